@@ -1,0 +1,1 @@
+"""The `simtest` command line; every sub-command has its own module."""

@@ -1,0 +1,26 @@
+"""The ``simtest`` command: wiring only.
+
+Each sub-command lives in its own module of this package, parses its options, calls one function
+of a lower layer and formats what it returns (helm's ``pkg/cmd`` -> ``pkg/action`` split).
+"""
+
+from __future__ import annotations
+
+import click
+
+from simtest_operator import __version__
+from simtest_operator.cli import crds
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(__version__, prog_name="simtest")
+def cli() -> None:
+    """Scenario-based simulation testing for automated driving, on Kubernetes or locally."""
+
+
+cli.add_command(crds.crds)
+
+
+def main() -> None:
+    """Console-script entry point."""
+    cli(prog_name="simtest")
