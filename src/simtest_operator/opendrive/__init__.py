@@ -1,0 +1,1 @@
+"""OpenDRIVE road networks: parsing and geometry evaluation."""
