@@ -1,0 +1,221 @@
+#!/usr/bin/env bash
+# Build the dev-cluster toolchain from Go modules only (no release downloads, no containers).
+#
+#   bash deploy/devcluster/build.sh            # everything (idempotent; seconds when cached)
+#   bash deploy/devcluster/build.sh etcd kwok  # a subset: etcd kubernetes kwok helm helmfile
+#
+# Versions: deploy/devcluster/versions.env (the one place they are pinned).
+# Output:   ${SIMTEST_CACHE_DIR:-${XDG_CACHE_HOME:-~/.cache}/simtest}/toolchain/
+#             <tool>-<version>/bin/*   the binaries, keyed by version
+#             bin/                     symlinks to the versions pinned now (put it on PATH)
+#             gomodcache/ gocache/     Go module and build caches (shared by all versions)
+#             work/                    generated wrapper modules
+# A binary is rebuilt only if it is missing or its --version output does not match the pin.
+set -euo pipefail
+
+HERE="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+# shellcheck source=versions.env
+source "$HERE/versions.env"
+
+CACHE_ROOT="${SIMTEST_CACHE_DIR:-${XDG_CACHE_HOME:-$HOME/.cache}/simtest}"
+TC="$CACHE_ROOT/toolchain"
+ALL_COMPONENTS=(etcd kwok kubernetes helm helmfile)
+JOBS="${SIMTEST_BUILD_JOBS:-2}"
+
+START=$(date +%s)
+log() { printf '[build.sh %4ss] %s\n' "$(($(date +%s) - START))" "$*" >&2; }
+die() { printf 'build.sh: error: %s\n' "$*" >&2; exit 1; }
+
+# --- the Go environment: local toolchain, static binaries, caches outside the repo -------------
+export GOTOOLCHAIN=local CGO_ENABLED=0 GO111MODULE=on GOWORK=off
+export GOMODCACHE="$TC/gomodcache" GOCACHE="$TC/gocache"
+export GOFLAGS="-buildvcs=false -modcacherw"
+GO_BUILD=(go build -trimpath -p "$JOBS")
+
+# --- helpers ---------------------------------------------------------------------------------
+# version_matches <want> <command...>: the command's output names exactly that version.
+version_matches() {
+    local want="$1"; shift
+    [[ -x "$1" ]] || return 1
+    local out
+    out="$("$@" 2>&1)" || return 1
+    grep -Eq "(^|[^0-9.])${want//./\\.}([^0-9]|$)" <<<"$out"
+}
+
+proxy_checked=0
+require_go() {
+    command -v go >/dev/null 2>&1 \
+        || die "no Go toolchain on PATH; install Go >= 1.26 (https://go.dev/dl/) and retry"
+    local gov
+    gov="$(go env GOVERSION)"
+    [[ "$gov" =~ ^go1\.(2[6-9]|[3-9][0-9]) ]] \
+        || die "Go $gov is too old; kubernetes $KUBERNETES_VERSION and kwok $KWOK_VERSION need Go >= 1.26"
+    if [[ $proxy_checked == 0 ]]; then
+        # One cheap request that must reach the module proxy (or hit the module cache).
+        go list -m -json "k8s.io/kubernetes@v$KUBERNETES_VERSION" >/dev/null 2>"$TC/proxy-check.err" \
+            || die "cannot reach the Go module proxy ($(go env GOPROXY)): $(tail -n 2 "$TC/proxy-check.err")"
+        proxy_checked=1
+    fi
+}
+
+# new_wrapper <dir> <module>: a fresh throw-away main module.
+new_wrapper() {
+    rm -rf "$1"; mkdir -p "$1"
+    (cd "$1" && go mod init "$2" >/dev/null 2>&1)
+}
+
+# install_bins <srcdir> <destdir>: atomically move freshly built binaries into place.
+install_bins() {
+    mkdir -p "$2"
+    local f
+    for f in "$1"/*; do mv -f "$f" "$2/"; done
+    rmdir "$1"
+}
+
+# --- components ------------------------------------------------------------------------------
+build_etcd() {
+    local v="$ETCD_VERSION" dir="$TC/etcd-$ETCD_VERSION/bin"
+    if version_matches "$v" "$dir/etcd" --version; then log "etcd $v: cached"; return; fi
+    require_go
+    log "etcd $v: building (own wrapper module, go.etcd.io/etcd/server/v3)"
+    local w="$TC/work/etcd-$v"
+    new_wrapper "$w" local/etcdbin
+    (
+        cd "$w"
+        go get -tool "go.etcd.io/etcd/server/v3@v$v"
+        "${GO_BUILD[@]}" -ldflags "-s -w" -o "$w/out/etcd" go.etcd.io/etcd/server/v3
+    )
+    install_bins "$w/out" "$dir"
+    version_matches "$v" "$dir/etcd" --version || die "etcd built but '$dir/etcd --version' does not say $v"
+    log "etcd $v: done"
+}
+
+build_kwok() {
+    local v="$KWOK_VERSION" dir="$TC/kwok-$KWOK_VERSION/bin"
+    if version_matches "$v" "$dir/kwok" --version && version_matches "$v" "$dir/kwokctl" --version; then
+        log "kwok $v: cached"; return
+    fi
+    require_go
+    log "kwok $v: building kwok + kwokctl"
+    local w="$TC/work/kwok-$v"
+    new_wrapper "$w" local/kwokbin
+    (
+        cd "$w"
+        go get -tool "sigs.k8s.io/kwok/cmd/kwok@v$v" "sigs.k8s.io/kwok/cmd/kwokctl@v$v"
+        "${GO_BUILD[@]}" -ldflags "-s -w" -o "$w/out/" sigs.k8s.io/kwok/cmd/kwok sigs.k8s.io/kwok/cmd/kwokctl
+    )
+    install_bins "$w/out" "$dir"
+    version_matches "$v" "$dir/kwok" --version || die "kwok built but '$dir/kwok --version' does not say $v"
+    log "kwok $v: done"
+}
+
+# Staging modules of k8s.io/kubernetes 1.36 (its go.mod replaces each with ./staging/src/...).
+# A missing one fails with "k8s.io/<x>@v0.0.0: unknown revision", which names it.
+K8S_STAGING="api apiextensions-apiserver apimachinery apiserver cli-runtime client-go cloud-provider
+ cluster-bootstrap code-generator component-base component-helpers controller-manager cri-api cri-client
+ cri-streaming csi-translation-lib dynamic-resource-allocation endpointslice externaljwt kms kube-aggregator
+ kube-controller-manager kube-proxy kube-scheduler kubectl kubelet metrics mount-utils pod-security-admission
+ sample-apiserver sample-cli-plugin sample-controller streaming"
+K8S_CMDS="kube-apiserver kube-controller-manager kube-scheduler kubectl"
+
+k8s_cached() {
+    local v="v$KUBERNETES_VERSION" dir="$TC/kubernetes-$KUBERNETES_VERSION/bin" c
+    for c in kube-apiserver kube-controller-manager kube-scheduler; do
+        version_matches "$v" "$dir/$c" --version || return 1
+    done
+    version_matches "$v" "$dir/kubectl" version --client
+}
+
+build_kubernetes() {
+    local v="$KUBERNETES_VERSION" dir="$TC/kubernetes-$KUBERNETES_VERSION/bin"
+    if k8s_cached; then log "kubernetes $v: cached"; return; fi
+    require_go
+    local minor="${v#1.}"; minor="${minor%%.*}"
+    log "kubernetes $v: building $K8S_CMDS (wrapper module, staging modules -> v0.${v#1.}; the long one)"
+    local w="$TC/work/kubernetes-$v"
+    new_wrapper "$w" local/k8sbins
+    local ldf="-s -w" kv m p pkgs=() gets=()
+    for kv in "gitVersion=v$v" gitMajor=1 "gitMinor=$minor" gitTreeState=clean \
+        "buildDate=$(date -u +%Y-%m-%dT%H:%M:%SZ)"; do
+        ldf+=" -X k8s.io/component-base/version.$kv -X k8s.io/client-go/pkg/version.$kv"
+    done
+    for p in $K8S_CMDS; do pkgs+=("k8s.io/kubernetes/cmd/$p"); gets+=("k8s.io/kubernetes/cmd/$p@v$v"); done
+    (
+        cd "$w"
+        go mod edit -go=1.26.0 -godebug="default=$KUBERNETES_GODEBUG"
+        for m in $K8S_STAGING; do go mod edit -replace="k8s.io/$m=k8s.io/$m@v0.${v#1.}"; done
+        log "kubernetes $v: resolving modules"
+        go get -tool "${gets[@]}"
+        log "kubernetes $v: compiling (cold: ~20-30 min on 2 cores)"
+        "${GO_BUILD[@]}" -ldflags "$ldf" -o "$w/out/" "${pkgs[@]}"
+    )
+    install_bins "$w/out" "$dir"
+    k8s_cached || die "kubernetes built but a binary's --version does not say v$v"
+    log "kubernetes $v: done"
+}
+
+build_helm() {
+    local v="$HELM_VERSION" dir="$TC/helm-$HELM_VERSION/bin"
+    if version_matches "v$v" "$dir/helm" version --short; then log "helm $v: cached"; return; fi
+    require_go
+    log "helm $v: building"
+    local w="$TC/work/helm-$v" kminor="${KUBERNETES_VERSION#1.}"; kminor="${kminor%%.*}"
+    new_wrapper "$w" local/helmbin
+    local ldf="-s -w -X helm.sh/helm/v3/internal/version.version=v$v"
+    ldf+=" -X helm.sh/helm/v3/internal/version.gitTreeState=clean"
+    ldf+=" -X helm.sh/helm/v3/pkg/chartutil.k8sVersionMajor=1 -X helm.sh/helm/v3/pkg/chartutil.k8sVersionMinor=$kminor"
+    ldf+=" -X helm.sh/helm/v3/pkg/lint/rules.k8sVersionMajor=1 -X helm.sh/helm/v3/pkg/lint/rules.k8sVersionMinor=$kminor"
+    (
+        cd "$w"
+        go get -tool "helm.sh/helm/v3/cmd/helm@v$v"
+        "${GO_BUILD[@]}" -ldflags "$ldf" -o "$w/out/helm" helm.sh/helm/v3/cmd/helm
+    )
+    install_bins "$w/out" "$dir"
+    version_matches "v$v" "$dir/helm" version --short || die "helm built but 'helm version' does not say v$v"
+    log "helm $v: done"
+}
+
+build_helmfile() {
+    local v="$HELMFILE_VERSION" dir="$TC/helmfile-$HELMFILE_VERSION/bin"
+    if version_matches "v$v" "$dir/helmfile" --version; then log "helmfile $v: cached"; return; fi
+    require_go
+    log "helmfile $v: building"
+    local w="$TC/work/helmfile-$v"
+    new_wrapper "$w" local/helmfilebin
+    (
+        cd "$w"
+        go get -tool "github.com/helmfile/helmfile@v$v"
+        "${GO_BUILD[@]}" -ldflags "-s -w -X go.szostok.io/version.version=v$v" \
+            -o "$w/out/helmfile" github.com/helmfile/helmfile
+    )
+    install_bins "$w/out" "$dir"
+    version_matches "v$v" "$dir/helmfile" --version || die "helmfile built but 'helmfile --version' does not say v$v"
+    log "helmfile $v: done"
+}
+
+# --- main ------------------------------------------------------------------------------------
+components=("$@")
+[[ ${#components[@]} -gt 0 ]] || components=("${ALL_COMPONENTS[@]}")
+for c in "${components[@]}"; do
+    [[ " ${ALL_COMPONENTS[*]} " == *" $c "* ]] || die "unknown component '$c' (one of: ${ALL_COMPONENTS[*]})"
+done
+
+mkdir -p "$TC/bin" "$TC/work"
+# One build at a time per cache (a test session and a shell may both call this).
+if command -v flock >/dev/null 2>&1; then
+    exec 9>"$TC/.build.lock"
+    flock -n 9 || { log "another build holds $TC/.build.lock; waiting"; flock 9; }
+fi
+
+log "toolchain cache: $TC"
+for c in "${components[@]}"; do "build_$c"; done
+
+# Refresh bin/ symlinks to the pinned versions of what exists.
+for pair in "etcd-$ETCD_VERSION:etcd" "kwok-$KWOK_VERSION:kwok kwokctl" \
+    "kubernetes-$KUBERNETES_VERSION:$K8S_CMDS" "helm-$HELM_VERSION:helm" "helmfile-$HELMFILE_VERSION:helmfile"; do
+    d="${pair%%:*}"
+    for b in ${pair#*:}; do
+        [[ -x "$TC/$d/bin/$b" ]] && ln -sfn "../$d/bin/$b" "$TC/bin/$b"
+    done
+done
+log "ready: $TC/bin ($(ls "$TC/bin" | tr '\n' ' '))"
