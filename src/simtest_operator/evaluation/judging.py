@@ -1,0 +1,82 @@
+"""Judging: turn what a run produced into one verdict with a one-line reason and its metrics.
+
+Precedence, most specific first: a scenario the engine could not run is ``Invalid``; broken
+infrastructure is ``Error``; a violated criterion is ``Failed`` (even if the run also ran out of
+time, the violation is the more useful news); a storyboard that did not complete within the time
+limit is ``Timeout``; everything else ``Passed``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping
+
+from simtest_operator.evaluation.online import OnlineEvaluator
+from simtest_operator.verdicts import Verdict
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class RunFacts:
+    """What the engine and runner know about how the run ended."""
+
+    simulated_seconds: float
+    wall_seconds: float
+    storyboard_complete: bool
+    invalid_reason: str | None = None
+    """Set when an unsupported or broken element stopped the run (names element and line)."""
+    error_reason: str | None = None
+    """Set when the infrastructure failed (simulator crash, map conversion)."""
+    wall_limit_hit: bool = False
+    """The run was stopped because it exceeded its wall-clock budget."""
+    ignored_elements: tuple[str, ...] = ()
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Judgement:
+    """A verdict, its one-line reason and the run's metrics."""
+
+    verdict: Verdict
+    reason: str
+    metrics: Mapping[str, float]
+
+
+def judge(evaluator: OnlineEvaluator, facts: RunFacts) -> Judgement:
+    """The verdict for a finished (or aborted) run."""
+    metrics = dict(evaluator.metrics())
+    metrics["simulatedSeconds"] = round(facts.simulated_seconds, 4)
+    metrics["wallSeconds"] = round(facts.wall_seconds, 4)
+    if facts.wall_seconds > 0.0 and facts.simulated_seconds > 0.0:
+        metrics["realTimeFactor"] = round(facts.simulated_seconds / facts.wall_seconds, 2)
+    metrics["ignoredElements"] = float(len(facts.ignored_elements))
+    metrics = {key: value for key, value in metrics.items() if math.isfinite(value)}
+    if facts.invalid_reason is not None:
+        return Judgement(verdict=Verdict.INVALID, reason=facts.invalid_reason, metrics=metrics)
+    if facts.error_reason is not None:
+        return Judgement(verdict=Verdict.ERROR, reason=facts.error_reason, metrics=metrics)
+    violations = evaluator.violations
+    if violations:
+        reason = violations[0].message
+        if len(violations) > 1:
+            others = ", ".join(v.criterion for v in violations[1:])
+            reason += f" (+{len(violations) - 1} more: {others})"
+        return Judgement(verdict=Verdict.FAILED, reason=reason, metrics=metrics)
+    if facts.wall_limit_hit:
+        return Judgement(
+            verdict=Verdict.TIMEOUT,
+            reason=f"wall-clock limit reached after {facts.wall_seconds:.1f} s "
+            f"({facts.simulated_seconds:.2f} s simulated)",
+            metrics=metrics,
+        )
+    if not facts.storyboard_complete:
+        return Judgement(
+            verdict=Verdict.TIMEOUT,
+            reason=f"storyboard not complete within {evaluator.criteria.time_limit:g} s "
+            "simulated time",
+            metrics=metrics,
+        )
+    return Judgement(
+        verdict=Verdict.PASSED,
+        reason=f"storyboard complete at t={facts.simulated_seconds:.2f} s, all criteria held",
+        metrics=metrics,
+    )
