@@ -1,0 +1,324 @@
+"""Triggers and conditions of the scenario model.
+
+A :class:`Trigger` is an OR over condition groups, a :class:`ConditionGroup` an AND over conditions,
+exactly as the standard defines them. Each condition is either :class:`ByEntity` (evaluated for the
+triggering entities, combined with rule any/all) or :class:`ByValue`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import enum
+
+from simtest_operator.openscenario.model.common import (
+    CoordinateSystem,
+    DirectionalDimension,
+    RelativeDistanceType,
+    RoutingAlgorithm,
+    Rule,
+    Unsupported,
+)
+from simtest_operator.openscenario.model.positions import Position
+
+
+class ConditionEdge(enum.StrEnum):
+    """When a condition fires relative to its underlying truth value."""
+
+    RISING = "rising"
+    FALLING = "falling"
+    RISING_OR_FALLING = "risingOrFalling"
+    NONE = "none"
+
+
+class TriggeringEntitiesRule(enum.StrEnum):
+    """Whether any or all triggering entities must satisfy an entity condition."""
+
+    ANY = "any"
+    ALL = "all"
+
+
+class StoryboardElementType(enum.StrEnum):
+    """Kinds of storyboard elements a StoryboardElementStateCondition may watch."""
+
+    STORY = "story"
+    ACT = "act"
+    MANEUVER_GROUP = "maneuverGroup"
+    MANEUVER = "maneuver"
+    EVENT = "event"
+    ACTION = "action"
+
+
+class StoryboardElementState(enum.StrEnum):
+    """States and transitions of the storyboard state machine."""
+
+    START_TRANSITION = "startTransition"
+    END_TRANSITION = "endTransition"
+    STOP_TRANSITION = "stopTransition"
+    SKIP_TRANSITION = "skipTransition"
+    COMPLETE_STATE = "completeState"
+    RUNNING_STATE = "runningState"
+    STANDBY_STATE = "standbyState"
+
+
+# --- entity conditions ------------------------------------------------------------------------
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class EndOfRoadCondition:
+    """Entity has been at the end of a road for ``duration`` seconds."""
+
+    duration: float
+    line: int | None = None
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class OffRoadCondition:
+    """Entity has been off road for ``duration`` seconds."""
+
+    duration: float
+    line: int | None = None
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class CollisionCondition:
+    """Entity collides with ``entity_ref``, or with any object of type ``by_type``."""
+
+    entity_ref: str | None = None
+    by_type: str | None = None
+    """ObjectType (vehicle, pedestrian, miscellaneous, external) when ByType is used."""
+    line: int | None = None
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class TimeHeadwayCondition:
+    """Time headway from the triggering entity to ``entity_ref``."""
+
+    entity_ref: str
+    value: float
+    rule: Rule
+    freespace: bool
+    coordinate_system: CoordinateSystem = CoordinateSystem.ENTITY
+    relative_distance_type: RelativeDistanceType = RelativeDistanceType.LONGITUDINAL
+    along_route: bool | None = None
+    """1.0 ``alongRoute`` (deprecated later), kept when present."""
+    line: int | None = None
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class TimeToCollisionCondition:
+    """Time to collision with an entity (``entity_ref``) or a position (``position``)."""
+
+    value: float
+    rule: Rule
+    freespace: bool
+    entity_ref: str | None = None
+    position: Position | None = None
+    coordinate_system: CoordinateSystem = CoordinateSystem.ENTITY
+    relative_distance_type: RelativeDistanceType = RelativeDistanceType.LONGITUDINAL
+    along_route: bool | None = None
+    line: int | None = None
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class AccelerationCondition:
+    """Acceleration of the triggering entity."""
+
+    value: float
+    rule: Rule
+    direction: DirectionalDimension | None = None
+    line: int | None = None
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class StandStillCondition:
+    """Entity has stood still for ``duration`` seconds."""
+
+    duration: float
+    line: int | None = None
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class SpeedCondition:
+    """Speed of the triggering entity."""
+
+    value: float
+    rule: Rule
+    direction: DirectionalDimension | None = None
+    line: int | None = None
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class RelativeSpeedCondition:
+    """Speed of the triggering entity minus the speed of ``entity_ref``."""
+
+    entity_ref: str
+    value: float
+    rule: Rule
+    direction: DirectionalDimension | None = None
+    line: int | None = None
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class TraveledDistanceCondition:
+    """Entity has travelled at least ``value`` metres since the scenario start."""
+
+    value: float
+    line: int | None = None
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class ReachPositionCondition:
+    """Entity is within ``tolerance`` metres of ``position``."""
+
+    position: Position
+    tolerance: float
+    line: int | None = None
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class DistanceCondition:
+    """Distance from the triggering entity to ``position``."""
+
+    position: Position
+    value: float
+    rule: Rule
+    freespace: bool
+    coordinate_system: CoordinateSystem = CoordinateSystem.ENTITY
+    relative_distance_type: RelativeDistanceType = RelativeDistanceType.EUCLIDEAN
+    along_route: bool | None = None
+    routing_algorithm: RoutingAlgorithm | None = None
+    line: int | None = None
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class RelativeDistanceCondition:
+    """Distance from the triggering entity to ``entity_ref``."""
+
+    entity_ref: str
+    value: float
+    rule: Rule
+    freespace: bool
+    relative_distance_type: RelativeDistanceType
+    coordinate_system: CoordinateSystem = CoordinateSystem.ENTITY
+    routing_algorithm: RoutingAlgorithm | None = None
+    line: int | None = None
+
+
+EntityCondition = (
+    EndOfRoadCondition
+    | OffRoadCondition
+    | CollisionCondition
+    | TimeHeadwayCondition
+    | TimeToCollisionCondition
+    | AccelerationCondition
+    | StandStillCondition
+    | SpeedCondition
+    | RelativeSpeedCondition
+    | TraveledDistanceCondition
+    | ReachPositionCondition
+    | DistanceCondition
+    | RelativeDistanceCondition
+    | Unsupported
+)
+"""RelativeClearance, Angle and RelativeAngle conditions arrive as :class:`Unsupported`."""
+
+
+# --- value conditions -------------------------------------------------------------------------
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class SimulationTimeCondition:
+    """Simulated time since the scenario start, in seconds."""
+
+    value: float
+    rule: Rule
+    line: int | None = None
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class StoryboardElementStateCondition:
+    """A storyboard element (by name) is in a state or passes a transition."""
+
+    element_type: StoryboardElementType
+    element_ref: str
+    state: StoryboardElementState
+    line: int | None = None
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class ParameterCondition:
+    """A parameter's current value compared with ``value`` (text, typed by the parameter)."""
+
+    parameter_ref: str
+    value: str
+    rule: Rule
+    line: int | None = None
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class VariableCondition:
+    """A variable's current value compared with ``value`` (text, typed by the variable)."""
+
+    variable_ref: str
+    value: str
+    rule: Rule
+    line: int | None = None
+
+
+ValueCondition = (
+    SimulationTimeCondition
+    | StoryboardElementStateCondition
+    | ParameterCondition
+    | VariableCondition
+    | Unsupported
+)
+"""TimeOfDay, UserDefinedValue, TrafficSignal and TrafficSignalController conditions arrive as
+:class:`Unsupported`."""
+
+
+# --- triggers ---------------------------------------------------------------------------------
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class ByEntity:
+    """An entity condition evaluated for the triggering entities."""
+
+    triggering_entities: tuple[str, ...]
+    rule: TriggeringEntitiesRule
+    condition: EntityCondition
+    line: int | None = None
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class ByValue:
+    """A condition on values (time, parameters, storyboard states)."""
+
+    condition: ValueCondition
+    line: int | None = None
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Condition:
+    """A named condition with a delay (seconds) and an edge."""
+
+    name: str
+    delay: float
+    edge: ConditionEdge
+    body: ByEntity | ByValue
+    line: int | None = None
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class ConditionGroup:
+    """True when all its conditions are true (AND)."""
+
+    conditions: tuple[Condition, ...]
+    line: int | None = None
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Trigger:
+    """True when any of its condition groups is true (OR); empty means never."""
+
+    condition_groups: tuple[ConditionGroup, ...]
+    line: int | None = None
