@@ -8,8 +8,14 @@ import click
 
 
 @click.command()
-@click.option("--out", "out_dir", type=click.Path(path_type=Path), default=Path("crds"),
-              show_default=True, help="Folder the CRD YAML files go to.")
+@click.option(
+    "--out",
+    "out_dir",
+    type=click.Path(path_type=Path),
+    default=Path("crds"),
+    show_default=True,
+    help="Folder the CRD YAML files go to.",
+)
 @click.option("--check", is_flag=True, help="Exit 1 when the files differ from the models.")
 def crds(out_dir: Path, check: bool) -> None:
     """Generate CustomResourceDefinitions from the pydantic models."""

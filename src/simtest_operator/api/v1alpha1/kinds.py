@@ -1,0 +1,266 @@
+"""The three custom resources: their specs, statuses and CRD naming.
+
+TestCampaign (what to test and how) owns ScenarioBatches (slices of its frozen scenario list),
+which own SimEnvironments (one provisioned environment per scenario, or one warm worker).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import datetime
+import enum
+from typing import Annotated, Any, Generic, Literal, TypeVar
+
+from pydantic import Field, StringConstraints
+
+from simtest_operator.api.v1alpha1 import common
+from simtest_operator.api.v1alpha1.common import ApiModel, DnsLabel
+from simtest_operator.api.v1alpha1.environment import EnvironmentSpec
+from simtest_operator.api.v1alpha1.evaluation import EvaluationSpec
+from simtest_operator.api.v1alpha1.execution import ExecutionSpec, Isolation
+from simtest_operator.api.v1alpha1.sources import ScenarioSelection
+from simtest_operator.api.v1alpha1.status import CommonStatus, ScenarioResult
+from simtest_operator.api.v1alpha1.storage import ArtifactsSpec, ResultsSpec
+from simtest_operator.verdicts import Verdict
+
+CAMPAIGN_NAME_MAX = 50
+"""Campaign names stay short so child names (``<campaign>-b00042-e0001``) fit in 63 characters."""
+
+Sha256 = Annotated[str, StringConstraints(pattern=r"^[0-9a-f]{64}$")]
+ScenarioId = Annotated[str, StringConstraints(min_length=1, max_length=1024)]
+
+
+# --- TestCampaign ------------------------------------------------------------------------------
+
+
+class TestCampaignSpec(ApiModel):
+    """What to test and how: scenarios, environment, execution, evaluation, storage."""
+
+    __test__ = False  # not a pytest test class, despite the name
+
+    scenarios: ScenarioSelection
+    """Scenario sources and selection; frozen (id + sha256) when the campaign starts."""
+    environment: EnvironmentSpec = Field(default_factory=EnvironmentSpec)
+    """Environment template, values, system under test and simulator settings."""
+    execution: ExecutionSpec = Field(default_factory=ExecutionSpec)
+    """Batching, parallelism, limits, retries and placement."""
+    evaluation: EvaluationSpec = Field(default_factory=EvaluationSpec)
+    """Pass/fail criteria with per-scenario overrides."""
+    artifacts: ArtifactsSpec = Field(default_factory=ArtifactsSpec)
+    """Where recordings, logs and result files go."""
+    results: ResultsSpec = Field(default_factory=ResultsSpec)
+    """Results database."""
+    suspend: bool = False
+    """Pause: no new scenarios start while true; running ones finish."""
+
+
+class TestCampaignStatus(CommonStatus):
+    """Counters and conditions only: per-scenario results live in ScenarioBatch status, so the
+    object stays far below etcd's size limit at 10,000 scenarios."""
+
+    __test__ = False
+
+    scenario_list: DnsLabel | None = None
+    """ConfigMap holding the frozen scenario list (id, source, sha256)."""
+    batches: Annotated[int, Field(ge=0)] = 0
+    """ScenarioBatch objects created so far."""
+    throughput: Annotated[float, Field(ge=0)] | None = None
+    """Finished scenarios per minute since the start."""
+
+
+# --- ScenarioBatch -----------------------------------------------------------------------------
+
+
+class FrozenScenario(ApiModel):
+    """One entry of the frozen scenario list."""
+
+    id: ScenarioId
+    """Stable scenario id (path inside its source, plus a distribution suffix where expanded)."""
+    source: Annotated[str, StringConstraints(min_length=1, max_length=4096)]
+    """Where the operator fetches the file from (URI of the resolved source + path)."""
+    sha256: Sha256
+    """Digest of the file content; a changed file is a different scenario."""
+    overrides: dict[str, str] = Field(default_factory=dict)
+    """OpenSCENARIO parameter values for this run (from the campaign and distributions)."""
+
+
+class ScenarioBatchSpec(ApiModel):
+    """A contiguous slice of the campaign's frozen list."""
+
+    campaign: DnsLabel
+    """Owning TestCampaign."""
+    index: Annotated[int, Field(ge=0)]
+    """Position of the slice in the campaign (0-based)."""
+    scenarios: Annotated[list[FrozenScenario], Field(min_length=1, max_length=1000)]
+    """The slice."""
+
+
+class ScenarioBatchStatus(CommonStatus):
+    """Per-scenario results of the slice and its counters."""
+
+    results: list[ScenarioResult] = Field(default_factory=list)
+    """Final results, one per finished scenario."""
+
+
+# --- SimEnvironment ----------------------------------------------------------------------------
+
+
+class SimEnvironmentSpec(ApiModel):
+    """One provisioned environment: a scenario (or, with Reuse, a queue of them) to run."""
+
+    campaign: DnsLabel
+    """Owning TestCampaign."""
+    batch: DnsLabel
+    """Owning ScenarioBatch."""
+    scenarios: Annotated[list[FrozenScenario], Field(min_length=1, max_length=1000)]
+    """What to run: one scenario with PerScenario isolation, several with Reuse."""
+    isolation: Isolation = Isolation.PER_SCENARIO
+    """Copied from the campaign so the environment is self-describing."""
+    attempt: Annotated[int, Field(ge=1)] = 1
+    """Attempt number (retries of infrastructure errors create a new environment)."""
+
+
+class EnvironmentPhase(enum.StrEnum):
+    """Lifecycle of one environment."""
+
+    PENDING = "Pending"
+    PROVISIONING = "Provisioning"
+    SCHEDULED = "Scheduled"
+    RUNNING = "Running"
+    FINISHED = "Finished"
+    TORN_DOWN = "TornDown"
+
+
+class Timings(ApiModel):
+    """When the environment passed each step; their differences are the orchestration overhead."""
+
+    queued: datetime.datetime | None = None
+    """Environment object created."""
+    scheduled: datetime.datetime | None = None
+    """Pod bound to a node."""
+    started: datetime.datetime | None = None
+    """Simulator container started."""
+    finished: datetime.datetime | None = None
+    """Simulator container terminated."""
+
+
+class SimEnvironmentStatus(ApiModel):
+    """State, placement, timings and verdict of one environment."""
+
+    phase: EnvironmentPhase = EnvironmentPhase.PENDING
+    """Lifecycle phase."""
+    observed_generation: Annotated[int, Field(ge=0)] | None = None
+    """The ``metadata.generation`` the status reflects."""
+    scenario: ScenarioId | None = None
+    """Scenario running now (or last run)."""
+    verdict: Verdict | None = None
+    """Verdict of the (last) scenario."""
+    reason: Annotated[str, StringConstraints(max_length=1024)] = ""
+    """One-line reason for the verdict or the failure."""
+    node: Annotated[str, StringConstraints(max_length=253)] | None = None
+    """Node the simulator pod runs on."""
+    pod: Annotated[str, StringConstraints(max_length=253)] | None = None
+    """Simulator pod name."""
+    rendered_hash: Sha256 | None = None
+    """Digest of the rendered values and pod spec, for reproducibility."""
+    timings: Timings = Field(default_factory=Timings)
+    """Queued, scheduled, started and finished times."""
+    results: list[ScenarioResult] = Field(default_factory=list)
+    """Results of the scenarios this environment ran."""
+    conditions: list[common.Condition] = Field(default_factory=list)
+    """Kubernetes-convention conditions."""
+
+
+# --- CRD naming --------------------------------------------------------------------------------
+
+SpecT = TypeVar("SpecT", bound=ApiModel)
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class PrinterColumn:
+    """One ``additionalPrinterColumns`` entry."""
+
+    name: str
+    type: Literal["string", "integer", "number", "boolean", "date"]
+    json_path: str
+    description: str = ""
+    priority: int = 0
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class ResourceKind(Generic[SpecT]):
+    """Everything the CRD generator and the clients need to know about one kind."""
+
+    kind: str
+    plural: str
+    singular: str
+    short_names: tuple[str, ...]
+    spec: type[SpecT]
+    status: type[ApiModel]
+    printer_columns: tuple[PrinterColumn, ...]
+    description: str
+
+    @property
+    def crd_name(self) -> str:
+        """``<plural>.<group>``."""
+        return f"{self.plural}.{common.GROUP}"
+
+
+def _counter_columns() -> tuple[PrinterColumn, ...]:
+    return (
+        PrinterColumn(name="Passed", type="integer", json_path=".status.passed"),
+        PrinterColumn(name="Failed", type="integer", json_path=".status.failed"),
+        PrinterColumn(name="Errored", type="integer", json_path=".status.errored"),
+    )
+
+
+_AGE = PrinterColumn(name="Age", type="date", json_path=".metadata.creationTimestamp")
+_PHASE = PrinterColumn(name="Phase", type="string", json_path=".status.phase")
+_PROGRESS = PrinterColumn(name="Progress", type="string", json_path=".status.progress")
+
+TEST_CAMPAIGN: ResourceKind[TestCampaignSpec] = ResourceKind(
+    kind="TestCampaign",
+    plural="testcampaigns",
+    singular="testcampaign",
+    short_names=("tc", "campaign"),
+    spec=TestCampaignSpec,
+    status=TestCampaignStatus,
+    printer_columns=(_PHASE, *_counter_columns(), _PROGRESS, _AGE),
+    description="A scenario-based test campaign: which OpenSCENARIO scenarios to run against which "
+    "system under test, how, and with which pass/fail criteria.",
+)
+SCENARIO_BATCH: ResourceKind[ScenarioBatchSpec] = ResourceKind(
+    kind="ScenarioBatch",
+    plural="scenariobatches",
+    singular="scenariobatch",
+    short_names=("sb",),
+    spec=ScenarioBatchSpec,
+    status=ScenarioBatchStatus,
+    printer_columns=(
+        PrinterColumn(name="Campaign", type="string", json_path=".spec.campaign"),
+        PrinterColumn(name="Index", type="integer", json_path=".spec.index"),
+        _PHASE,
+        _PROGRESS,
+        _AGE,
+    ),
+    description="A slice of a TestCampaign's frozen scenario list with the per-scenario results.",
+)
+SIM_ENVIRONMENT: ResourceKind[SimEnvironmentSpec] = ResourceKind(
+    kind="SimEnvironment",
+    plural="simenvironments",
+    singular="simenvironment",
+    short_names=("senv", "simenv"),
+    spec=SimEnvironmentSpec,
+    status=SimEnvironmentStatus,
+    printer_columns=(
+        PrinterColumn(name="Scenario", type="string", json_path=".status.scenario"),
+        _PHASE,
+        PrinterColumn(name="Verdict", type="string", json_path=".status.verdict"),
+        PrinterColumn(name="Node", type="string", json_path=".status.node"),
+        _AGE,
+    ),
+    description="One provisioned simulation environment running one scenario (or a queue of "
+    "scenarios on a warm simulator).",
+)
+
+KINDS: tuple[ResourceKind[Any], ...] = (TEST_CAMPAIGN, SCENARIO_BATCH, SIM_ENVIRONMENT)
