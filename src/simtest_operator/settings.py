@@ -62,9 +62,10 @@ class Settings:
         """Build settings from ``SIMTEST_*`` variables (defaults for the rest)."""
         env = os.environ if env is None else env
         cache_root = env.get(f"{ENV_PREFIX}CACHE_DIR")
+        defaults = SimulationSettings()
         simulation = SimulationSettings(
-            step_length=float(env.get(f"{ENV_PREFIX}STEP_LENGTH", SimulationSettings.step_length)),
-            seed=int(env.get(f"{ENV_PREFIX}SEED", SimulationSettings.seed)),
+            step_length=float(env.get(f"{ENV_PREFIX}STEP_LENGTH", defaults.step_length)),
+            seed=int(env.get(f"{ENV_PREFIX}SEED", defaults.seed)),
         )
         return cls(
             cache=CacheSettings(
