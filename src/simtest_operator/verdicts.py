@@ -9,6 +9,7 @@ from __future__ import annotations
 import dataclasses
 import enum
 from collections.abc import Mapping
+from typing import Any
 
 
 class Verdict(enum.StrEnum):
@@ -61,3 +62,34 @@ class ScenarioOutcome:
     """OpenSCENARIO elements accepted but not simulated (environment, light state, ...)."""
     versions: Mapping[str, str] = dataclasses.field(default_factory=dict)
     """Component versions (simulator, SUT model, simtest) for reproducibility."""
+
+    def to_json(self) -> dict[str, Any]:
+        """A JSON-compatible dict (camelCase keys, as in result files and termination messages)."""
+        return {
+            "scenarioId": self.scenario_id,
+            "verdict": self.verdict.value,
+            "reason": self.reason,
+            "metrics": dict(self.metrics),
+            "simulatedSeconds": self.simulated_seconds,
+            "wallSeconds": self.wall_seconds,
+            "attempts": self.attempts,
+            "artifacts": dict(self.artifacts),
+            "ignoredElements": list(self.ignored_elements),
+            "versions": dict(self.versions),
+        }
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> ScenarioOutcome:
+        """Inverse of :meth:`to_json`; unknown keys are ignored, missing optional ones defaulted."""
+        return cls(
+            scenario_id=str(data["scenarioId"]),
+            verdict=Verdict(data["verdict"]),
+            reason=str(data.get("reason", "")),
+            metrics={str(k): float(v) for k, v in dict(data.get("metrics", {})).items()},
+            simulated_seconds=float(data.get("simulatedSeconds", 0.0)),
+            wall_seconds=float(data.get("wallSeconds", 0.0)),
+            attempts=int(data.get("attempts", 1)),
+            artifacts={str(k): str(v) for k, v in dict(data.get("artifacts", {})).items()},
+            ignored_elements=tuple(str(e) for e in data.get("ignoredElements", ())),
+            versions={str(k): str(v) for k, v in dict(data.get("versions", {})).items()},
+        )
