@@ -1,0 +1,30 @@
+# The two README commands: `make run` (the main job on its embedded default) and `make test`.
+# Both set up a fresh machine first (system packages, virtualenv, and for the tests the
+# Kubernetes control plane built from Go modules, cached in ~/.cache/simtest).
+VENV ?= .venv
+SIMTEST := $(VENV)/bin/simtest
+
+.PHONY: setup toolchain run test lint crds
+
+setup:
+	bash deploy/setup.sh
+
+toolchain:
+	bash deploy/devcluster/build.sh
+
+run: setup
+	$(SIMTEST) run scenarios/smoke-campaign.yaml --output out/smoke
+
+# pytest's exit code 5 (no tests collected) is a failure here, not a pass.
+test: setup toolchain
+	$(VENV)/bin/python -m pytest $(PYTEST_ARGS); rc=$$?; \
+	if [ $$rc -eq 5 ]; then echo "pytest collected no tests" >&2; exit 1; fi; exit $$rc
+
+lint: setup
+	$(VENV)/bin/ruff check src tests bench scenarios
+	$(VENV)/bin/ruff format --check src tests bench scenarios
+	$(VENV)/bin/mypy
+	$(VENV)/bin/lint-imports
+
+crds: setup
+	$(SIMTEST) crds
