@@ -27,16 +27,20 @@ def _schema(kind: kinds.ResourceKind[Any]) -> dict[str, Any]:
 
 
 def test_check_passes_on_the_committed_crds() -> None:
-    result = CliRunner().invoke(cli, ["crds", "--check", "--out", str(CRDS)])
+    result = CliRunner().invoke(
+        cli, ["crds", "--check", "--out", str(CRDS), "--docs", str(REPO / "docs")]
+    )
     assert result.exit_code == 0, result.output
 
 
 def test_check_fails_on_drift(tmp_path: Path) -> None:
     runner = CliRunner()
-    assert runner.invoke(cli, ["crds", "--out", str(tmp_path)]).exit_code == 0
+    args = ["crds", "--out", str(tmp_path), "--docs", str(tmp_path)]
+    assert runner.invoke(cli, args).exit_code == 0
+    assert runner.invoke(cli, [*args, "--check"]).exit_code == 0
     target = tmp_path / crdgen.CRD_FILES["TestCampaign"]
     target.write_text(target.read_text(encoding="utf-8").replace("batchSize", "batchsize"))
-    result = runner.invoke(cli, ["crds", "--check", "--out", str(tmp_path)])
+    result = runner.invoke(cli, [*args, "--check"])
     assert result.exit_code == 1
     assert crdgen.CRD_FILES["TestCampaign"] in result.output
 
