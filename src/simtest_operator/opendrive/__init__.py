@@ -1,1 +1,33 @@
-"""OpenDRIVE road networks: parsing and geometry evaluation."""
+"""OpenDRIVE road networks: safe parsing and geometry evaluation.
+
+Public entry point: :class:`RoadNetwork` (``RoadNetwork.from_file(path)``), which answers
+(road, s, lane, offset) -> pose, world point -> road coordinates, lane widths and the lane graph.
+"""
+
+from simtest_operator.opendrive.lanes import LaneBounds
+from simtest_operator.opendrive.models import ContactPoint, OpenDrive, Road, TrafficRule
+from simtest_operator.opendrive.network import (
+    DRIVABLE_LANE_TYPES,
+    LaneLocation,
+    Pose,
+    RoadCoord,
+    RoadNetwork,
+)
+from simtest_operator.opendrive.parsing import load, parse
+from simtest_operator.opendrive.topology import LaneEntry
+
+__all__ = [
+    "DRIVABLE_LANE_TYPES",
+    "ContactPoint",
+    "LaneBounds",
+    "LaneEntry",
+    "LaneLocation",
+    "OpenDrive",
+    "Pose",
+    "Road",
+    "RoadCoord",
+    "RoadNetwork",
+    "TrafficRule",
+    "load",
+    "parse",
+]

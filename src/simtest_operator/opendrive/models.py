@@ -1,0 +1,193 @@
+"""OpenDRIVE document model: the parsed road network as immutable values.
+
+The parser turns untrusted XML into these dataclasses once; geometry evaluation and the lane graph
+work on them and never look at XML again. Only what the simulator needs is kept (road marks,
+objects, signals and user data are dropped). Polynomials keep OpenDRIVE's ``a + b*ds + c*ds^2 +
+d*ds^3`` form with their start ``s`` (or ``sOffset`` inside a lane section).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import enum
+
+
+class ContactPoint(enum.StrEnum):
+    """Which end of a road a link attaches to."""
+
+    START = "start"
+    END = "end"
+
+
+class ElementType(enum.StrEnum):
+    """What a road link points at."""
+
+    ROAD = "road"
+    JUNCTION = "junction"
+
+
+class TrafficRule(enum.StrEnum):
+    """Right-hand or left-hand traffic (``road/@rule``, OpenDRIVE 1.5+; RHT when absent)."""
+
+    RHT = "RHT"
+    LHT = "LHT"
+
+
+class GeometryKind(enum.StrEnum):
+    """planView geometry primitives."""
+
+    LINE = "line"
+    ARC = "arc"
+    SPIRAL = "spiral"
+    POLY3 = "poly3"
+    PARAM_POLY3 = "paramPoly3"
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Poly3:
+    """A cubic ``a + b*ds + c*ds^2 + d*ds^3`` valid from ``s`` (absolute or section-relative)."""
+
+    s: float
+    a: float
+    b: float = 0.0
+    c: float = 0.0
+    d: float = 0.0
+
+    def value(self, s: float) -> float:
+        ds = s - self.s
+        return self.a + ds * (self.b + ds * (self.c + ds * self.d))
+
+    def slope(self, s: float) -> float:
+        ds = s - self.s
+        return self.b + ds * (2.0 * self.c + ds * 3.0 * self.d)
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Geometry:
+    """One planView record: start pose, length and the primitive's parameters.
+
+    ``curvature`` is used by arcs, ``curv_start``/``curv_end`` by spirals, ``u``/``v`` (a, b, c, d)
+    by paramPoly3 and ``v`` alone by poly3 (``u`` is then the identity); ``normalized`` is
+    paramPoly3's ``pRange="normalized"``.
+    """
+
+    kind: GeometryKind
+    s: float
+    x: float
+    y: float
+    heading: float
+    length: float
+    curvature: float = 0.0
+    curv_start: float = 0.0
+    curv_end: float = 0.0
+    u: tuple[float, float, float, float] = (0.0, 1.0, 0.0, 0.0)
+    v: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
+    normalized: bool = False
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class RoadLink:
+    """A road's predecessor or successor: another road (with contact point) or a junction."""
+
+    element_type: ElementType
+    element_id: str
+    contact_point: ContactPoint | None = None
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Lane:
+    """One lane of a lane section. ``widths`` are section-relative; ``borders`` is the 1.4+
+    alternative (outer edge as a polynomial of the lateral position), used when ``widths`` is empty.
+    """
+
+    id: int
+    type: str
+    widths: tuple[Poly3, ...] = ()
+    borders: tuple[Poly3, ...] = ()
+    predecessors: tuple[int, ...] = ()
+    successors: tuple[int, ...] = ()
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class LaneSection:
+    """Lanes valid from ``s`` to the next section. Left lanes have ids > 0 ordered 1, 2, ...
+    outwards; right lanes ids < 0 ordered -1, -2, ... outwards; the centre lane (id 0) has no width.
+    """
+
+    s: float
+    left: tuple[Lane, ...] = ()
+    right: tuple[Lane, ...] = ()
+    single_side: bool = False
+
+    def lane(self, lane_id: int) -> Lane | None:
+        lanes = self.left if lane_id > 0 else self.right
+        for lane in lanes:
+            if lane.id == lane_id:
+                return lane
+        return None
+
+    @property
+    def lane_ids(self) -> tuple[int, ...]:
+        """All non-centre lane ids, left to right (e.g. ``(2, 1, -1, -2)``)."""
+        return tuple(lane.id for lane in reversed(self.left)) + tuple(
+            lane.id for lane in self.right
+        )
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Road:
+    """An OpenDRIVE road. ``junction`` is ``"-1"`` for roads outside junctions."""
+
+    id: str
+    name: str
+    length: float
+    junction: str
+    rule: TrafficRule
+    predecessor: RoadLink | None
+    successor: RoadLink | None
+    geometries: tuple[Geometry, ...]
+    elevations: tuple[Poly3, ...] = ()
+    lane_offsets: tuple[Poly3, ...] = ()
+    lane_sections: tuple[LaneSection, ...] = ()
+
+    @property
+    def in_junction(self) -> bool:
+        return self.junction not in ("-1", "")
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class LaneLink:
+    """Junction lane link: lane ``from_lane`` of the incoming road continues as ``to_lane`` of the
+    connecting road."""
+
+    from_lane: int
+    to_lane: int
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Connection:
+    """A junction connection from an incoming road into a connecting road (at its contact end)."""
+
+    id: str
+    incoming_road: str
+    connecting_road: str
+    contact_point: ContactPoint
+    lane_links: tuple[LaneLink, ...] = ()
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Junction:
+    id: str
+    name: str
+    connections: tuple[Connection, ...] = ()
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class OpenDrive:
+    """A whole parsed document."""
+
+    rev_major: int
+    rev_minor: int
+    name: str
+    roads: tuple[Road, ...]
+    junctions: tuple[Junction, ...] = ()

@@ -1,0 +1,179 @@
+"""World point -> road coordinates (road, s, t): nearest-road search plus exact refinement.
+
+Every road's reference line is sampled into short segments (with the road's lateral extent at each
+sample) once per network. A query measures, for all segments at once with numpy, how far the point
+lies outside each road's surface, keeps the best few roads and refines s on their exact reference
+lines with Newton steps. Overlapping roads (junction connecting roads) are told apart by a hint
+(the road the entity was on) and the entity heading. With a hint the search usually skips the
+sampled index entirely: one Newton refinement on the hinted road.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Sequence
+
+import numpy as np
+import numpy.typing as npt
+
+from simtest_operator.opendrive import lanes, planview
+
+SAMPLE_STEP = 2.0
+"""Reference-line sampling distance of the search index, metres."""
+_CANDIDATE_SLACK = 1.0
+_MAX_CANDIDATES = 6
+
+_Array = npt.NDArray[np.float64]
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Projection:
+    """A point's exact coordinates relative to one road."""
+
+    road_index: int
+    s: float
+    t: float
+    heading: float
+    outside: float
+    """How far the point lies outside the road surface (0 when on it), metres."""
+
+
+class RoadIndex:
+    """Sampled segments of every road, for nearest-road search."""
+
+    __slots__ = ("_bounds", "_ends", "_layouts", "_lines", "_seg", "_spans", "_starts")
+
+    def __init__(
+        self, lines: Sequence[planview.ReferenceLine], layouts: Sequence[lanes.RoadLayout]
+    ) -> None:
+        self._lines = lines
+        self._layouts = layouts
+        columns: list[list[float]] = [[] for _ in range(8)]
+        spans: list[tuple[int, int]] = []
+        for road_index, (line, layout) in enumerate(zip(lines, layouts, strict=True)):
+            samples = line.sample_s(SAMPLE_STEP)
+            points = [line.at(s) for s in samples]
+            extents = [_extent(layout, s) for s in samples]
+            first = len(columns[0])
+            for k in range(len(samples) - 1):
+                (x0, y0, _, _), (x1, y1, _, _) = points[k], points[k + 1]
+                values = (
+                    x0,
+                    y0,
+                    x1 - x0,
+                    y1 - y0,
+                    samples[k],
+                    float(road_index),
+                    min(extents[k][0], extents[k + 1][0]),
+                    max(extents[k][1], extents[k + 1][1]),
+                )
+                for column, value in zip(columns, values, strict=True):
+                    column.append(value)
+            spans.append((first, len(columns[0])))
+        self._seg = np.array(columns, dtype=np.float64).reshape(8, -1)
+        self._spans = spans
+        nonempty = [(first, last) for first, last in spans if last > first]
+        self._starts = np.array([first for first, _ in nonempty], dtype=np.intp)
+        self._ends = [last for _, last in nonempty]
+        self._bounds = self._road_bounds()
+
+    def _road_bounds(self) -> _Array:
+        """Per-road axis-aligned box (xmin, ymin, xmax, ymax) grown by the lateral extent."""
+        boxes = np.zeros((len(self._spans), 4))
+        seg = self._seg
+        for road_index, (first, last) in enumerate(self._spans):
+            if first == last:
+                boxes[road_index] = (np.inf, np.inf, -np.inf, -np.inf)
+                continue
+            x0, y0 = seg[0, first:last], seg[1, first:last]
+            x1, y1 = x0 + seg[2, first:last], y0 + seg[3, first:last]
+            grow = float(np.max(np.maximum(np.abs(seg[6, first:last]), np.abs(seg[7, first:last]))))
+            boxes[road_index] = (
+                min(x0.min(), x1.min()) - grow,
+                min(y0.min(), y1.min()) - grow,
+                max(x0.max(), x1.max()) + grow,
+                max(y0.max(), y1.max()) + grow,
+            )
+        return boxes
+
+    def candidates(self, x: float, y: float) -> list[tuple[int, float]]:
+        """(road index, approximate s) of the roads nearest to the point, best first."""
+        seg = self._seg
+        if not self._ends:
+            return []
+        dx, dy = seg[2], seg[3]
+        rx, ry = x - seg[0], y - seg[1]
+        length2 = dx * dx + dy * dy
+        with np.errstate(divide="ignore", invalid="ignore"):
+            u = np.clip(np.where(length2 > 0, (rx * dx + ry * dy) / length2, 0.0), 0.0, 1.0)
+        px, py = rx - u * dx, ry - u * dy
+        distance = np.hypot(px, py)
+        side = dx * ry - dy * rx
+        margin = np.where(side >= 0, np.maximum(seg[7], 0.0), np.maximum(-seg[6], 0.0))
+        outside = np.maximum(distance - margin, 0.0)
+        per_road = np.minimum.reduceat(outside, self._starts)
+        best = float(per_road.min())
+        chosen = np.flatnonzero(per_road <= best + _CANDIDATE_SLACK)
+        chosen = chosen[np.argsort(per_road[chosen], kind="stable")][:_MAX_CANDIDATES]
+        result: list[tuple[int, float]] = []
+        for position in chosen:
+            first = int(self._starts[position])
+            last = first + int(np.argmin(outside[first : self._ends[position]]))
+            road_index = int(seg[5, first])
+            result.append((road_index, float(seg[4, last] + u[last] * math.sqrt(length2[last]))))
+        return result
+
+    def nearest_s(self, road_index: int, x: float, y: float) -> float:
+        """Approximate s of the point on one road from its sampled segments."""
+        first, last = self._spans[road_index]
+        seg = self._seg[:, first:last]
+        if seg.shape[1] == 0:
+            return 0.0
+        dx, dy = seg[2], seg[3]
+        rx, ry = x - seg[0], y - seg[1]
+        length2 = dx * dx + dy * dy
+        with np.errstate(divide="ignore", invalid="ignore"):
+            u = np.clip(np.where(length2 > 0, (rx * dx + ry * dy) / length2, 0.0), 0.0, 1.0)
+        distance = np.hypot(rx - u * dx, ry - u * dy)
+        k = int(np.argmin(distance))
+        return float(seg[4, k] + u[k] * math.sqrt(length2[k]))
+
+    def may_contain(self, road_index: int, x: float, y: float) -> bool:
+        xmin, ymin, xmax, ymax = self._bounds[road_index]
+        return bool(xmin <= x <= xmax and ymin <= y <= ymax)
+
+    def refine(self, road_index: int, x: float, y: float, s: float) -> Projection:
+        """Exact projection onto one road's reference line, starting from ``s``."""
+        line = self._lines[road_index]
+        length = line.length
+        for _ in range(12):
+            rx, ry, heading, curvature = line.at(s)
+            cos_h, sin_h = math.cos(heading), math.sin(heading)
+            along = (x - rx) * cos_h + (y - ry) * sin_h
+            lateral = -(x - rx) * sin_h + (y - ry) * cos_h
+            denominator = 1.0 - curvature * lateral
+            step = along / denominator if denominator > 0.2 else along
+            new_s = min(max(s + step, 0.0), length)
+            if abs(new_s - s) < 1e-7:
+                s = new_s
+                break
+            s = new_s
+        rx, ry, heading, _ = line.at(s)
+        cos_h, sin_h = math.cos(heading), math.sin(heading)
+        along = (x - rx) * cos_h + (y - ry) * sin_h
+        t = -(x - rx) * sin_h + (y - ry) * cos_h
+        t_min, t_max = _extent(self._layouts[road_index], s)
+        lateral_out = max(t - t_max, t_min - t, 0.0)
+        overshoot = abs(along) if (s <= 0.0 and along < 0) or (s >= length and along > 0) else 0.0
+        return Projection(
+            road_index=road_index,
+            s=s,
+            t=t,
+            heading=heading,
+            outside=math.hypot(lateral_out, overshoot if overshoot > 1e-6 else 0.0),
+        )
+
+
+def _extent(layout: lanes.RoadLayout, s: float) -> tuple[float, float]:
+    return layout.extent(s)
