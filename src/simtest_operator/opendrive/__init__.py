@@ -13,7 +13,7 @@ from simtest_operator.opendrive.network import (
     RoadCoord,
     RoadNetwork,
 )
-from simtest_operator.opendrive.parsing import load, parse
+from simtest_operator.opendrive.parsing import load, parse, without_signals
 from simtest_operator.opendrive.topology import LaneEntry
 
 __all__ = [
@@ -30,4 +30,5 @@ __all__ = [
     "TrafficRule",
     "load",
     "parse",
+    "without_signals",
 ]

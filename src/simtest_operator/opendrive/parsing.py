@@ -331,3 +331,27 @@ class _Reader:
             name=element.get("name") or "",
             connections=tuple(connections),
         )
+
+
+def without_signals(data: bytes, *, source: str = "<xodr>") -> bytes:
+    """The document with every ``<signals>``/``<signal>`` element removed.
+
+    Some real maps carry signal definitions that netconvert rejects (for example an empty
+    ``type``); the simulator does not use signals, so a copy without them is converted instead.
+    """
+    if len(data) > MAX_BYTES:
+        raise ScenarioError(f"OpenDRIVE data is {len(data)} bytes, limit {MAX_BYTES}", file=source)
+    try:
+        root = etree.fromstring(data, parser=_parser())
+    except etree.XMLSyntaxError as exc:
+        raise ScenarioError(f"malformed OpenDRIVE XML: {exc}", file=source) from exc
+    doomed = [
+        element
+        for element in root.iter()
+        if _local(element) in ("signals", "signal", "signalReference")
+    ]
+    for element in doomed:
+        parent = element.getparent()
+        if parent is not None:
+            parent.remove(element)
+    return bytes(etree.tostring(root, xml_declaration=True, encoding="UTF-8"))

@@ -1,0 +1,176 @@
+"""OpenDRIVE -> SUMO network conversion with netconvert, cached by content hash.
+
+Converting a map takes 0.2-0.5 s and the same few maps back thousands of runs, so each converted
+``.net.xml`` is kept under ``settings.cache.nets`` named by the SHA-256 of the map content, the
+netconvert flags and the SUMO version. Files appear atomically (temp file + rename), so processes
+converting the same map at the same time are safe: the last rename wins with identical content.
+
+The flags keep SUMO's x/y equal to OpenDRIVE's (no offset normalisation) and annotate every SUMO
+lane with ``origId="<road>_<lane>"``. Known-broken real maps are retried with ``--ignore-errors``
+and then on a copy without ``<signal>`` elements (see notes/sumo-mapping.md).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import importlib.metadata
+import subprocess
+import tempfile
+import time
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import sumo  # type: ignore[import-untyped]  # no stubs; lead: add "sumo.*" to mypy overrides
+import sumolib
+
+from simtest_operator import opendrive
+from simtest_operator.errors import ScenarioError, SimulationError
+
+NETCONVERT_FLAGS: tuple[str, ...] = (
+    "--offset.disable-normalization",
+    "true",
+    "--output.original-names",
+    "true",
+    "--opendrive.internal-shapes",
+    "true",
+    "--no-warnings",
+    "true",
+)
+"""Flags of every conversion (part of the cache key)."""
+
+_STRATEGY = "v1: plain, ignore-errors, no-signals, no-signals+ignore-errors"
+"""Names the fallback sequence; changing it invalidates cached nets."""
+_IGNORE_ERRORS = ("--ignore-errors", "true")
+_STDERR_TAIL = 20
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class ConvertedNet:
+    """A SUMO network ready to load."""
+
+    path: Path
+    from_cache: bool
+    seconds: float
+    """Wall time spent here (hash + lookup on a hit, conversion on a miss)."""
+
+
+def netconvert_binary() -> Path:
+    """netconvert shipped in the ``eclipse-sumo`` wheel."""
+    binary = Path(sumo.SUMO_HOME) / "bin" / "netconvert"
+    if not binary.is_file():
+        raise SimulationError(f"netconvert not found at {binary}; reinstall the eclipse-sumo wheel")
+    return binary
+
+
+def sumo_version() -> str:
+    try:
+        return importlib.metadata.version("eclipse-sumo")
+    except importlib.metadata.PackageNotFoundError as exc:
+        raise SimulationError("the eclipse-sumo package is not installed") from exc
+
+
+def cache_key(content: bytes) -> str:
+    digest = hashlib.sha256(content)
+    for part in (*NETCONVERT_FLAGS, _STRATEGY, sumo_version()):
+        digest.update(b"\0" + part.encode())
+    return digest.hexdigest()
+
+
+def ensure_net(xodr: Path, *, cache_dir: Path, timeout: float = 300.0) -> ConvertedNet:
+    """The SUMO network for the OpenDRIVE file ``xodr``, converting it on a cache miss.
+
+    Raises ScenarioError if the map cannot be read and SimulationError if netconvert fails on
+    every fallback (the message ends with netconvert's last stderr lines).
+    """
+    started = time.perf_counter()
+    try:
+        content = xodr.read_bytes()
+    except OSError as exc:
+        raise ScenarioError(f"cannot read OpenDRIVE file: {exc}", file=str(xodr)) from exc
+    target = cache_dir / f"{cache_key(content)}.net.xml"
+    if target.is_file() and target.stat().st_size > 0:
+        return ConvertedNet(path=target, from_cache=True, seconds=time.perf_counter() - started)
+    cache_dir.mkdir(parents=True, exist_ok=True)
+    _convert(xodr, content, target, timeout=timeout)
+    return ConvertedNet(path=target, from_cache=False, seconds=time.perf_counter() - started)
+
+
+def _convert(xodr: Path, content: bytes, target: Path, *, timeout: float) -> None:
+    failures: list[str] = []
+    with tempfile.TemporaryDirectory(prefix="netconvert-", dir=target.parent) as work:
+        work_dir = Path(work)
+        stripped: Path | None = None
+        attempts: list[tuple[str, Path | None, Sequence[str]]] = [
+            ("plain", xodr, ()),
+            ("--ignore-errors", xodr, _IGNORE_ERRORS),
+            ("without signals", None, ()),
+            ("without signals, --ignore-errors", None, _IGNORE_ERRORS),
+        ]
+        for label, source, extra in attempts:
+            if source is None:
+                if stripped is None:
+                    stripped = work_dir / "stripped.xodr"
+                    stripped.write_bytes(opendrive.without_signals(content, source=str(xodr)))
+                source = stripped
+            output = work_dir / "out.net.xml"
+            result = _run(source, output, extra, timeout=timeout)
+            if result.returncode == 0 and output.is_file() and output.stat().st_size > 0:
+                # Same directory as the target, so the rename is atomic.
+                output.replace(target)
+                return
+            tail = "\n".join(result.stderr.strip().splitlines()[-_STDERR_TAIL:])
+            failures.append(f"[{label}] rc={result.returncode}: {tail}")
+    raise SimulationError(
+        f"netconvert failed on {xodr} with every fallback:\n" + "\n".join(failures)
+    )
+
+
+def _run(
+    source: Path, output: Path, extra: Sequence[str], *, timeout: float
+) -> subprocess.CompletedProcess[str]:
+    command = [
+        str(netconvert_binary()),
+        "--opendrive-files",
+        str(source),
+        "--output-file",
+        str(output),
+        *NETCONVERT_FLAGS,
+        *extra,
+    ]
+    try:
+        return subprocess.run(
+            command,
+            capture_output=True,
+            text=True,
+            timeout=timeout,
+            env={"SUMO_HOME": str(sumo.SUMO_HOME)},
+            check=False,
+        )
+    except subprocess.TimeoutExpired as exc:
+        raise SimulationError(f"netconvert timed out after {timeout:.0f} s on {source}") from exc
+    except OSError as exc:
+        raise SimulationError(f"cannot run netconvert: {exc}") from exc
+
+
+def lane_origins(net_path: Path) -> Mapping[tuple[str, int], tuple[str, ...]]:
+    """OpenDRIVE (road id, lane id) -> SUMO lane ids, from the ``origId`` lane parameters.
+
+    Normal lanes of split lane sections map several SUMO lanes to one OpenDRIVE lane (ordered as
+    in the net file); junction connecting roads map to internal lanes (``:<junction>_<n>_<i>``).
+    """
+    try:
+        net = sumolib.net.readNet(str(net_path), withInternal=True)
+    except (OSError, ValueError) as exc:
+        raise SimulationError(f"cannot read SUMO network {net_path}: {exc}") from exc
+    mapping: dict[tuple[str, int], list[str]] = {}
+    for edge in net.getEdges(withInternal=True):
+        for lane in edge.getLanes():
+            for origin in (lane.getParam("origId") or "").split():
+                road_id, _, lane_id = origin.rpartition("_")
+                try:
+                    key = (road_id, int(lane_id))
+                except ValueError:
+                    continue
+                mapping.setdefault(key, []).append(lane.getID())
+    return {key: tuple(value) for key, value in mapping.items()}
