@@ -1,0 +1,32 @@
+"""Opening a results store from what a user or a Secret gives: a file, a folder or a DSN.
+
+The one place that decides between SQLite and PostgreSQL, so the CLI, the local runner and the
+operator accept the same spellings.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from simtest_operator.results import postgres, sqlite, sqlstore, stores
+
+
+def open_store(target: str | Path, *, clock: sqlstore.Clock = sqlstore.utc_now) -> stores.Store:
+    """Open (creating and migrating as needed) the store at ``target``.
+
+    ``postgresql://...`` or ``postgres://...`` -> PostgreSQL; an existing folder -> its
+    ``results.sqlite``; anything else -> that SQLite file.
+    """
+    if isinstance(target, str) and postgres.is_dsn(target):
+        return postgres.PostgresStore(target, clock=clock)
+    path = Path(target)
+    if path.is_dir():
+        path = path / sqlite.DEFAULT_FILENAME
+    return sqlite.SqliteStore(path, clock=clock)
+
+
+def describe(target: str | Path) -> str:
+    """A display form of a store target that never shows a password."""
+    if isinstance(target, str) and postgres.is_dsn(target):
+        return f"postgresql://{postgres.describe(target)}"
+    return str(target)

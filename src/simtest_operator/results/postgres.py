@@ -1,0 +1,132 @@
+"""The shared results store: PostgreSQL through psycopg 3, for the operator and for teams.
+
+Same schema and queries as SQLite (see :mod:`.sqlstore`), with native JSONB and TIMESTAMPTZ
+columns so the tables are pleasant to query from other tools. Migrations take a transaction-level
+advisory lock, so several operator replicas or CI jobs opening the database at once apply each
+step exactly once. The DSN comes from a Secret and may hold a password: it never appears in an
+error message (only host, port and database name do).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import datetime
+from collections.abc import Iterable, Iterator, Sequence
+from typing import Any
+
+import psycopg
+import psycopg.conninfo
+import psycopg.types.json
+
+from simtest_operator.errors import ResultsError
+from simtest_operator.results import migrating, sqlstore
+
+MIGRATION_LOCK = 0x73696D7465737400
+"""Advisory lock key for migrations (``b"simtest\\0"`` as a big-endian integer)."""
+
+DSN_PREFIXES = ("postgresql://", "postgres://")
+
+
+def is_dsn(target: str) -> bool:
+    """Whether a store target names a PostgreSQL database rather than a file."""
+    return target.startswith(DSN_PREFIXES)
+
+
+def describe(dsn: str) -> str:
+    """``host:port/dbname`` of a DSN, safe to show (no user, no password)."""
+    try:
+        parts = psycopg.conninfo.conninfo_to_dict(dsn)
+    except psycopg.ProgrammingError:
+        return "<unparsable DSN>"
+    return f"{parts.get('host', 'localhost')}:{parts.get('port', 5432)}/{parts.get('dbname', '')}"
+
+
+class _PostgresCodec:
+    """JSONB through psycopg's adapter; TIMESTAMPTZ as aware datetimes."""
+
+    def json_in(self, value: object) -> object:
+        return psycopg.types.json.Jsonb(value)
+
+    def json_out(self, raw: Any) -> Any:
+        return raw
+
+    def time_in(self, value: datetime.datetime) -> object:
+        return value
+
+    def time_out(self, raw: Any) -> datetime.datetime:
+        if not isinstance(raw, datetime.datetime):
+            raise ResultsError(f"expected a timestamp from PostgreSQL, got {raw!r}")
+        return raw.astimezone(datetime.UTC)
+
+
+class _PostgresTx:
+    def __init__(self, connection: psycopg.Connection[Any]) -> None:
+        self._connection = connection
+
+    def query(self, sql: str, params: Sequence[object] = ()) -> list[sqlstore.Row]:
+        cursor = self._connection.execute(_placeholders(sql), tuple(params) if params else None)
+        return list(cursor.fetchall()) if cursor.description is not None else []
+
+    def execute_many(self, sql: str, rows: Iterable[Sequence[object]]) -> None:
+        batch = [tuple(row) for row in rows]
+        if batch:
+            with self._connection.cursor() as cursor:
+                cursor.executemany(_placeholders(sql), batch)
+
+
+def _redact(message: str, dsn: str) -> str:
+    try:
+        password = psycopg.conninfo.conninfo_to_dict(dsn).get("password")
+    except psycopg.ProgrammingError:
+        return "<error message withheld: unparsable DSN>"
+    return message.replace(str(password), "***") if password else message
+
+
+def _placeholders(sql: str) -> str:
+    # The shared queries use sqlite3's "?"; none contains a literal "?" or "%".
+    return sql.replace("?", "%s")
+
+
+class PostgresStore(sqlstore.SqlStore):
+    """A results store in a PostgreSQL database; migrated on open."""
+
+    dialect = migrating.Dialect.POSTGRES
+
+    def __init__(
+        self,
+        dsn: str,
+        *,
+        clock: sqlstore.Clock = sqlstore.utc_now,
+        auto_migrate: bool = True,
+        connect_timeout: int = 10,
+    ) -> None:
+        """Connect to ``dsn``; ``auto_migrate=False`` is for staged upgrades."""
+        super().__init__(codec=_PostgresCodec(), clock=clock)
+        self.where = describe(dsn)
+        try:
+            self._connection: psycopg.Connection[Any] = psycopg.connect(
+                dsn, autocommit=True, connect_timeout=connect_timeout
+            )
+        except psycopg.Error as exc:
+            raise ResultsError(
+                f"cannot connect to the results database {self.where}: {_redact(str(exc), dsn)}; "
+                "check the DSN secret and that the server is reachable"
+            ) from None
+        if auto_migrate:
+            self.migrate()
+
+    @contextlib.contextmanager
+    def _transaction(self, *, write: bool) -> Iterator[sqlstore.Tx]:
+        try:
+            with self._connection.transaction():
+                if not write:
+                    self._connection.execute("SET TRANSACTION READ ONLY")
+                yield _PostgresTx(self._connection)
+        except psycopg.Error as exc:
+            raise ResultsError(f"results database {self.where}: {exc}") from exc
+
+    def _lock_for_migration(self, tx: sqlstore.Tx) -> None:
+        tx.query("SELECT pg_advisory_xact_lock(?)", (MIGRATION_LOCK,))
+
+    def close(self) -> None:
+        self._connection.close()
