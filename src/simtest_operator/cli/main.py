@@ -9,7 +9,7 @@ from __future__ import annotations
 import click
 
 from simtest_operator import __version__
-from simtest_operator.cli import crds
+from simtest_operator.cli import crds, devcluster
 
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
@@ -19,6 +19,7 @@ def cli() -> None:
 
 
 cli.add_command(crds.crds)
+cli.add_command(devcluster.dev_cluster)
 
 
 def main() -> None:
