@@ -1,0 +1,129 @@
+"""Actors: the mutable runtime state of every scenario entity during a run.
+
+An actor moves in one of three modes: ``ROAD`` (following its lane at an offset from the lane
+centre, direction set by its heading, continuing through the lane graph), ``FREE`` (straight along
+its heading, for open space and entities placed off the lanes) and ``PATH`` (a trajectory action
+sets its pose every step). Scenario values never mutate; actors are the one place that does, and
+:meth:`Actor.state` freezes them into snapshot values.
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+
+from simtest_operator.openscenario import model
+from simtest_operator.sim.sut import DriverModel
+from simtest_operator.snapshots import BoundingBox, EntityKind, EntityState
+
+
+class Mode(enum.StrEnum):
+    """How an actor's position advances each step."""
+
+    ROAD = "road"
+    FREE = "free"
+    PATH = "path"
+
+
+class Domain(enum.StrEnum):
+    """Control domains; a new action in a domain replaces the running one there."""
+
+    LONGITUDINAL = "longitudinal"
+    LATERAL = "lateral"
+
+
+class Actor:
+    """One entity during a run (OpenDRIVE conventions, reference point)."""
+
+    __slots__ = (
+        "acceleration",
+        "box",
+        "category",
+        "direction",
+        "driver",
+        "end_of_road_time",
+        "heading",
+        "id",
+        "kind",
+        "lane_id",
+        "lateral_speed",
+        "mode",
+        "name",
+        "obj",
+        "odometer",
+        "offroad_time",
+        "offset",
+        "pitch",
+        "placed",
+        "road_id",
+        "roll",
+        "route_roads",
+        "s",
+        "speed",
+        "standstill_time",
+        "stuck",
+        "x",
+        "y",
+        "z",
+    )
+
+    def __init__(self, obj: model.ScenarioObject, actor_id: int) -> None:
+        self.obj = obj
+        self.name = obj.name
+        self.id = actor_id
+        self.kind: EntityKind = obj.kind
+        self.category = obj.category
+        self.box: BoundingBox = obj.bounding_box
+        self.x = self.y = self.z = 0.0
+        self.heading = self.pitch = self.roll = 0.0
+        self.speed = 0.0
+        self.acceleration = 0.0
+        self.lateral_speed = 0.0
+        self.mode = Mode.FREE
+        self.road_id: str | None = None
+        self.lane_id = 0
+        self.s = 0.0
+        self.offset = 0.0
+        """Lateral offset (m) from the centre of ``lane_id``, positive towards +t."""
+        self.direction = 1
+        """+1 when moving towards increasing s on ``road_id``, else -1."""
+        self.placed = False
+        """False until a Teleport (or the first pose) puts the actor into the world."""
+        self.odometer = 0.0
+        self.standstill_time = 0.0
+        self.offroad_time = 0.0
+        self.end_of_road_time = 0.0
+        self.stuck = False
+        """True while the lane it follows has ended (no successor)."""
+        self.route_roads: frozenset[str] = frozenset()
+        """Roads of an assigned route, preferred at forks."""
+        self.driver: DriverModel | None = None
+        """Set while the system-under-test driver model controls this actor."""
+
+    @property
+    def front_offset(self) -> float:
+        """Distance from the reference point to the front bumper."""
+        return self.box.center_x + self.box.length / 2.0
+
+    def state(self) -> EntityState:
+        """A frozen snapshot of this actor."""
+        return EntityState(
+            id=self.id,
+            name=self.name,
+            kind=self.kind,
+            category=self.category,
+            x=self.x,
+            y=self.y,
+            z=self.z,
+            heading=(self.heading + math.pi) % (2.0 * math.pi) - math.pi,
+            pitch=self.pitch,
+            roll=self.roll,
+            speed=self.speed,
+            acceleration=self.acceleration,
+            lateral_speed=self.lateral_speed,
+            box=self.box,
+            road_id=self.road_id if self.mode is Mode.ROAD else None,
+            lane_id=self.lane_id if self.mode is Mode.ROAD else None,
+            s=self.s if self.mode is Mode.ROAD else None,
+            t=None,
+        )

@@ -1,0 +1,236 @@
+"""Condition evaluation: the raw truth of every supported OpenSCENARIO condition.
+
+Entity conditions are evaluated per triggering entity and combined with the ``any``/``all`` rule;
+the satisfied entities are returned too (``selectTriggeringEntities``). Edges and delays are the
+trigger layer's business (:mod:`~simtest_operator.sim.triggers`). An unsupported condition raises
+the error that turns the run ``Invalid`` when it is first evaluated, i.e. when execution reaches it.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+from simtest_operator import geometry
+from simtest_operator.errors import ScenarioError
+from simtest_operator.openscenario import model
+from simtest_operator.sim import measures, positions
+from simtest_operator.sim.actors import Actor
+from simtest_operator.sim.triggers import Truth
+from simtest_operator.sim.world import World
+from simtest_operator.snapshots import EntityKind
+
+StateQuery = Callable[[model.StoryboardElementType, str, model.StoryboardElementState], bool]
+
+_EPSILON = 1e-9
+_OBJECT_TYPES = {
+    "vehicle": EntityKind.VEHICLE,
+    "pedestrian": EntityKind.PEDESTRIAN,
+    "miscellaneous": EntityKind.MISC_OBJECT,
+}
+
+
+def compare(value: float, rule: model.Rule, reference: float) -> bool:
+    """``value <rule> reference`` with a tiny tolerance for the equality rules."""
+    if rule is model.Rule.GREATER_THAN:
+        return value > reference
+    if rule is model.Rule.LESS_THAN:
+        return value < reference
+    if rule is model.Rule.GREATER_OR_EQUAL:
+        return value >= reference - _EPSILON
+    if rule is model.Rule.LESS_OR_EQUAL:
+        return value <= reference + _EPSILON
+    equal = abs(value - reference) <= _EPSILON * max(1.0, abs(reference))
+    return equal if rule is model.Rule.EQUAL_TO else not equal
+
+
+def _compare_typed(current: model.ParameterValue, rule: model.Rule, text: str) -> bool:
+    if isinstance(current, bool):
+        wanted = text.strip().lower() in ("true", "1")
+        return compare(float(current), rule, float(wanted))
+    if isinstance(current, int | float):
+        try:
+            return compare(float(current), rule, float(text))
+        except ValueError:
+            raise ScenarioError(f"cannot compare number {current} with {text!r}") from None
+    order = {
+        model.Rule.EQUAL_TO: current == text,
+        model.Rule.NOT_EQUAL_TO: current != text,
+        model.Rule.GREATER_THAN: current > text,
+        model.Rule.LESS_THAN: current < text,
+        model.Rule.GREATER_OR_EQUAL: current >= text,
+        model.Rule.LESS_OR_EQUAL: current <= text,
+    }
+    return order[rule]
+
+
+class Conditions:
+    """Evaluates condition bodies against the world and the storyboard state."""
+
+    __slots__ = ("_state_query", "_world")
+
+    def __init__(self, world: World, state_query: StateQuery) -> None:
+        self._world = world
+        self._state_query = state_query
+
+    def __call__(self, body: model.ByEntity | model.ByValue) -> Truth:
+        if isinstance(body, model.ByValue):
+            return self._by_value(body.condition), frozenset()
+        satisfied = frozenset(
+            name for name in body.triggering_entities if self._entity(name, body.condition)
+        )
+        if body.rule is model.TriggeringEntitiesRule.ALL:
+            return len(satisfied) == len(set(body.triggering_entities)), satisfied
+        return bool(satisfied), satisfied
+
+    # --- value conditions ---------------------------------------------------------------------
+
+    def _by_value(self, condition: model.ValueCondition) -> bool:
+        world = self._world
+        if isinstance(condition, model.SimulationTimeCondition):
+            return compare(world.time, condition.rule, condition.value)
+        if isinstance(condition, model.StoryboardElementStateCondition):
+            return self._state_query(condition.element_type, condition.element_ref, condition.state)
+        if isinstance(condition, model.ParameterCondition):
+            if condition.parameter_ref not in world.parameters:
+                raise ScenarioError(
+                    f"parameter {condition.parameter_ref!r} is not declared",
+                    element="ParameterCondition",
+                    line=condition.line,
+                )
+            current = world.parameters[condition.parameter_ref]
+            return _compare_typed(current, condition.rule, condition.value)
+        if isinstance(condition, model.VariableCondition):
+            if condition.variable_ref not in world.variables:
+                raise ScenarioError(
+                    f"variable {condition.variable_ref!r} is not declared",
+                    element="VariableCondition",
+                    line=condition.line,
+                )
+            current = world.variables[condition.variable_ref]
+            return _compare_typed(current, condition.rule, condition.value)
+        raise positions.unsupported(condition)
+
+    # --- entity conditions --------------------------------------------------------------------
+
+    def _entity(self, name: str, condition: model.EntityCondition) -> bool:
+        world = self._world
+        actor = world.actor(name)
+        if isinstance(condition, model.Unsupported):
+            raise positions.unsupported(condition)
+        if not actor.placed:
+            return False
+        if isinstance(condition, model.SpeedCondition):
+            value = actor.lateral_speed if _lateral(condition.direction) else actor.speed
+            return compare(value, condition.rule, condition.value)
+        if isinstance(condition, model.AccelerationCondition):
+            value = 0.0 if _lateral(condition.direction) else actor.acceleration
+            return compare(value, condition.rule, condition.value)
+        if isinstance(condition, model.StandStillCondition):
+            return actor.standstill_time >= condition.duration - _EPSILON and actor.speed == 0.0
+        if isinstance(condition, model.TraveledDistanceCondition):
+            return actor.odometer >= condition.value
+        if isinstance(condition, model.EndOfRoadCondition):
+            return actor.stuck and actor.end_of_road_time >= condition.duration - _EPSILON
+        if isinstance(condition, model.OffRoadCondition):
+            return actor.offroad_time > 0.0 and actor.offroad_time >= condition.duration - _EPSILON
+        if isinstance(condition, model.RelativeSpeedCondition):
+            other = world.actor(condition.entity_ref)
+            return compare(actor.speed - other.speed, condition.rule, condition.value)
+        if isinstance(condition, model.CollisionCondition):
+            return self._collision(actor, condition)
+        if isinstance(condition, model.ReachPositionCondition):
+            target = positions.resolve(world, condition.position)
+            return math.hypot(target.x - actor.x, target.y - actor.y) <= condition.tolerance
+        if isinstance(condition, model.DistanceCondition):
+            target = positions.resolve(world, condition.position)
+            point = measures.point_state(target.x, target.y, target.heading)
+            value = measures.to_point(
+                world.state(name),
+                point,
+                kind=condition.relative_distance_type,
+                freespace=condition.freespace,
+            )
+            return compare(value, condition.rule, condition.value)
+        if isinstance(condition, model.RelativeDistanceCondition):
+            other = world.actor(condition.entity_ref)
+            value = abs(
+                measures.between(
+                    world,
+                    actor,
+                    other,
+                    kind=condition.relative_distance_type,
+                    freespace=condition.freespace,
+                    system=condition.coordinate_system,
+                )
+            )
+            return compare(value, condition.rule, condition.value)
+        if isinstance(condition, model.TimeHeadwayCondition):
+            return compare(self._headway(actor, condition), condition.rule, condition.value)
+        if isinstance(condition, model.TimeToCollisionCondition):
+            return compare(self._ttc(actor, condition), condition.rule, condition.value)
+        raise ScenarioError(f"condition {type(condition).__name__} is not supported")
+
+    def _collision(self, actor: Actor, condition: model.CollisionCondition) -> bool:
+        world = self._world
+        me = world.state(actor.name)
+        if condition.entity_ref is not None:
+            other = world.actor(condition.entity_ref)
+            return other.placed and geometry.boxes_overlap(me, world.state(other.name))
+        kind = _OBJECT_TYPES.get(condition.by_type or "")
+        for other in world.actors.values():
+            if other is actor or not other.placed or (kind is not None and other.kind is not kind):
+                continue
+            if geometry.boxes_overlap(me, world.state(other.name)):
+                return True
+        return False
+
+    def _headway(self, actor: Actor, condition: model.TimeHeadwayCondition) -> float:
+        other = self._world.actor(condition.entity_ref)
+        distance = measures.between(
+            self._world,
+            actor,
+            other,
+            kind=condition.relative_distance_type,
+            freespace=condition.freespace,
+            system=condition.coordinate_system,
+        )
+        if actor.speed <= 0.0:
+            return math.inf if distance > 0 else -math.inf
+        return distance / actor.speed
+
+    def _ttc(self, actor: Actor, condition: model.TimeToCollisionCondition) -> float:
+        world = self._world
+        kind = condition.relative_distance_type
+        me = world.state(actor.name)
+        if condition.entity_ref is not None:
+            other_actor = world.actor(condition.entity_ref)
+            distance = measures.between(
+                world,
+                actor,
+                other_actor,
+                kind=kind,
+                freespace=condition.freespace,
+                system=condition.coordinate_system,
+            )
+            other = world.state(other_actor.name)
+        elif condition.position is not None:
+            target = positions.resolve(world, condition.position)
+            other = measures.point_state(target.x, target.y, target.heading)
+            distance = measures.to_point(me, other, kind=kind, freespace=condition.freespace)
+        else:
+            raise ScenarioError(
+                "TimeToCollisionCondition needs an entity or a position",
+                element="TimeToCollisionCondition",
+                line=condition.line,
+            )
+        if kind is not model.RelativeDistanceType.EUCLIDEAN and distance < 0:
+            return math.inf
+        closing = measures.closing_speed(me, other, kind)
+        if closing <= 0.0:
+            return math.inf
+        return abs(distance) / closing
+
+
+def _lateral(direction: model.DirectionalDimension | None) -> bool:
+    return direction is model.DirectionalDimension.LATERAL

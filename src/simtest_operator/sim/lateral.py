@@ -1,0 +1,145 @@
+"""Lateral actions: LaneChangeAction and LaneOffsetAction.
+
+Both move an actor's offset from its lane centre with a dynamics shape. A lane change keeps the
+actor's logical lane until it completes and measures the target lane centre afresh every step, so
+it follows lanes whose widths change and lanes that continue on the next road; at the end the
+actor belongs to the target lane. Durations come from the dynamics (``time``; ``distance`` /
+speed; lateral ``rate`` in m/s) or, for lane offsets, from the maximum lateral acceleration.
+"""
+
+from __future__ import annotations
+
+import math
+
+from simtest_operator.errors import ScenarioError
+from simtest_operator.openscenario import model
+from simtest_operator.sim import positions
+from simtest_operator.sim.actors import Actor, Mode
+from simtest_operator.sim.runs import LATERAL, Run, shape_fraction
+from simtest_operator.sim.world import World
+
+DEFAULT_MAX_LATERAL_ACCELERATION = 0.5
+"""m/s^2 for LaneOffsetActions without ``maxLateralAcc``."""
+
+
+def lanes_between(start: int, target: int) -> int:
+    """Signed number of lanes from ``start`` to ``target``, not counting the centre lane."""
+    delta = target - start
+    if start < 0 < target:
+        delta -= 1
+    elif target < 0 < start:
+        delta += 1
+    return delta
+
+
+def _require_lane(actor: Actor, element: str) -> str:
+    if actor.mode is not Mode.ROAD or actor.road_id is None:
+        raise ScenarioError(f"{element} needs {actor.name!r} on a lane", element=element)
+    return actor.road_id
+
+
+class LaneChangeRun(Run):
+    """A running LaneChangeAction."""
+
+    __slots__ = ("_delta", "_duration", "_elapsed", "_offset0", "_shape", "_target_offset")
+
+    def __init__(self, world: World, actor: Actor, action: model.LaneChangeAction) -> None:
+        super().__init__(actor, LATERAL)
+        road_id = _require_lane(actor, "LaneChangeAction")
+        target = action.target
+        if isinstance(target, model.AbsoluteTargetLane):
+            target_lane = target.lane_id
+        else:
+            ref = world.actor(target.entity_ref)
+            target_lane = positions.add_lanes(world.current_lane(ref), target.value)
+        self._delta = lanes_between(actor.lane_id, target_lane)
+        self._target_offset = action.target_lane_offset or 0.0
+        self._offset0 = actor.offset
+        self._shape = action.dynamics.shape
+        self._elapsed = 0.0
+        dynamics = action.dynamics
+        lateral = abs(self._relative_target(world, road_id) - self._offset0)
+        if dynamics.shape is model.DynamicsShape.STEP:
+            self._duration = 0.0
+        elif dynamics.dimension is model.DynamicsDimension.TIME:
+            self._duration = abs(dynamics.value)
+        elif dynamics.dimension is model.DynamicsDimension.DISTANCE:
+            self._duration = abs(dynamics.value) / max(abs(actor.speed), 0.1)
+        else:
+            self._duration = lateral / abs(dynamics.value) if dynamics.value else 0.0
+        if self._duration <= 0.0:
+            self._finish()
+
+    def _target_lane(self) -> int:
+        assert self.actor is not None
+        return positions.add_lanes(self.actor.lane_id, self._delta)
+
+    def _relative_target(self, world: World, road_id: str) -> float:
+        assert self.actor is not None
+        s = self.actor.s
+        target_t = world.lane_t(road_id, s, self._target_lane()) + self._target_offset
+        return target_t - world.lane_t(road_id, s, self.actor.lane_id)
+
+    def _finish(self) -> None:
+        assert self.actor is not None
+        self.actor.lane_id = self._target_lane()
+        self.actor.offset = self._target_offset
+        self.finished = True
+
+    def step(self, world: World, dt: float) -> None:
+        actor = self.actor
+        assert actor is not None
+        if actor.mode is not Mode.ROAD or actor.road_id is None:
+            self.cancel()
+            return
+        self._elapsed += dt
+        if self._elapsed >= self._duration:
+            self._finish()
+            return
+        target = self._relative_target(world, actor.road_id)
+        fraction = shape_fraction(self._shape, self._elapsed / self._duration)
+        actor.offset = self._offset0 + (target - self._offset0) * fraction
+
+
+class LaneOffsetRun(Run):
+    """A running LaneOffsetAction."""
+
+    __slots__ = ("_action", "_duration", "_elapsed", "_offset0")
+
+    def __init__(self, world: World, actor: Actor, action: model.LaneOffsetAction) -> None:
+        super().__init__(actor, LATERAL)
+        _require_lane(actor, "LaneOffsetAction")
+        self._action = action
+        self._offset0 = actor.offset
+        self._elapsed = 0.0
+        distance = abs(self._target(world) - self._offset0)
+        acc = action.max_lateral_acc or DEFAULT_MAX_LATERAL_ACCELERATION
+        if action.shape is model.DynamicsShape.STEP or distance < 1e-9:
+            self._duration = 0.0
+        elif action.shape is model.DynamicsShape.SINUSOIDAL:
+            self._duration = math.pi * math.sqrt(distance / (2.0 * acc))
+        elif action.shape is model.DynamicsShape.CUBIC:
+            self._duration = math.sqrt(6.0 * distance / acc)
+        else:
+            self._duration = math.sqrt(2.0 * distance / acc)
+        if self._duration <= 0.0:
+            actor.offset = self._target(world)
+            self.finished = not action.continuous
+
+    def _target(self, world: World) -> float:
+        target = self._action.target
+        if isinstance(target, model.AbsoluteTargetLaneOffset):
+            return target.value
+        return world.actor(target.entity_ref).offset + target.value
+
+    def step(self, world: World, dt: float) -> None:
+        actor = self.actor
+        assert actor is not None
+        self._elapsed += dt
+        target = self._target(world)
+        if self._elapsed >= self._duration:
+            actor.offset = target
+            self.finished = not self._action.continuous
+            return
+        fraction = shape_fraction(self._action.shape, self._elapsed / self._duration)
+        actor.offset = self._offset0 + (target - self._offset0) * fraction

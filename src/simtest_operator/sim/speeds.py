@@ -1,0 +1,127 @@
+"""Longitudinal speed actions: SpeedAction (all shapes and dimensions, absolute and relative,
+continuous) and SpeedProfileAction.
+
+A transition runs from the speed at the action start to the target with the dynamics shape over a
+duration derived from the dimension: ``time`` is the duration, ``distance`` the distance covered
+(duration = distance / mean speed), ``rate`` the mean acceleration (duration = |dv| / rate). A
+relative target is re-read each step, so the transition bends towards a moving target; with
+``continuous`` the action keeps tracking it after the transition and never ends by itself.
+"""
+
+from __future__ import annotations
+
+from simtest_operator.openscenario import model
+from simtest_operator.sim.actors import Actor
+from simtest_operator.sim.runs import LONGITUDINAL, Run, shape_fraction
+from simtest_operator.sim.world import World
+
+DEFAULT_ACCELERATION = 5.0
+"""Acceleration (m/s^2) for speed-profile entries that give no time and no constraint."""
+
+
+def target_speed(
+    world: World, target: model.AbsoluteTargetSpeed | model.RelativeTargetSpeed
+) -> float:
+    if isinstance(target, model.AbsoluteTargetSpeed):
+        return target.value
+    ref = world.actor(target.entity_ref).speed
+    if target.value_type is model.SpeedTargetValueType.FACTOR:
+        return ref * target.value
+    return ref + target.value
+
+
+def transition_duration(dynamics: model.TransitionDynamics, v0: float, v1: float) -> float:
+    """Seconds a speed transition from v0 to v1 takes under ``dynamics``."""
+    if dynamics.shape is model.DynamicsShape.STEP:
+        return 0.0
+    value = abs(dynamics.value)
+    if dynamics.dimension is model.DynamicsDimension.TIME:
+        return value
+    if dynamics.dimension is model.DynamicsDimension.DISTANCE:
+        mean = abs(v0 + v1) / 2.0
+        return value / mean if mean > 1e-6 else 0.0
+    return abs(v1 - v0) / value if value > 1e-9 else 0.0
+
+
+class SpeedRun(Run):
+    """A running SpeedAction on one actor."""
+
+    __slots__ = ("_action", "_duration", "_elapsed", "_v0")
+
+    def __init__(self, world: World, actor: Actor, action: model.SpeedAction) -> None:
+        super().__init__(actor, LONGITUDINAL)
+        self._action = action
+        self._v0 = actor.speed
+        self._elapsed = 0.0
+        self._duration = transition_duration(
+            action.dynamics, self._v0, target_speed(world, action.target)
+        )
+        if self._duration <= 0.0:
+            actor.speed = target_speed(world, action.target)
+            self.finished = not self._continuous
+
+    @property
+    def _continuous(self) -> bool:
+        target = self._action.target
+        return isinstance(target, model.RelativeTargetSpeed) and target.continuous
+
+    def step(self, world: World, dt: float) -> None:
+        assert self.actor is not None
+        target = target_speed(world, self._action.target)
+        self._elapsed += dt
+        if self._duration <= 0.0 or self._elapsed >= self._duration:
+            self.actor.speed = target
+            self.finished = not self._continuous
+            return
+        fraction = shape_fraction(self._action.dynamics.shape, self._elapsed / self._duration)
+        self.actor.speed = self._v0 + (target - self._v0) * fraction
+
+
+class SpeedProfileRun(Run):
+    """A running SpeedProfileAction: linear segments through the profile's speeds."""
+
+    __slots__ = ("_action", "_elapsed", "_index", "_segment", "_v0")
+
+    def __init__(self, world: World, actor: Actor, action: model.SpeedProfileAction) -> None:
+        super().__init__(actor, LONGITUDINAL)
+        self._action = action
+        self._index = 0
+        self._elapsed = 0.0
+        self._v0 = actor.speed
+        self._segment = self._duration(world)
+
+    def _target(self, world: World) -> float:
+        entry = self._action.entries[self._index]
+        if self._action.entity_ref is not None:
+            return world.actor(self._action.entity_ref).speed + entry.speed
+        return entry.speed
+
+    def _duration(self, world: World) -> float:
+        entry = self._action.entries[self._index]
+        if entry.time is not None:
+            return max(entry.time, 0.0)
+        assert self.actor is not None
+        dv = self._target(world) - self.actor.speed
+        limits = self._action.constraints
+        performance = self.actor.obj.performance
+        rate = None
+        if limits is not None:
+            rate = limits.max_acceleration if dv > 0 else limits.max_deceleration
+        if rate is None and performance is not None:
+            rate = performance.max_acceleration if dv > 0 else performance.max_deceleration
+        return abs(dv) / (rate or DEFAULT_ACCELERATION)
+
+    def step(self, world: World, dt: float) -> None:
+        assert self.actor is not None
+        self._elapsed += dt
+        while self._elapsed >= self._segment:
+            self.actor.speed = self._target(world)
+            self._index += 1
+            if self._index >= len(self._action.entries):
+                self.finished = True
+                return
+            self._elapsed -= self._segment
+            self._v0 = self.actor.speed
+            self._segment = self._duration(world)
+        fraction = self._elapsed / self._segment if self._segment > 0 else 1.0
+        self.actor.speed = self._v0 + (self._target(world) - self._v0) * fraction

@@ -1,0 +1,237 @@
+"""The libsumo backend: the only module of the project that imports libsumo.
+
+libsumo runs SUMO inside this process and is a per-process singleton: one simulation per process
+at a time. :meth:`SumoBackend.start` refuses to start a second one; the local executor and
+``simtest scenario check`` therefore run each scenario in its own worker process.
+
+Conventions translated here and nowhere else:
+- SUMO positions a vehicle by its front-bumper centre; the engine speaks about the OpenSCENARIO
+  reference point, ``front_offset`` metres behind the bumper along the heading.
+- SUMO angle = 90 - degrees(OpenDRIVE heading) (compass degrees, clockwise from north).
+- Network coordinates = OpenDRIVE coordinates + the net's ``netOffset`` (zero for nets the cache
+  builds with ``--offset.disable-normalization``, non-zero for some hand-made SUMO inputs).
+
+Engine-driven actors get ``speedMode 0`` / ``laneChangeMode 0`` and are placed every step with
+``moveToXY(keepRoute=2)`` (exact, even off the lanes). SUMO runs with ``--collision.action none``;
+the engine detects collisions from bounding boxes itself.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import math
+import re
+from collections.abc import Mapping
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+from simtest_operator.errors import SimulationError
+from simtest_operator.sim.backends import ActorSpec, ActorState, BackendConfig
+from simtest_operator.snapshots import EntityKind
+
+_ROUTE_ID = "simtest_route"
+_POSITION, _ANGLE, _SPEED = 0x42, 0x43, 0x40
+"""libsumo.constants VAR_POSITION, VAR_ANGLE, VAR_SPEED (stable TraCI protocol numbers)."""
+_SUBSCRIBED = (_POSITION, _ANGLE, _SPEED)
+_OFFSET_RE = re.compile(rb'netOffset="(-?[0-9.]+),(-?[0-9.]+)"')
+_NET_FILE_RE = re.compile(rb'<net-file\s+value="([^"]+)"')
+
+
+def _load_libsumo() -> ModuleType:
+    # libsumo prints a pyarrow version warning on import; it is irrelevant here and would spam
+    # every run's output, so swallow stdout while importing.
+    with contextlib.redirect_stdout(io.StringIO()):
+        import libsumo
+    module: ModuleType = libsumo
+    return module
+
+
+def sumo_angle(heading: float) -> float:
+    """SUMO compass angle (degrees) for an OpenDRIVE heading (radians)."""
+    return (90.0 - math.degrees(heading)) % 360.0
+
+
+def odr_heading(angle: float) -> float:
+    """OpenDRIVE heading (radians, in [-pi, pi)) for a SUMO compass angle (degrees)."""
+    return (math.radians(90.0 - angle) + math.pi) % (2.0 * math.pi) - math.pi
+
+
+def read_net_offset(net_file: Path) -> tuple[float, float]:
+    """The ``netOffset`` of a SUMO network (it sits in the first few kB of the file)."""
+    with net_file.open("rb") as handle:
+        head = handle.read(16384)
+    match = _OFFSET_RE.search(head)
+    return (float(match.group(1)), float(match.group(2))) if match else (0.0, 0.0)
+
+
+def _config_net(sumo_config: Path) -> Path | None:
+    match = _NET_FILE_RE.search(sumo_config.read_bytes())
+    return (sumo_config.parent / match.group(1).decode()) if match else None
+
+
+class SumoBackend:
+    """Backend protocol on libsumo."""
+
+    __slots__ = ("_external", "_lib", "_offset", "_placed", "_specs", "_speeds", "_started")
+
+    def __init__(self) -> None:
+        self._lib: Any = None
+        self._specs: dict[str, ActorSpec] = {}
+        self._placed: dict[str, ActorState] = {}
+        self._speeds: dict[str, float] = {}
+        self._external: dict[str, tuple[float, float]] = {}
+        self._offset = (0.0, 0.0)
+        self._started = False
+
+    def start(self, config: BackendConfig) -> None:
+        lib = _load_libsumo()
+        if lib.simulation.isLoaded():
+            raise SimulationError(
+                "libsumo already runs a simulation in this process; run one scenario per process"
+            )
+        args = ["sumo"]
+        net = config.net_file
+        if config.sumo_config is not None:
+            args += ["-c", str(config.sumo_config)]
+            net = _config_net(config.sumo_config) or net
+        elif net is not None:
+            args += ["-n", str(net)]
+        else:
+            raise SimulationError("the SUMO backend needs a road network; use open space instead")
+        args += [
+            "--step-length",
+            f"{config.step_length:g}",
+            "--seed",
+            str(config.seed),
+            "--lateral-resolution",
+            f"{config.lateral_resolution:g}",
+            "--collision.action",
+            "none",
+            "--time-to-teleport",
+            "-1",
+            "--begin",
+            "0",
+            "--no-step-log",
+            "true",
+            "--no-warnings",
+            "true",
+            "--duration-log.disable",
+            "true",
+        ]
+        try:
+            lib.start(args)
+            edges = [e for e in lib.edge.getIDList() if not e.startswith(":")]
+            if not edges:
+                raise SimulationError(f"SUMO network {net} has no edges")
+            lib.route.add(_ROUTE_ID, [edges[0]])
+        except lib.TraCIException as exc:
+            self._close_quietly(lib)
+            raise SimulationError(f"SUMO failed to start: {exc}") from exc
+        self._lib = lib
+        self._offset = read_net_offset(net) if net is not None else (0.0, 0.0)
+        self._started = True
+
+    def add(self, spec: ActorSpec) -> None:
+        lib = self._require()
+        type_id = f"simtest_{spec.name}"
+        try:
+            lib.vehicletype.copy("DEFAULT_VEHTYPE", type_id)
+            lib.vehicletype.setLength(type_id, max(spec.length, 0.1))
+            lib.vehicletype.setWidth(type_id, max(spec.width, 0.1))
+            lib.vehicletype.setMinGap(type_id, 0.0)
+            vclass = "passenger" if spec.kind is EntityKind.VEHICLE else "ignoring"
+            lib.vehicletype.setVehicleClass(type_id, vclass)
+            lib.vehicle.add(spec.name, _ROUTE_ID, typeID=type_id, departSpeed="0")
+            lib.vehicle.setSpeedMode(spec.name, 0)
+            lib.vehicle.setLaneChangeMode(spec.name, 0)
+        except lib.TraCIException as exc:
+            raise SimulationError(f"SUMO refused actor {spec.name!r}: {exc}") from exc
+        self._specs[spec.name] = spec
+
+    def place(self, name: str, *, x: float, y: float, heading: float, speed: float) -> None:
+        lib = self._require()
+        spec = self._specs[name]
+        cos_h, sin_h = math.cos(heading), math.sin(heading)
+        front_x = x + spec.front_offset * cos_h + self._offset[0]
+        front_y = y + spec.front_offset * sin_h + self._offset[1]
+        try:
+            lib.vehicle.moveToXY(name, "", -1, front_x, front_y, sumo_angle(heading), keepRoute=2)
+            if self._speeds.get(name) != speed:
+                lib.vehicle.setSpeed(name, max(speed, 0.0))
+                self._speeds[name] = speed
+        except lib.TraCIException as exc:
+            raise SimulationError(f"SUMO could not place {name!r}: {exc}") from exc
+        self._placed[name] = ActorState(
+            name=name,
+            x=x,
+            y=y,
+            heading=heading,
+            speed=speed,
+            length=spec.length,
+            width=spec.width,
+            front_offset=spec.front_offset,
+        )
+
+    def step(self) -> None:
+        lib = self._require()
+        try:
+            lib.simulationStep()
+            for vid in lib.simulation.getDepartedIDList():
+                if vid not in self._specs:
+                    lib.vehicle.subscribe(vid, _SUBSCRIBED)
+                    self._external[vid] = (
+                        lib.vehicle.getLength(vid),
+                        lib.vehicle.getWidth(vid),
+                    )
+            for vid in lib.simulation.getArrivedIDList():
+                self._external.pop(vid, None)
+        except lib.TraCIException as exc:
+            raise SimulationError(f"SUMO step failed: {exc}") from exc
+
+    def states(self) -> Mapping[str, ActorState]:
+        """Engine-driven actors as placed (SUMO moves them exactly there) plus SUMO traffic."""
+        result = dict(self._placed)
+        if not self._external:
+            return result
+        lib = self._require()
+        for vid, values in lib.vehicle.getAllSubscriptionResults().items():
+            dims = self._external.get(vid)
+            if dims is None:
+                continue
+            length, width = dims
+            heading = odr_heading(values[_ANGLE])
+            front_x, front_y = values[_POSITION]
+            half = length / 2.0
+            result[vid] = ActorState(
+                name=vid,
+                x=front_x - self._offset[0] - half * math.cos(heading),
+                y=front_y - self._offset[1] - half * math.sin(heading),
+                heading=heading,
+                speed=values[_SPEED],
+                length=length,
+                width=width,
+                front_offset=half,
+                external=True,
+            )
+        return result
+
+    def close(self) -> None:
+        if self._started and self._lib is not None:
+            self._close_quietly(self._lib)
+        self._started = False
+        self._specs.clear()
+        self._placed.clear()
+        self._external.clear()
+        self._speeds.clear()
+
+    def _require(self) -> Any:
+        if not self._started:
+            raise SimulationError("SUMO backend used before start or after close")
+        return self._lib
+
+    @staticmethod
+    def _close_quietly(lib: Any) -> None:
+        with contextlib.suppress(Exception):
+            lib.close()

@@ -1,0 +1,164 @@
+"""The world: actors, the road network, simulated time, parameters and variables.
+
+Actions, conditions and positions all read the world through this one object, so they agree on
+what "the current lane of X" or "the state of X" means. Frozen per-step entity states are cached
+(:meth:`World.refresh`) because conditions read them many times per step.
+"""
+
+from __future__ import annotations
+
+import math
+import random
+from collections.abc import Iterable
+
+from simtest_operator.errors import ScenarioError
+from simtest_operator.opendrive import RoadCoord, RoadNetwork
+from simtest_operator.openscenario import model
+from simtest_operator.sim.actors import Actor, Mode
+from simtest_operator.snapshots import EntityState
+
+ROAD_SNAP_ANGLE = math.radians(60.0)
+"""Entities placed within this angle of a lane's axis (either way) follow the lane."""
+
+
+class World:
+    """Everything that changes during a run, plus the static road network."""
+
+    __slots__ = (
+        "_states",
+        "actors",
+        "dt",
+        "ignored",
+        "parameters",
+        "rng",
+        "roads",
+        "time",
+        "variables",
+    )
+
+    def __init__(
+        self,
+        *,
+        roads: RoadNetwork | None,
+        actors: Iterable[Actor],
+        dt: float,
+        seed: int,
+        parameters: dict[str, model.ParameterValue],
+        variables: dict[str, model.ParameterValue],
+    ) -> None:
+        self.roads = roads
+        self.actors = {actor.name: actor for actor in actors}
+        self.dt = dt
+        self.time = 0.0
+        self.rng = random.Random(seed)
+        self.parameters = parameters
+        self.variables = variables
+        self.ignored: list[str] = []
+        self._states: dict[str, EntityState] = {}
+
+    def actor(self, name: str) -> Actor:
+        try:
+            return self.actors[name]
+        except KeyError:
+            raise ScenarioError(f"entity {name!r} is not declared", element="EntityRef") from None
+
+    def state(self, name: str) -> EntityState:
+        """Frozen state of ``name`` as of the last :meth:`refresh`."""
+        state = self._states.get(name)
+        if state is None:
+            state = self.actor(name).state()
+            self._states[name] = state
+        return state
+
+    def states(self) -> tuple[EntityState, ...]:
+        return tuple(self.state(name) for name, actor in self.actors.items() if actor.placed)
+
+    def refresh(self) -> None:
+        """Forget cached states after actors moved."""
+        self._states.clear()
+
+    # --- roads --------------------------------------------------------------------------------
+
+    def road_coord(self, x: float, y: float, heading: float | None = None) -> RoadCoord | None:
+        if self.roads is None:
+            return None
+        return self.roads.to_road(x, y, heading=heading)
+
+    def attach(self, actor: Actor) -> None:
+        """Put ``actor`` into ROAD mode on the lane under it if it is on a lane and roughly
+        aligned with it; otherwise FREE mode."""
+        coord = self.road_coord(actor.x, actor.y, actor.heading)
+        if coord is None or not coord.on_road or coord.lane_id == 0:
+            actor.mode = Mode.FREE
+            return
+        diff = math.remainder(actor.heading - coord.heading_of_road, 2.0 * math.pi)
+        if min(abs(diff), math.pi - abs(diff)) > ROAD_SNAP_ANGLE:
+            actor.mode = Mode.FREE
+            return
+        self.set_lane(
+            actor,
+            coord.road_id,
+            coord.lane_id,
+            coord.s,
+            self.offset_in_lane(coord.road_id, coord.s, coord.lane_id, coord.t),
+            direction=1 if abs(diff) <= math.pi / 2 else -1,
+        )
+
+    def offset_in_lane(self, road_id: str, s: float, lane_id: int, t: float) -> float:
+        assert self.roads is not None
+        bounds = self.roads.lane_bounds(road_id, s, lane_id)
+        return t - bounds.t_center if bounds is not None else 0.0
+
+    def set_lane(
+        self, actor: Actor, road_id: str, lane_id: int, s: float, offset: float, *, direction: int
+    ) -> None:
+        """Put ``actor`` on a lane (ROAD mode) without moving its pose."""
+        actor.mode = Mode.ROAD
+        actor.road_id = road_id
+        actor.lane_id = lane_id
+        actor.s = s
+        actor.offset = offset
+        actor.direction = direction
+        actor.stuck = False
+
+    def lane_t(self, road_id: str, s: float, lane_id: int) -> float:
+        """t of a lane's centre at s (0 for the centre lane or a lane that does not exist)."""
+        assert self.roads is not None
+        bounds = self.roads.lane_bounds(road_id, s, lane_id)
+        return bounds.t_center if bounds is not None else 0.0
+
+    def current_lane(self, actor: Actor) -> int:
+        """The lane containing the actor's reference point (its logical lane while changing)."""
+        if actor.mode is not Mode.ROAD or actor.road_id is None or self.roads is None:
+            coord = self.road_coord(actor.x, actor.y, actor.heading)
+            return coord.lane_id if coord is not None else 0
+        t = self.lane_t(actor.road_id, actor.s, actor.lane_id) + actor.offset
+        for bounds in self.roads.lanes_at(actor.road_id, actor.s):
+            if bounds.lane_id != 0 and bounds.t_min <= t <= bounds.t_max and bounds.width > 0:
+                return bounds.lane_id
+        return actor.lane_id
+
+    def pose_on_road(self, actor: Actor, lateral_angle: float = 0.0) -> None:
+        """Recompute a ROAD-mode actor's pose from its lane coordinates."""
+        assert self.roads is not None and actor.road_id is not None
+        pose = self.roads.lane_pose(actor.road_id, actor.s, actor.lane_id, actor.offset)
+        actor.x, actor.y, actor.z = pose.x, pose.y, pose.z
+        base = pose.heading if actor.direction > 0 else pose.heading + math.pi
+        actor.heading = math.remainder(base + lateral_angle, 2.0 * math.pi)
+
+    def neighbour_lane(
+        self, road_id: str, s: float, lane_id: int, steps: int, direction: int
+    ) -> int:
+        """The lane ``steps`` lanes to the left (positive) of ``lane_id`` for a vehicle travelling
+        in ``direction``, skipping the centre lane; clamped to existing lanes."""
+        assert self.roads is not None
+        ids = sorted(i for i in self.roads.lane_ids(road_id, s) if i != 0)
+        if not ids:
+            return lane_id
+        # Left of travel is +t when moving along +s, so the lane list walks upwards.
+        ordered = ids if direction > 0 else ids[::-1]
+        try:
+            index = ordered.index(lane_id)
+        except ValueError:
+            return lane_id
+        return ordered[max(0, min(len(ordered) - 1, index + steps))]
