@@ -113,7 +113,11 @@ class PostgresStore(sqlstore.SqlStore):
                 "check the DSN secret and that the server is reachable"
             ) from None
         if auto_migrate:
-            self.migrate()
+            try:
+                self.migrate()
+            except BaseException:
+                self.close()
+                raise
 
     @contextlib.contextmanager
     def _transaction(self, *, write: bool) -> Iterator[sqlstore.Tx]:

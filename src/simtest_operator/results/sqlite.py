@@ -80,7 +80,11 @@ class SqliteStore(sqlstore.SqlStore):
         except (OSError, sqlite3.Error) as exc:
             raise ResultsError(f"cannot open results database {self.path}: {exc}") from exc
         if auto_migrate:
-            self.migrate()
+            try:
+                self.migrate()
+            except BaseException:
+                self.close()
+                raise
 
     @contextlib.contextmanager
     def _transaction(self, *, write: bool) -> Iterator[sqlstore.Tx]:
