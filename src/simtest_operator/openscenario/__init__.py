@@ -1,1 +1,34 @@
-"""openscenario package."""
+"""OpenSCENARIO 1.0-1.3 loading: safe XML in, a typed immutable scenario model out.
+
+Public API (stable):
+
+- :func:`load_scenario` -- load a scenario file (with optional global parameter overrides) into
+  :class:`model.Scenario`.
+- :func:`expand_distribution` / :func:`is_distribution` -- expand ParameterValueDistribution
+  files into :class:`ConcreteRun` s (id, scenario path, overrides).
+- :func:`file_kind` -- tell scenario, catalog and distribution files apart.
+- :mod:`model` -- the scenario model the engine executes.
+
+Errors are :class:`simtest_operator.errors.ScenarioError` (and its subclass
+``UnsupportedFeatureError``) carrying file, element and line. lxml stays inside this package.
+"""
+
+from __future__ import annotations
+
+from simtest_operator.openscenario import model
+from simtest_operator.openscenario.distributions import (
+    ConcreteRun,
+    expand_distribution,
+    is_distribution,
+)
+from simtest_operator.openscenario.loading import FileKind, file_kind, load_scenario
+
+__all__ = [
+    "ConcreteRun",
+    "FileKind",
+    "expand_distribution",
+    "file_kind",
+    "is_distribution",
+    "load_scenario",
+    "model",
+]

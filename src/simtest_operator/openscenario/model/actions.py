@@ -15,9 +15,14 @@ from simtest_operator.openscenario.model.common import (
     CoordinateSystem,
     ReferenceContext,
     Unsupported,
-    ValueScope,
 )
-from simtest_operator.openscenario.model.entities import Controller
+from simtest_operator.openscenario.model.controls import (
+    ActivateControllerAction,
+    AssignControllerAction,
+    IgnoredAction,
+    ModifyValueAction,
+    SetValueAction,
+)
 from simtest_operator.openscenario.model.positions import Position, Route
 from simtest_operator.openscenario.model.trajectories import Trajectory
 
@@ -67,13 +72,6 @@ class LateralDisplacement(enum.StrEnum):
     ANY = "any"
     LEFT = "leftToReferencedEntity"
     RIGHT = "rightToReferencedEntity"
-
-
-class ModifyRule(enum.StrEnum):
-    """Parameter/variable modify operation."""
-
-    ADD = "addValue"
-    MULTIPLY = "multiplyByValue"
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
@@ -323,67 +321,6 @@ class SynchronizeAction:
     final_speed: AbsoluteFinalSpeed | RelativeFinalSpeed | None = None
     target_tolerance_master: float | None = None
     target_tolerance: float | None = None
-    line: int | None = None
-
-
-# --- controllers ------------------------------------------------------------------------------
-
-
-@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
-class ActivateControllerAction:
-    """Switch the entity's controller on/off per domain (None: leave unchanged)."""
-
-    lateral: bool | None = None
-    longitudinal: bool | None = None
-    lighting: bool | None = None
-    animation: bool | None = None
-    controller_ref: str | None = None
-    object_controller_ref: str | None = None
-    line: int | None = None
-
-
-@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
-class AssignControllerAction:
-    """Assign a controller to the entity, optionally activating domains (1.2)."""
-
-    controller: Controller | Unsupported
-    activate_lateral: bool | None = None
-    activate_longitudinal: bool | None = None
-    activate_lighting: bool | None = None
-    activate_animation: bool | None = None
-    line: int | None = None
-
-
-# --- parameters and variables -----------------------------------------------------------------
-
-
-@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
-class SetValueAction:
-    """Set a parameter or variable to ``value`` (text, typed by the declaration)."""
-
-    scope: ValueScope
-    ref: str
-    value: str
-    line: int | None = None
-
-
-@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
-class ModifyValueAction:
-    """Add to or multiply a numeric parameter or variable."""
-
-    scope: ValueScope
-    ref: str
-    rule: ModifyRule
-    value: float
-    line: int | None = None
-
-
-@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
-class IgnoredAction:
-    """An action accepted but not simulated (environment, lights, visibility, appearance)."""
-
-    kind: str
-    """XML tag, e.g. ``EnvironmentAction`` or ``LightStateAction``."""
     line: int | None = None
 
 

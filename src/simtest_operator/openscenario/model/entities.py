@@ -73,6 +73,15 @@ class Controller:
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class ObjectController:
+    """One ``<ObjectController>`` of an entity (1.3 allows several, selected by name)."""
+
+    controller: Controller | Unsupported
+    name: str | None = None
+    line: int | None = None
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
 class ScenarioObject:
     """One entity of the scenario."""
 
@@ -95,7 +104,10 @@ class ScenarioObject:
     controller: Controller | Unsupported | None = None
     """ObjectController's controller; None when the object has no controller (default driver)."""
     object_controller_name: str | None = None
-    """1.3 ``ObjectController name``, for ActivateControllerAction ``objectControllerRef``."""
+    """1.3 ``ObjectController name`` of ``controller``, if named."""
+    object_controllers: tuple[ObjectController, ...] = ()
+    """All ObjectControllers in file order (``controller`` is the first one's controller); 1.3
+    ActivateControllerAction ``objectControllerRef`` selects among them by name."""
     unsupported: Unsupported | None = None
     """Set when the object itself cannot be simulated (e.g. ExternalObjectReference); the other
     fields then hold defaults."""

@@ -157,6 +157,9 @@ class Scenario:
     ignored_kinds: tuple[str, ...] = ()
     """Distinct element kinds present that are accepted but not simulated (IgnoredAction kinds,
     scene graph, ...), sorted."""
+    notes: tuple[str, ...] = ()
+    """Non-fatal remarks about the input (e.g. a parameter value kept as text because it does
+    not fit its declared type), each naming file and line."""
     line: int | None = None
 
     def unsupported(self) -> tuple[Unsupported, ...]:

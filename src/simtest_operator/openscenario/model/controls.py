@@ -1,0 +1,80 @@
+"""Controller, parameter/variable and ignored actions of the scenario model.
+
+Split from :mod:`.actions` to keep modules small; import them through ``model``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import enum
+
+from simtest_operator.openscenario.model.common import Unsupported, ValueScope
+from simtest_operator.openscenario.model.entities import Controller
+
+
+class ModifyRule(enum.StrEnum):
+    """Parameter/variable modify operation."""
+
+    ADD = "addValue"
+    MULTIPLY = "multiplyByValue"
+
+
+# --- controllers ------------------------------------------------------------------------------
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class ActivateControllerAction:
+    """Switch the entity's controller on/off per domain (None: leave unchanged)."""
+
+    lateral: bool | None = None
+    longitudinal: bool | None = None
+    lighting: bool | None = None
+    animation: bool | None = None
+    controller_ref: str | None = None
+    object_controller_ref: str | None = None
+    line: int | None = None
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class AssignControllerAction:
+    """Assign a controller to the entity, optionally activating domains (1.2)."""
+
+    controller: Controller | Unsupported
+    activate_lateral: bool | None = None
+    activate_longitudinal: bool | None = None
+    activate_lighting: bool | None = None
+    activate_animation: bool | None = None
+    line: int | None = None
+
+
+# --- parameters and variables -----------------------------------------------------------------
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class SetValueAction:
+    """Set a parameter or variable to ``value`` (text, typed by the declaration)."""
+
+    scope: ValueScope
+    ref: str
+    value: str
+    line: int | None = None
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class ModifyValueAction:
+    """Add to or multiply a numeric parameter or variable."""
+
+    scope: ValueScope
+    ref: str
+    rule: ModifyRule
+    value: float
+    line: int | None = None
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class IgnoredAction:
+    """An action accepted but not simulated (environment, lights, visibility, appearance)."""
+
+    kind: str
+    """XML tag, e.g. ``EnvironmentAction`` or ``LightStateAction``."""
+    line: int | None = None

@@ -1,0 +1,101 @@
+"""Reading controllers: Controller definitions, ObjectController, assign/activate actions."""
+
+from __future__ import annotations
+
+from simtest_operator.openscenario import reading
+from simtest_operator.openscenario.model import actions as a
+from simtest_operator.openscenario.model import common as m
+from simtest_operator.openscenario.model import controls as ctl
+from simtest_operator.openscenario.model import entities as e
+from simtest_operator.openscenario.xmlsafe import Element
+
+
+def properties(
+    el: Element | None, ctx: reading.Context
+) -> tuple[tuple[m.Property, ...], tuple[str, ...]]:
+    """Read an optional ``<Properties>``: name/value pairs and File paths."""
+    if el is None:
+        return (), ()
+    props = tuple(
+        m.Property(
+            name=ctx.string(prop, "name"), value=ctx.string(prop, "value"), line=prop.sourceline
+        )
+        for prop in reading.all_children(el, "Property")
+    )
+    files = tuple(ctx.string(f, "filepath") for f in reading.all_children(el, "File"))
+    return props, files
+
+
+def controller(el: Element, ctx: reading.Context) -> e.Controller:
+    """Read a ``<Controller>`` definition (inline or catalog entry)."""
+    inner, _ = ctx.declarations(el)
+    props, files = properties(reading.child(el, "Properties"), inner)
+    return e.Controller(
+        name=inner.string(el, "name"),
+        controller_type=inner.opt_string(el, "controllerType"),
+        properties=props,
+        files=files,
+        line=el.sourceline,
+    )
+
+
+def controller_or_ref(el: Element, ctx: reading.Context) -> e.Controller | m.Unsupported:
+    """Read ``<Controller>``, a controller ``<CatalogReference>`` or an ``<ObjectController>``."""
+    if el.tag == "ObjectController":
+        return controller_or_ref(ctx.choice(el), ctx)
+    if el.tag == "CatalogReference":
+        entry, inner = ctx.catalogs.find(el, ctx, ("Controller",))
+        return controller(entry.element, inner)
+    if el.tag == "Controller":
+        return controller(el, ctx)
+    return ctx.unsupported(el, f"unexpected controller element {el.tag}")
+
+
+def object_controllers(
+    scenario_object: Element, ctx: reading.Context
+) -> tuple[e.ObjectController, ...]:
+    """All ObjectControllers of a ScenarioObject, in file order."""
+    return tuple(
+        e.ObjectController(
+            controller=controller_or_ref(ctx.choice(node), ctx),
+            name=ctx.opt_string(node, "name"),
+            line=node.sourceline,
+        )
+        for node in reading.all_children(scenario_object, "ObjectController")
+    )
+
+
+def activate(el: Element, ctx: reading.Context) -> ctl.ActivateControllerAction:
+    """Read an ``<ActivateControllerAction>``."""
+    return ctl.ActivateControllerAction(
+        lateral=ctx.opt_boolean(el, "lateral"),
+        longitudinal=ctx.opt_boolean(el, "longitudinal"),
+        lighting=ctx.opt_boolean(el, "lighting"),
+        animation=ctx.opt_boolean(el, "animation"),
+        controller_ref=ctx.opt_string(el, "controllerRef"),
+        object_controller_ref=ctx.opt_string(el, "objectControllerRef"),
+        line=el.sourceline,
+    )
+
+
+def controller_action(el: Element, ctx: reading.Context) -> a.PrivateAction:
+    """Read a ``<ControllerAction>`` (1.0: assign + override; 1.1+: one of assign/override/
+    activate)."""
+    assign = reading.child(el, "AssignControllerAction")
+    if assign is not None:
+        return ctl.AssignControllerAction(
+            controller=controller_or_ref(ctx.choice(assign), ctx),
+            activate_lateral=ctx.opt_boolean(assign, "activateLateral"),
+            activate_longitudinal=ctx.opt_boolean(assign, "activateLongitudinal"),
+            activate_lighting=ctx.opt_boolean(assign, "activateLighting"),
+            activate_animation=ctx.opt_boolean(assign, "activateAnimation"),
+            line=assign.sourceline,
+        )
+    chosen = ctx.choice(el)
+    if chosen.tag == "ActivateControllerAction":
+        return activate(chosen, ctx)
+    if chosen.tag == "OverrideControllerValueAction":
+        return ctx.unsupported(
+            chosen, "overriding controller values (pedals, steering) is not supported"
+        )
+    return ctx.unsupported(chosen, f"unknown controller action {chosen.tag}")

@@ -1,0 +1,148 @@
+"""Reading ScenarioObjects (vehicles, pedestrians, misc objects) into the model."""
+
+from __future__ import annotations
+
+from simtest_operator.openscenario import reading
+from simtest_operator.openscenario.model import entities as e
+from simtest_operator.openscenario.readers import controllers
+from simtest_operator.openscenario.xmlsafe import Element
+from simtest_operator.snapshots import BoundingBox, EntityKind
+
+_KINDS = {
+    "Vehicle": (EntityKind.VEHICLE, "vehicleCategory"),
+    "Pedestrian": (EntityKind.PEDESTRIAN, "pedestrianCategory"),
+    "MiscObject": (EntityKind.MISC_OBJECT, "miscObjectCategory"),
+}
+
+
+def scenario_object(el: Element, ctx: reading.Context) -> e.ScenarioObject:
+    """Read one ``<ScenarioObject>`` (resolving its catalog reference and controller)."""
+    name = ctx.string(el, "name")
+    chosen = ctx.choice(el)
+    catalog_entry: str | None = None
+    body, body_ctx = chosen, ctx
+    if chosen.tag == "CatalogReference":
+        entry, body_ctx = ctx.catalogs.find(chosen, ctx, tuple(_KINDS))
+        body, catalog_entry = entry.element, entry.entry_name
+    owned = controllers.object_controllers(el, ctx)
+    if body.tag not in _KINDS:
+        return e.ScenarioObject(
+            name=name,
+            kind=EntityKind.VEHICLE,
+            category="unknown",
+            bounding_box=BoundingBox(),
+            controller=owned[0].controller if owned else None,
+            object_controller_name=owned[0].name if owned else None,
+            object_controllers=owned,
+            unsupported=ctx.unsupported(body, f"{body.tag} entities are not supported", name=name),
+            line=el.sourceline,
+        )
+    return _object(
+        body,
+        body_ctx,
+        name=name,
+        catalog_entry=catalog_entry,
+        owned=owned,
+        line=el.sourceline,
+    )
+
+
+def _object(
+    el: Element,
+    ctx: reading.Context,
+    *,
+    name: str,
+    catalog_entry: str | None,
+    owned: tuple[e.ObjectController, ...],
+    line: int | None,
+) -> e.ScenarioObject:
+    inner, _ = ctx.declarations(el)
+    kind, category_attr = _KINDS[str(el.tag)]
+    category = inner.opt_string(el, category_attr)
+    if category is None:
+        # 1.0 pedestrians may omit the category; vehicles and misc objects may not.
+        if kind is not EntityKind.PEDESTRIAN:
+            raise inner.error(el, f"missing required attribute {category_attr!r}")
+        category = "pedestrian"
+    props, _ = controllers.properties(reading.child(el, "Properties"), inner)
+    trailer_el = reading.child(el, "Trailer")
+    if trailer_el is not None and not _has_trailer(trailer_el, inner):
+        trailer_el = None
+    return e.ScenarioObject(
+        name=name,
+        kind=kind,
+        category=category,
+        bounding_box=_bounding_box(inner.require(el, "BoundingBox"), inner),
+        model_name=inner.opt_string(el, "name"),
+        catalog_entry=catalog_entry,
+        role=inner.opt_string(el, "role"),
+        mass=inner.opt_double(el, "mass"),
+        performance=_performance(reading.child(el, "Performance"), inner),
+        axles=_axles(reading.child(el, "Axles"), inner),
+        properties=props,
+        controller=owned[0].controller if owned else None,
+        object_controller_name=owned[0].name if owned else None,
+        object_controllers=owned,
+        trailer=(
+            inner.unsupported(trailer_el, "trailers are not simulated", name=name)
+            if trailer_el is not None
+            else None
+        ),
+        line=line,
+    )
+
+
+def _has_trailer(el: Element, ctx: reading.Context) -> bool:
+    # Catalog vehicles declare <Trailer><TrailerRef entityRef="$TrailerRef"/> with an empty
+    # default, meaning "no trailer".
+    ref = reading.child(el, "TrailerRef")
+    return ref is None or bool(ctx.string(ref, "entityRef").strip())
+
+
+def _bounding_box(el: Element, ctx: reading.Context) -> BoundingBox:
+    center = ctx.require(el, "Center")
+    dims = ctx.require(el, "Dimensions")
+    return BoundingBox(
+        center_x=ctx.double(center, "x"),
+        center_y=ctx.double(center, "y"),
+        center_z=ctx.double(center, "z"),
+        length=ctx.double(dims, "length"),
+        width=ctx.double(dims, "width"),
+        height=ctx.double(dims, "height"),
+    )
+
+
+def _performance(el: Element | None, ctx: reading.Context) -> e.Performance | None:
+    if el is None:
+        return None
+    return e.Performance(
+        max_speed=ctx.double(el, "maxSpeed"),
+        max_acceleration=ctx.double(el, "maxAcceleration"),
+        max_deceleration=ctx.double(el, "maxDeceleration"),
+        max_acceleration_rate=ctx.opt_double(el, "maxAccelerationRate"),
+        max_deceleration_rate=ctx.opt_double(el, "maxDecelerationRate"),
+        line=el.sourceline,
+    )
+
+
+def _axle(el: Element, ctx: reading.Context) -> e.Axle:
+    return e.Axle(
+        max_steering=ctx.double(el, "maxSteering"),
+        wheel_diameter=ctx.double(el, "wheelDiameter"),
+        track_width=ctx.double(el, "trackWidth"),
+        position_x=ctx.double(el, "positionX"),
+        position_z=ctx.double(el, "positionZ"),
+        line=el.sourceline,
+    )
+
+
+def _axles(el: Element | None, ctx: reading.Context) -> e.Axles | None:
+    if el is None:
+        return None
+    front = reading.child(el, "FrontAxle")
+    return e.Axles(
+        rear=_axle(ctx.require(el, "RearAxle"), ctx),
+        front=_axle(front, ctx) if front is not None else None,
+        additional=tuple(_axle(x, ctx) for x in reading.all_children(el, "AdditionalAxle")),
+        line=el.sourceline,
+    )

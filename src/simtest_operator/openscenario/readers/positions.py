@@ -1,0 +1,165 @@
+"""Reading positions, orientations and routes into the model."""
+
+from __future__ import annotations
+
+from simtest_operator.openscenario import reading
+from simtest_operator.openscenario.model import common as m
+from simtest_operator.openscenario.model import positions as p
+from simtest_operator.openscenario.xmlsafe import Element
+
+
+def orientation(el: Element | None, ctx: reading.Context) -> m.Orientation | None:
+    """Read an optional ``<Orientation>``."""
+    if el is None:
+        return None
+    return m.Orientation(
+        type=ctx.opt_enum(el, "type", m.ReferenceContext),
+        h=ctx.double_or(el, "h", 0.0),
+        p=ctx.double_or(el, "p", 0.0),
+        r=ctx.double_or(el, "r", 0.0),
+        line=el.sourceline,
+    )
+
+
+def _orientation_of(el: Element, ctx: reading.Context) -> m.Orientation | None:
+    return orientation(reading.child(el, "Orientation"), ctx)
+
+
+def position(el: Element, ctx: reading.Context) -> p.Position:
+    """Read a ``<Position>`` wrapper (its one chosen child)."""
+    return position_choice(ctx.choice(el), ctx)
+
+
+def position_choice(el: Element, ctx: reading.Context) -> p.Position:
+    """Read the concrete position element (WorldPosition, LanePosition, ...)."""
+    tag = el.tag
+    line = el.sourceline
+    if tag == "WorldPosition":
+        return p.WorldPosition(
+            x=ctx.double(el, "x"),
+            y=ctx.double(el, "y"),
+            z=ctx.opt_double(el, "z"),
+            h=ctx.opt_double(el, "h"),
+            p=ctx.opt_double(el, "p"),
+            r=ctx.opt_double(el, "r"),
+            line=line,
+        )
+    if tag in ("RelativeWorldPosition", "RelativeObjectPosition"):
+        kind = (
+            p.RelativeWorldPosition if tag == "RelativeWorldPosition" else p.RelativeObjectPosition
+        )
+        return kind(
+            entity_ref=ctx.string(el, "entityRef"),
+            dx=ctx.double(el, "dx"),
+            dy=ctx.double(el, "dy"),
+            dz=ctx.opt_double(el, "dz"),
+            orientation=_orientation_of(el, ctx),
+            line=line,
+        )
+    if tag == "RoadPosition":
+        return p.RoadPosition(
+            road_id=ctx.string(el, "roadId"),
+            s=ctx.double(el, "s"),
+            t=ctx.double(el, "t"),
+            orientation=_orientation_of(el, ctx),
+            line=line,
+        )
+    if tag == "RelativeRoadPosition":
+        return p.RelativeRoadPosition(
+            entity_ref=ctx.string(el, "entityRef"),
+            ds=ctx.double(el, "ds"),
+            dt=ctx.double(el, "dt"),
+            orientation=_orientation_of(el, ctx),
+            line=line,
+        )
+    if tag == "LanePosition":
+        return p.LanePosition(
+            road_id=ctx.string(el, "roadId"),
+            lane_id=ctx.integer(el, "laneId"),
+            s=ctx.double(el, "s"),
+            offset=ctx.double_or(el, "offset", 0.0),
+            orientation=_orientation_of(el, ctx),
+            line=line,
+        )
+    if tag == "RelativeLanePosition":
+        ds = ctx.opt_double(el, "ds")
+        ds_lane = ctx.opt_double(el, "dsLane")
+        if ds is None and ds_lane is None:
+            raise ctx.error(el, "one of 'ds' or 'dsLane' is required")
+        return p.RelativeLanePosition(
+            entity_ref=ctx.string(el, "entityRef"),
+            d_lane=ctx.integer(el, "dLane"),
+            ds=ds,
+            ds_lane=ds_lane,
+            offset=ctx.double_or(el, "offset", 0.0),
+            orientation=_orientation_of(el, ctx),
+            line=line,
+        )
+    if tag == "RoutePosition":
+        return _route_position(el, ctx)
+    if tag in ("GeoPosition", "TrajectoryPosition"):
+        return ctx.unsupported(el, f"{tag} is not supported (needs geo/trajectory projection)")
+    return ctx.unsupported(el, f"unknown position kind {tag}")
+
+
+def _route_position(el: Element, ctx: reading.Context) -> p.RoutePosition:
+    route_ref = ctx.require(el, "RouteRef")
+    in_route_el = ctx.choice(ctx.require(el, "InRoutePosition"))
+    in_route: p.InRoutePosition
+    if in_route_el.tag == "FromCurrentEntity":
+        in_route = p.FromCurrentEntity(
+            entity_ref=ctx.string(in_route_el, "entityRef"), line=in_route_el.sourceline
+        )
+    elif in_route_el.tag == "FromRoadCoordinates":
+        in_route = p.FromRoadCoordinates(
+            path_s=ctx.double(in_route_el, "pathS"),
+            t=ctx.double(in_route_el, "t"),
+            line=in_route_el.sourceline,
+        )
+    elif in_route_el.tag == "FromLaneCoordinates":
+        in_route = p.FromLaneCoordinates(
+            path_s=ctx.double(in_route_el, "pathS"),
+            lane_id=ctx.integer(in_route_el, "laneId"),
+            lane_offset=ctx.double_or(in_route_el, "laneOffset", 0.0),
+            line=in_route_el.sourceline,
+        )
+    else:
+        raise ctx.error(in_route_el, "unknown InRoutePosition kind")
+    return p.RoutePosition(
+        route=route_or_ref(route_ref, ctx),
+        in_route=in_route,
+        orientation=_orientation_of(el, ctx),
+        line=el.sourceline,
+    )
+
+
+def route_or_ref(el: Element, ctx: reading.Context) -> p.Route | m.Unsupported:
+    """Read a route from an element holding ``<Route>`` or a ``<CatalogReference>``."""
+    chosen = ctx.choice(el)
+    if chosen.tag == "CatalogReference":
+        entry, inner = ctx.catalogs.find(chosen, ctx, ("Route",))
+        return route(entry.element, inner)
+    if chosen.tag == "Route":
+        return route(chosen, ctx)
+    return ctx.unsupported(chosen, f"unexpected route element {chosen.tag}")
+
+
+def route(el: Element, ctx: reading.Context) -> p.Route:
+    """Read a ``<Route>`` (its parameters, waypoints)."""
+    inner, _ = ctx.declarations(el)
+    waypoints = tuple(
+        p.Waypoint(
+            position=position(inner.require(wp, "Position"), inner),
+            route_strategy=inner.enum(wp, "routeStrategy", p.RouteStrategy),
+            line=wp.sourceline,
+        )
+        for wp in reading.all_children(el, "Waypoint")
+    )
+    if len(waypoints) < 2:
+        raise inner.error(el, "a route needs at least two waypoints")
+    return p.Route(
+        name=inner.string(el, "name"),
+        closed=inner.opt_boolean(el, "closed", False) or False,
+        waypoints=waypoints,
+        line=el.sourceline,
+    )
