@@ -61,6 +61,7 @@ class Actor:
         "s",
         "speed",
         "standstill_time",
+        "stretch",
         "stuck",
         "x",
         "y",
@@ -93,6 +94,9 @@ class Actor:
         self.standstill_time = 0.0
         self.offroad_time = 0.0
         self.end_of_road_time = 0.0
+        self.stretch = 1.0
+        """Reference-line metres per metre driven in the lane (>1 inside curves), learnt from the
+        previous step so the actor drives its speed along the lane, not along the reference line."""
         self.stuck = False
         """True while the lane it follows has ended (no successor)."""
         self.route_roads: frozenset[str] = frozenset()

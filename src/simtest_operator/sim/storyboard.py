@@ -10,7 +10,7 @@ group -> act -> story -> storyboard).
 
 Transitions are events, not states: one that happens during step k is visible to
 StoryboardElementStateConditions evaluated in step k+1 (and only then), so chains of
-"start when X ends" advance one step per link, as in esmini.
+"start when X ends" advance one step per link, as in esmini (checked against its output).
 
 Event priorities apply within the event's maneuver: ``override`` (1.0 ``overwrite``) stops the
 other running events, ``skip`` does not start while another event runs, ``parallel`` just starts.
@@ -250,7 +250,7 @@ class Storyboard:
             assert isinstance(source, model.Event)
             running = [e for e in maneuver.children if e is not event and e.phase is Phase.RUNNING]
             if source.priority is model.Priority.SKIP and running:
-                self._pending.add((Kind.EVENT, event.name, Transition.SKIP_TRANSITION))
+                self._transition(event, Transition.SKIP_TRANSITION)
                 continue
             if source.priority is model.Priority.OVERRIDE:
                 for other in running:
@@ -275,9 +275,13 @@ class Storyboard:
             action.actors = actors if source.is_private else ()
             action.runs = tuple(self._start_action(source, action.actors))
 
+    def _transition(self, node: Node, transition: Transition) -> None:
+        key = (node.kind, node.name, transition)
+        self._pending.add(key)
+
     def _begin(self, node: Node) -> None:
         node.phase = Phase.RUNNING
-        self._pending.add((node.kind, node.name, Transition.START_TRANSITION))
+        self._transition(node, Transition.START_TRANSITION)
 
     def _begin_group(self, group: Node) -> None:
         self._begin(group)
@@ -298,11 +302,11 @@ class Storyboard:
             if not run.finished:
                 run.cancel()
         node.phase = Phase.COMPLETE
-        self._pending.add((node.kind, node.name, Transition.STOP_TRANSITION))
+        self._transition(node, Transition.STOP_TRANSITION)
 
     def _end(self, node: Node) -> None:
         node.phase = Phase.COMPLETE
-        self._pending.add((node.kind, node.name, Transition.END_TRANSITION))
+        self._transition(node, Transition.END_TRANSITION)
 
     # --- completion ---------------------------------------------------------------------------
 
@@ -343,7 +347,7 @@ class Storyboard:
                 if action.phase is Phase.RUNNING and all(run.finished for run in action.runs):
                     if any(run.stopped for run in action.runs):
                         action.phase = Phase.COMPLETE
-                        self._pending.add((Kind.ACTION, action.name, Transition.STOP_TRANSITION))
+                        self._transition(action, Transition.STOP_TRANSITION)
                     else:
                         self._end(action)
             if all(action.phase is Phase.COMPLETE for action in event.children):

@@ -1,0 +1,242 @@
+"""Starting actions: model actions -> running :class:`~simtest_operator.sim.runs.Run` objects.
+
+Instant actions (teleport, routing, controller switches, parameter/variable changes) take effect
+here and return a finished run. Continuous ones become runs registered per actor and control
+domain; a new run in an occupied domain cancels the old one (the standard's conflict rule).
+
+The system under test: while the driver model drives the ego, a SpeedAction on the ego becomes the
+driver's new set speed (a request to the driver, like a driver turning the cruise-control knob),
+and other longitudinal actions on the ego are not executed and are listed as ignored. Lateral
+actions still run (the model only keeps its lane). Controllers of other entities are not
+simulated: those entities keep following the storyboard, and the controller is listed as ignored.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+
+from simtest_operator.errors import ScenarioError
+from simtest_operator.openscenario import model
+from simtest_operator.sim import positions, routing
+from simtest_operator.sim.actors import Actor, Domain, Mode
+from simtest_operator.sim.following import DistanceRun, SynchronizeRun
+from simtest_operator.sim.lateral import LaneChangeRun, LaneOffsetRun
+from simtest_operator.sim.runs import Done, Run
+from simtest_operator.sim.speeds import SpeedProfileRun, SpeedRun, target_speed
+from simtest_operator.sim.trajectories import PathRun
+from simtest_operator.sim.world import World
+
+ControllerSwitch = Callable[[Actor, bool], None]
+"""Engages (True) or releases (False) the SUT driver model on an actor."""
+
+_SUT_LONGITUDINAL = (
+    model.SpeedProfileAction,
+    model.LongitudinalDistanceAction,
+    model.SynchronizeAction,
+)
+
+
+class Dispatcher:
+    """Starts actions on actors and keeps the per-actor, per-domain registry of runs."""
+
+    __slots__ = ("_active", "_ego", "_switch", "_world")
+
+    def __init__(self, world: World, *, ego: str | None, switch: ControllerSwitch) -> None:
+        self._world = world
+        self._ego = ego
+        self._switch = switch
+        self._active: dict[str, dict[Domain, Run]] = {}
+
+    def runs(self, actor: Actor) -> dict[Domain, Run]:
+        """The actor's active runs by domain (finished ones pruned)."""
+        mine = self._active.get(actor.name)
+        if mine is None:
+            return {}
+        for domain in [d for d, run in mine.items() if run.finished]:
+            del mine[domain]
+        return mine
+
+    def start(self, action: model.Action, actors: tuple[str, ...]) -> Sequence[Run]:
+        """Storyboard callback: start ``action`` for each actor (global: once)."""
+        body = action.body
+        if not action.is_private:
+            return [self.start_global(body)]
+        if not actors:
+            raise ScenarioError(
+                f"private action {action.name!r} has no actors", element="Action", line=action.line
+            )
+        return [self.start_private(self._world.actor(name), body) for name in actors]
+
+    def start_global(self, body: model.AnyAction) -> Run:
+        world = self._world
+        if isinstance(body, model.SetValueAction):
+            store = (
+                world.parameters if body.scope is model.ValueScope.PARAMETER else world.variables
+            )
+            current = store.get(body.ref)
+            store[body.ref] = _typed_like(current, body.value)
+            return Done()
+        if isinstance(body, model.ModifyValueAction):
+            store = (
+                world.parameters if body.scope is model.ValueScope.PARAMETER else world.variables
+            )
+            current = store.get(body.ref)
+            if isinstance(current, bool) or not isinstance(current, int | float):
+                raise ScenarioError(
+                    f"cannot modify non-numeric {body.scope} {body.ref!r}",
+                    element="ModifyAction",
+                    line=body.line,
+                )
+            value = (
+                current + body.value if body.rule is model.ModifyRule.ADD else current * body.value
+            )
+            store[body.ref] = type(current)(value)
+            return Done()
+        if isinstance(body, model.IgnoredAction):
+            self._ignore(body.kind)
+            return Done()
+        if isinstance(body, model.Unsupported):
+            raise positions.unsupported(body)
+        raise ScenarioError(f"{type(body).__name__} is not a global action")
+
+    def start_private(self, actor: Actor, body: model.AnyAction) -> Run:
+        world = self._world
+        if isinstance(body, model.Unsupported):
+            raise positions.unsupported(body)
+        if isinstance(body, model.IgnoredAction):
+            self._ignore(body.kind)
+            return Done(actor)
+        if actor.obj.unsupported is not None:
+            raise positions.unsupported(actor.obj.unsupported)
+        if isinstance(body, model.TeleportAction):
+            self.teleport(actor, positions.resolve(world, body.position))
+            return Done(actor)
+        if isinstance(body, model.ActivateControllerAction):
+            self._activate(actor, body.longitudinal, body.lateral)
+            return Done(actor)
+        if isinstance(body, model.AssignControllerAction):
+            controller = body.controller
+            if isinstance(controller, model.Unsupported):
+                raise positions.unsupported(controller)
+            self._activate(actor, body.activate_longitudinal, body.activate_lateral)
+            return Done(actor)
+        if isinstance(body, model.AssignRouteAction):
+            route = body.route
+            if isinstance(route, model.Unsupported):
+                raise positions.unsupported(route)
+            self._route(actor, [wp.position for wp in route.waypoints])
+            return Done(actor)
+        if isinstance(body, model.AcquirePositionAction):
+            self._route(actor, [body.position])
+            return Done(actor)
+        if actor.driver is not None:
+            if isinstance(body, model.SpeedAction):
+                actor.driver.set_speed = target_speed(world, body.target)
+                return Done(actor)
+            if isinstance(body, _SUT_LONGITUDINAL):
+                self._ignore(f"{type(body).__name__} on the SUT-driven {actor.name}")
+                return Done(actor)
+        return self._register(actor, self._make(actor, body))
+
+    def _make(self, actor: Actor, body: model.AnyAction) -> Run:
+        world = self._world
+        if isinstance(body, model.SpeedAction):
+            return SpeedRun(world, actor, body)
+        if isinstance(body, model.SpeedProfileAction):
+            return SpeedProfileRun(world, actor, body)
+        if isinstance(body, model.LaneChangeAction):
+            return LaneChangeRun(world, actor, body)
+        if isinstance(body, model.LaneOffsetAction):
+            return LaneOffsetRun(world, actor, body)
+        if isinstance(body, model.FollowTrajectoryAction):
+            return PathRun(world, actor, body)
+        if isinstance(body, model.LongitudinalDistanceAction):
+            return DistanceRun(world, actor, body)
+        if isinstance(body, model.SynchronizeAction):
+            return SynchronizeRun(world, actor, body)
+        raise ScenarioError(
+            f"{type(body).__name__} is not supported",
+            element=type(body).__name__,
+            line=getattr(body, "line", None),
+        )
+
+    def _register(self, actor: Actor, run: Run) -> Run:
+        if run.finished or not run.domains:
+            return run
+        mine = self._active.setdefault(actor.name, {})
+        for domain in run.domains:
+            old = mine.get(domain)
+            if old is not None and old is not run:
+                old.cancel()
+                for d in [d for d, r in mine.items() if r is old]:
+                    del mine[d]
+        for domain in run.domains:
+            mine[domain] = run
+        return run
+
+    def teleport(self, actor: Actor, placement: positions.Placement) -> None:
+        world = self._world
+        actor.x, actor.y, actor.z, actor.heading = (
+            placement.x,
+            placement.y,
+            placement.z,
+            placement.heading,
+        )
+        actor.placed = True
+        lane = placement.lane
+        if lane is not None and world.roads is not None:
+            world.set_lane(
+                actor, lane.road_id, lane.lane_id, lane.s, lane.offset, direction=lane.direction
+            )
+        elif actor.mode is not Mode.PATH:
+            world.attach(actor)
+        # A teleport ends any path the actor was following.
+        path = self._active.get(actor.name, {}).get(Domain.LATERAL)
+        if isinstance(path, PathRun):
+            path.cancel()
+            world.attach(actor)
+
+    def _activate(self, actor: Actor, longitudinal: bool | None, lateral: bool | None) -> None:
+        if actor.name != self._ego:
+            controller = actor.obj.controller
+            name = controller.name if isinstance(controller, model.Controller) else "controller"
+            self._ignore(f"Controller {name} of {actor.name}")
+            return
+        if longitudinal is False:
+            self._switch(actor, False)
+        elif longitudinal is True or lateral is True or (longitudinal is None and lateral is None):
+            self._switch(actor, True)
+
+    def _route(self, actor: Actor, targets: list[model.Position]) -> None:
+        world = self._world
+        roads = world.roads
+        if roads is None:
+            raise ScenarioError("routing needs a road network", element="RoutingAction")
+        goals: list[str] = []
+        for position in targets:
+            placement = positions.resolve(world, position)
+            if placement.lane is not None:
+                goals.append(placement.lane.road_id)
+                continue
+            coord = world.road_coord(placement.x, placement.y, placement.heading)
+            if coord is not None:
+                goals.append(coord.road_id)
+        if actor.mode is Mode.ROAD and actor.road_id is not None:
+            roads_on_route = routing.plan_through(roads, (actor.road_id, actor.direction), goals)
+        else:
+            roads_on_route = goals
+        actor.route_roads = frozenset(roads_on_route)
+
+    def _ignore(self, what: str) -> None:
+        if what not in self._world.ignored:
+            self._world.ignored.append(what)
+
+
+def _typed_like(current: model.ParameterValue | None, text: str) -> model.ParameterValue:
+    if isinstance(current, bool):
+        return text.strip().lower() in ("true", "1")
+    if isinstance(current, int):
+        return int(float(text))
+    if isinstance(current, float):
+        return float(text)
+    return text

@@ -1,0 +1,256 @@
+"""The engine: one scenario run, step by step, on a backend.
+
+Split of work (see docs/simulator.md): the engine owns the authoritative kinematics of every
+scenario entity (storyboard actions, lane following on the OpenDRIVE geometry, the SUT driver
+model for the ego) because that is what makes reference-player behaviour reachable; the backend
+(SUMO via libsumo) hosts the network, receives every entity's pose each step with
+``moveToXY(keepRoute=2)`` and drives its own background traffic, which comes back as extra
+entities in the snapshots.
+
+Each :meth:`Simulation.step`: storyboard triggers are evaluated on the world at time t, actions
+and the driver model update speeds and lateral offsets, motion advances poses to t + dt,
+completions propagate through the storyboard, the backend is synchronised, and a
+:class:`~simtest_operator.snapshots.WorldSnapshot` at t + dt comes out.
+"""
+
+from __future__ import annotations
+
+from simtest_operator.errors import ScenarioError
+from simtest_operator.opendrive import RoadNetwork
+from simtest_operator.openscenario import model
+from simtest_operator.sim import motion, perception
+from simtest_operator.sim.actors import Actor, Domain, Mode
+from simtest_operator.sim.backends import ActorSpec, Backend, BackendConfig
+from simtest_operator.sim.conditions import Conditions
+from simtest_operator.sim.dispatch import Dispatcher
+from simtest_operator.sim.storyboard import Storyboard
+from simtest_operator.sim.sut import DriverModel, SutConfig, Takeover
+from simtest_operator.sim.world import World
+from simtest_operator.snapshots import BoundingBox, EntityKind, EntityState, WorldSnapshot
+
+EGO_NAMES = ("Ego", "ego", "hero", "Hero", "EGO")
+
+
+def pick_ego(scenario: model.Scenario, configured: str | None) -> str | None:
+    """The ego entity: configured name, else a conventional name, else the first vehicle."""
+    names = [obj.name for obj in scenario.entities]
+    if configured is not None:
+        if configured not in names:
+            raise ScenarioError(f"ego entity {configured!r} is not in the scenario")
+        return configured
+    for name in EGO_NAMES:
+        if name in names:
+            return name
+    vehicles = [obj.name for obj in scenario.entities if obj.kind is EntityKind.VEHICLE]
+    return vehicles[0] if vehicles else None
+
+
+class Simulation:
+    """One run of one scenario; create, :meth:`start`, :meth:`step` until done, :meth:`close`."""
+
+    __slots__ = (
+        "_backend",
+        "_backend_config",
+        "_conditions",
+        "_dispatcher",
+        "_external_ids",
+        "_scenario",
+        "_steps",
+        "_storyboard",
+        "_sut",
+        "ego",
+        "world",
+    )
+
+    def __init__(
+        self,
+        scenario: model.Scenario,
+        *,
+        roads: RoadNetwork | None,
+        backend: Backend,
+        backend_config: BackendConfig,
+        sut: SutConfig,
+    ) -> None:
+        self._scenario = scenario
+        self._backend = backend
+        self._backend_config = backend_config
+        self._sut = sut
+        self.ego = pick_ego(scenario, sut.ego)
+        actors = [Actor(obj, index) for index, obj in enumerate(scenario.entities)]
+        self.world = World(
+            roads=roads,
+            actors=actors,
+            dt=backend_config.step_length,
+            seed=backend_config.seed,
+            parameters={p.name: p.value for p in scenario.parameters},
+            variables={v.name: v.value for v in scenario.variables},
+        )
+        self._dispatcher = Dispatcher(self.world, ego=self.ego, switch=self._switch_driver)
+        self._conditions = Conditions(self.world, self._state_query)
+        self._storyboard = Storyboard(
+            scenario.storyboard,
+            raw=self._conditions,
+            start_action=self._dispatcher.start,
+        )
+        self._steps = 0
+        self._external_ids: dict[str, int] = {}
+
+    # --- public -------------------------------------------------------------------------------
+
+    @property
+    def time(self) -> float:
+        return self.world.time
+
+    @property
+    def complete(self) -> bool:
+        """The storyboard has completed (stop trigger fired, or all stories ended)."""
+        return self._storyboard.complete
+
+    @property
+    def ignored(self) -> tuple[str, ...]:
+        """Elements accepted but not simulated, from the file and met during the run."""
+        return tuple(dict.fromkeys((*self._scenario.ignored_kinds, *self.world.ignored)))
+
+    def off_road(self, state: EntityState) -> bool:
+        """Whether an entity is off the drivable road (for the online evaluation)."""
+        actor = self.world.actors.get(state.name)
+        if actor is None or self.world.roads is None:
+            return False
+        return actor.offroad_time > 0.0
+
+    def start(self) -> WorldSnapshot:
+        """Run the Init actions, start the backend and return the snapshot at t = 0."""
+        world = self.world
+        init = self._scenario.storyboard.init
+        for private in init.private:
+            actor = world.actor(private.entity_ref)
+            for body in private.actions:
+                self._dispatcher.start_private(actor, body)
+        for global_action in init.global_actions:
+            self._dispatcher.start_global(global_action)
+        self._initial_takeover()
+        self._backend.start(self._backend_config)
+        for actor in world.actors.values():
+            self._backend.add(
+                ActorSpec(
+                    name=actor.name,
+                    kind=actor.kind,
+                    length=actor.box.length,
+                    width=actor.box.width,
+                    front_offset=actor.front_offset,
+                )
+            )
+        world.refresh()
+        return self._sync()
+
+    def step(self) -> WorldSnapshot:
+        """Advance by one step; raises ScenarioError (incl. unsupported elements) on bad input."""
+        world = self.world
+        dt = world.dt
+        world.refresh()
+        self._steps += 1
+        world.time = round(self._steps * dt, 9)
+        # As in the reference player, the clock moves first: triggers see the new time with the
+        # poses of the previous step, then actions and motion take the world to the new time.
+        self._storyboard.update(world.time)
+        for actor in world.actors.values():
+            if actor.placed:
+                self._advance(actor, dt)
+        self._storyboard.settle()
+        world.refresh()
+        return self._sync()
+
+    def close(self) -> None:
+        self._backend.close()
+
+    # --- internals ----------------------------------------------------------------------------
+
+    def _state_query(
+        self, kind: model.StoryboardElementType, name: str, state: model.StoryboardElementState
+    ) -> bool:
+        if not self._storyboard.known(kind, name):
+            raise ScenarioError(
+                f"storyboard element {kind} {name!r} does not exist",
+                element="StoryboardElementStateCondition",
+            )
+        return self._storyboard.is_in(kind, name, state)
+
+    def _initial_takeover(self) -> None:
+        if self.ego is None:
+            return
+        ego = self.world.actor(self.ego)
+        takeover = self._sut.takeover
+        has_controller = isinstance(ego.obj.controller, model.Controller)
+        if takeover is Takeover.AFTER_INIT or (
+            takeover is Takeover.ON_CONTROLLER and has_controller
+        ):
+            self._switch_driver(ego, True)
+
+    def _switch_driver(self, actor: Actor, engage: bool) -> None:
+        if self._sut.takeover is Takeover.NEVER or actor.name != self.ego:
+            return
+        if not engage:
+            actor.driver = None
+        elif actor.driver is None:
+            actor.driver = DriverModel(self._sut, set_speed=actor.speed)
+
+    def _advance(self, actor: Actor, dt: float) -> None:
+        world = self.world
+        speed_before = actor.speed
+        t_before = motion.lateral_position(world, actor)
+        road_before = actor.road_id
+        runs = self._dispatcher.runs(actor)
+        longitudinal = runs.get(Domain.LONGITUDINAL)
+        lateral = runs.get(Domain.LATERAL)
+        driver = actor.driver
+        if longitudinal is not None:
+            longitudinal.step(world, dt)
+        elif driver is not None:
+            ahead = perception.leader(world, actor, self._sut.sensor_range)
+            command = driver.command(speed=actor.speed, leader=ahead)
+            actor.speed = max(actor.speed + command.acceleration * dt, 0.0)
+        if lateral is not None and lateral is not longitudinal:
+            lateral.step(world, dt)
+        elif lateral is None and driver is not None and actor.mode is Mode.ROAD:
+            actor.offset = driver.lateral_offset(actor.offset, dt)
+        if actor.mode is Mode.PATH and Domain.LATERAL not in self._dispatcher.runs(actor):
+            world.attach(actor)
+        motion.move(world, actor, dt, t_before=t_before, road_before=road_before)
+        actor.acceleration = (actor.speed - speed_before) / dt if dt > 0 else 0.0
+
+    def _sync(self) -> WorldSnapshot:
+        """Push poses to the backend, step it, and build the snapshot."""
+        backend = self._backend
+        entities = list(self.world.states())
+        for state in entities:
+            backend.place(
+                state.name, x=state.x, y=state.y, heading=state.heading, speed=state.speed
+            )
+        backend.step()
+        for other in backend.states().values():
+            if not other.external:
+                continue
+            ident = self._external_ids.setdefault(
+                other.name, len(self.world.actors) + len(self._external_ids)
+            )
+            entities.append(
+                EntityState(
+                    id=ident,
+                    name=other.name,
+                    kind=EntityKind.VEHICLE,
+                    category="car",
+                    x=other.x,
+                    y=other.y,
+                    heading=other.heading,
+                    speed=other.speed,
+                    box=BoundingBox(
+                        center_x=other.front_offset - other.length / 2.0,
+                        length=other.length,
+                        width=other.width,
+                    ),
+                )
+            )
+        return WorldSnapshot(time=self.world.time, entities=tuple(entities))
+
+
+__all__ = ["Simulation", "pick_ego"]

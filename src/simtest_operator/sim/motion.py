@@ -1,0 +1,74 @@
+"""Motion: advance one actor's pose by one step from its speed and lane offset.
+
+ROAD actors move ``speed * dt`` along their lane through the lane graph (preferring their route's
+roads at forks); a change of the lateral position this step tilts the heading by the angle of the
+resulting velocity, as a real lane change does. FREE actors move straight along their heading.
+PATH actors were placed by their trajectory run already. Odometer and the timers that
+StandStill/OffRoad/EndOfRoad conditions read are updated here too.
+"""
+
+from __future__ import annotations
+
+import math
+
+from simtest_operator.sim.actors import Actor, Mode
+from simtest_operator.sim.world import World
+
+STANDSTILL_SPEED = 1e-3
+"""Speed (m/s) below which an actor counts as standing still."""
+
+
+def lateral_position(world: World, actor: Actor) -> float:
+    """Absolute t of a ROAD actor (for the heading tilt of lateral motion)."""
+    if actor.mode is not Mode.ROAD or actor.road_id is None:
+        return 0.0
+    return world.lane_t(actor.road_id, actor.s, actor.lane_id) + actor.offset
+
+
+def move(
+    world: World, actor: Actor, dt: float, *, t_before: float, road_before: str | None
+) -> None:
+    """Advance ``actor`` by ``dt`` (speed and offset already updated for this step)."""
+    x0, y0 = actor.x, actor.y
+    if actor.mode is Mode.ROAD and actor.road_id is not None and world.roads is not None:
+        t_now = lateral_position(world, actor)
+        lateral_rate = (t_now - t_before) / dt if road_before == actor.road_id and dt > 0 else 0.0
+        distance = actor.speed * dt
+        stretched = distance * actor.stretch
+        location = world.roads.advance(
+            actor.road_id,
+            actor.s,
+            actor.lane_id,
+            stretched * actor.direction,
+            prefer_roads=actor.route_roads,
+        )
+        walked = 1 if distance >= 0 else -1
+        actor.stuck = location.remaining > 1e-9
+        actor.road_id, actor.s, actor.lane_id = location.road_id, location.s, location.lane_id
+        actor.direction = location.direction * walked
+        tilt = math.atan2(actor.direction * lateral_rate, abs(actor.speed)) if actor.speed else 0.0
+        road_kept = location.road_id == road_before
+        world.pose_on_road(actor, tilt)
+        actor.lateral_speed = lateral_rate
+        moved = math.hypot(actor.x - x0, actor.y - y0)
+        if road_kept and abs(lateral_rate) < 0.01 and moved > 1e-6 and distance > 0:
+            actor.stretch = min(max(stretched / moved, 0.5), 2.0)
+    elif actor.mode is Mode.FREE:
+        actor.x += actor.speed * math.cos(actor.heading) * dt
+        actor.y += actor.speed * math.sin(actor.heading) * dt
+        actor.lateral_speed = 0.0
+    actor.odometer += math.hypot(actor.x - x0, actor.y - y0)
+    update_timers(world, actor, dt)
+
+
+def update_timers(world: World, actor: Actor, dt: float) -> None:
+    actor.standstill_time = (
+        actor.standstill_time + dt if abs(actor.speed) < STANDSTILL_SPEED else 0.0
+    )
+    actor.end_of_road_time = actor.end_of_road_time + dt if actor.stuck else 0.0
+    if world.roads is None:
+        return
+    on_road = actor.mode is Mode.ROAD and not actor.stuck
+    if not on_road:
+        on_road = world.roads.is_on_road(actor.x, actor.y)
+    actor.offroad_time = 0.0 if on_road else actor.offroad_time + dt

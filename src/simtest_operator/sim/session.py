@@ -1,0 +1,96 @@
+"""Opening a simulation: load the scenario and its road network, pick and configure a backend.
+
+Scenarios with a road network run on SUMO (:class:`~simtest_operator.sim.sumo.SumoBackend`, the
+network converted once and cached by :mod:`~simtest_operator.sim.netcache`); scenarios without one
+run in open space on :class:`~simtest_operator.sim.memory.MemoryBackend`. An entity whose
+controller is esmini's SUMO controller brings a ``.sumocfg``; SUMO then also loads that file's
+routes and its vehicles join the run as background traffic.
+
+libsumo is one simulation per process: run one session at a time per process.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import enum
+from collections.abc import Mapping
+from pathlib import Path
+
+from simtest_operator.opendrive import RoadNetwork
+from simtest_operator.openscenario import load_scenario, model
+from simtest_operator.settings import SimulationSettings
+from simtest_operator.sim import netcache
+from simtest_operator.sim.backends import Backend, BackendConfig
+from simtest_operator.sim.engine import Simulation
+from simtest_operator.sim.memory import MemoryBackend
+from simtest_operator.sim.sumo import SumoBackend
+from simtest_operator.sim.sut import SutConfig
+
+
+class BackendChoice(enum.StrEnum):
+    """Which backend runs scenarios that have a road network."""
+
+    SUMO = "sumo"
+    MEMORY = "memory"
+    """Pure Python (tests, and runs that need no SUMO traffic)."""
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Opened:
+    """A ready-to-start simulation and what it took to get there."""
+
+    simulation: Simulation
+    scenario: model.Scenario
+    net_file: Path | None
+    net_from_cache: bool
+    net_seconds: float
+
+
+def sumo_config_of(scenario: model.Scenario) -> Path | None:
+    """The ``.sumocfg`` of an esmini SumoController in the scenario, if any."""
+    for obj in scenario.entities:
+        controller = obj.controller
+        if not isinstance(controller, model.Controller):
+            continue
+        if controller.property("esminiController") != "SumoController" or not controller.files:
+            continue
+        config = (scenario.path.parent / controller.files[0]).resolve()
+        if config.is_file():
+            return config
+    return None
+
+
+def open_simulation(
+    path: Path,
+    *,
+    sut: SutConfig,
+    settings: SimulationSettings,
+    nets_dir: Path,
+    overrides: Mapping[str, str] | None = None,
+    backend: BackendChoice = BackendChoice.SUMO,
+) -> Opened:
+    """Load ``path`` and prepare its simulation (ScenarioError on bad input)."""
+    scenario = load_scenario(path, overrides=overrides)
+    logic_file = scenario.road_network.logic_file
+    roads = RoadNetwork.from_file(logic_file) if logic_file is not None else None
+    net_file: Path | None = None
+    from_cache, seconds = False, 0.0
+    chosen: Backend
+    config = BackendConfig(step_length=settings.step_length, seed=settings.seed)
+    if logic_file is not None and backend is BackendChoice.SUMO:
+        converted = netcache.ensure_net(logic_file, cache_dir=nets_dir)
+        net_file, from_cache, seconds = converted.path, converted.from_cache, converted.seconds
+        config = dataclasses.replace(
+            config, net_file=net_file, sumo_config=sumo_config_of(scenario)
+        )
+        chosen = SumoBackend()
+    else:
+        chosen = MemoryBackend()
+    simulation = Simulation(scenario, roads=roads, backend=chosen, backend_config=config, sut=sut)
+    return Opened(
+        simulation=simulation,
+        scenario=scenario,
+        net_file=net_file,
+        net_from_cache=from_cache,
+        net_seconds=seconds,
+    )
