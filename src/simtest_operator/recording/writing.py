@@ -1,0 +1,287 @@
+"""The run recorder: world snapshots -> one omega-prime (OSI GroundTruth 3.7.0) MCAP file.
+
+Layout of a recording, as omega-prime and the OSI MCAP trace convention expect:
+- file metadata ``net.asam.osi.trace`` (OSI/protobuf versions, description, zero time) and
+  ``simtest.run`` (scenario id, seed, tool versions);
+- topic ``ground_truth``: one ``osi3.GroundTruth`` per recorded frame, timestamps being offsets
+  from the scenario start, log time equal to the timestamp;
+- topic ``ground_truth_map``: one ``osi3.MapAsamOpenDrive`` with the road file, whose
+  ``map_reference`` matches every GroundTruth's.
+Every entity is an ``osi3.MovingObject`` at its bounding-box centre. Misc objects are written as
+moving objects of type OTHER, because omega-prime ignores ``stationary_object`` when reading and
+obstacles would otherwise vanish from every consumer. An entity that reappears after missing from
+a frame gets a fresh id, since omega-prime forbids gaps in an object's frames.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import datetime
+import math
+from collections.abc import Mapping
+from pathlib import Path
+from types import TracebackType
+from typing import BinaryIO
+
+from mcap.writer import CompressionType, Writer
+
+from simtest_operator.errors import ResultsError
+from simtest_operator.recording import descriptors, osiwire
+from simtest_operator.snapshots import BoundingBox, EntityKind, EntityState, WorldSnapshot
+
+GROUND_TRUTH_TOPIC = "ground_truth"
+MAP_TOPIC = "ground_truth_map"
+OSI_TRACE_METADATA = "net.asam.osi.trace"
+RUN_METADATA = "simtest.run"
+_OSI_VERSION = ".".join(str(part) for part in osiwire.OSI_VERSION)
+_PROTOBUF_VERSION = "7.0.0"  # what betterosi declares for the OSI protobuf files
+_REISSUED_ID_BASE = 1_000_000_000
+_MIN_DIMENSION = 0.01
+
+# OSI MovingObject.Type and VehicleClassification.Type / Role values (osi_object.proto 3.7.0).
+_TYPE_OTHER, _TYPE_VEHICLE, _TYPE_PEDESTRIAN, _TYPE_ANIMAL = 1, 2, 3, 4
+_CLASS_OTHER = 1
+_VEHICLE_CLASSES = {
+    "car": 4, "van": 6, "truck": 7, "semitrailer": 9, "trailer": 10, "motorbike": 11,
+    "bicycle": 12, "bus": 13, "tram": 14, "train": 15, "wheelchair": 16,
+}  # fmt: skip
+_ROLE_UNKNOWN, _ROLE_CIVIL = 0, 2
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class RecordingInfo:
+    """What a recording says about its run."""
+
+    scenario_id: str
+    seed: int
+    versions: Mapping[str, str] = dataclasses.field(default_factory=dict)
+    """Tool versions, e.g. ``{"simtest-operator": "0.1.0", "sumo": "1.28.0"}``."""
+    description: str = ""
+    zero_time: datetime.datetime | None = None
+    """Wall-clock time of simulated t = 0, if meaningful (omitted from the file otherwise)."""
+
+
+def _classify(state: EntityState) -> tuple[int, int, int]:
+    """(OSI object type, classification type, classification role) of an entity."""
+    category = state.category.lower()
+    if state.kind is EntityKind.VEHICLE:
+        return _TYPE_VEHICLE, _VEHICLE_CLASSES.get(category, _CLASS_OTHER), _ROLE_CIVIL
+    if state.kind is EntityKind.PEDESTRIAN:
+        kind = _TYPE_ANIMAL if category == "animal" else _TYPE_PEDESTRIAN
+        return kind, _CLASS_OTHER, _ROLE_UNKNOWN
+    return _TYPE_OTHER, _CLASS_OTHER, _ROLE_UNKNOWN
+
+
+class Recorder:
+    """Writes world snapshots to an omega-prime MCAP file; use as a context manager.
+
+    ``period`` (seconds) thins the snapshots: a frame is written when its time reaches the next
+    multiple of the period (0 writes every snapshot; pass 0.1 for 10 Hz from a 20 Hz loop).
+    ``host_id`` is the ego's entity id (OSI ``host_vehicle_id``); without it the smallest id of
+    the first frame is used.
+    """
+
+    def __init__(
+        self,
+        path: Path,
+        *,
+        info: RecordingInfo,
+        opendrive: str | bytes | None = None,
+        map_reference: str = "map",
+        host_id: int | None = None,
+        period: float = 0.0,
+        country_code: int = 276,
+    ) -> None:
+        self.path = path
+        self._map = (
+            opendrive.decode("utf-8", "replace") if isinstance(opendrive, bytes) else opendrive
+        )
+        self._map_reference = map_reference
+        self._host_id = host_id
+        self._period_ns = round(period * 1e9)
+        self._due_ns = 0
+        self._last_ns: int | None = None
+        self._frames = 0
+        self._tail = osiwire.ground_truth_tail(
+            country_code=country_code, map_reference=map_reference
+        )
+        self._ids: dict[int, int] = {}
+        self._previous: set[int] = set()
+        self._seen: set[int] = set()
+        self._reissued = 0
+        self._layouts: dict[int, tuple[EntityKind, str, BoundingBox, osiwire.ObjectLayout]] = {}
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            self._file: BinaryIO | None = path.open("wb")
+        except OSError as exc:
+            raise ResultsError(f"cannot create recording {path}: {exc}") from exc
+        self._writer = Writer(self._file, compression=CompressionType.ZSTD)
+        self._writer.start(profile="", library="simtest-operator")
+        self._writer.add_metadata(OSI_TRACE_METADATA, self._trace_metadata(info))
+        run = {"scenario_id": info.scenario_id, "seed": str(info.seed)}
+        run.update({f"version.{name}": value for name, value in sorted(info.versions.items())})
+        self._writer.add_metadata(RUN_METADATA, run)
+        descriptor_set = descriptors.osi_descriptor_set()
+        channel_meta = {
+            "net.asam.osi.trace.channel.osi_version": _OSI_VERSION,
+            "net.asam.osi.trace.channel.protobuf_version": _PROTOBUF_VERSION,
+        }
+        gt_schema = self._writer.register_schema("osi3.GroundTruth", "protobuf", descriptor_set)
+        self._gt_channel = self._writer.register_channel(
+            GROUND_TRUTH_TOPIC, "protobuf", gt_schema,
+            {**channel_meta, "net.asam.osi.trace.channel.description": "simulated ground truth"},
+        )  # fmt: skip
+        self._map_channel: int | None = None
+        if self._map is not None:
+            map_schema = self._writer.register_schema(
+                "osi3.MapAsamOpenDrive", "protobuf", descriptor_set
+            )
+            self._map_channel = self._writer.register_channel(
+                MAP_TOPIC, "protobuf", map_schema,
+                {**channel_meta, "net.asam.osi.trace.channel.description": "OpenDRIVE road map"},
+            )  # fmt: skip
+
+    @staticmethod
+    def _trace_metadata(info: RecordingInfo) -> dict[str, str]:
+        metadata = {
+            "version": _OSI_VERSION,
+            "min_osi_version": _OSI_VERSION,
+            "max_osi_version": _OSI_VERSION,
+            "min_protobuf_version": _PROTOBUF_VERSION,
+            "max_protobuf_version": _PROTOBUF_VERSION,
+            "description": info.description or f"simtest-operator run of {info.scenario_id}",
+            "authors": "simtest-operator",
+            "data_sources": "simulation",
+        }
+        if info.zero_time is not None:
+            stamp = info.zero_time.astimezone(datetime.UTC)
+            metadata["zero_time"] = stamp.strftime("%Y-%m-%dT%H:%M:%S.%fZ")
+        return metadata
+
+    @property
+    def frames(self) -> int:
+        """Number of GroundTruth frames written so far."""
+        return self._frames
+
+    def __enter__(self) -> Recorder:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        traceback: TracebackType | None,
+    ) -> None:
+        self.close()
+
+    def _osi_id(self, entity_id: int) -> int:
+        if entity_id in self._previous or entity_id not in self._seen:
+            self._seen.add(entity_id)
+            return self._ids.setdefault(entity_id, entity_id)
+        # Back after a gap: omega-prime forbids gaps, so this is a new object.
+        self._reissued += 1
+        self._ids[entity_id] = _REISSUED_ID_BASE + self._reissued
+        return self._ids[entity_id]
+
+    def _layout(self, osi_id: int, state: EntityState) -> osiwire.ObjectLayout:
+        cached = self._layouts.get(osi_id)
+        box = state.box
+        if (
+            cached is not None
+            and (cached[2] is box or cached[2] == box)
+            and cached[0] is state.kind
+            and cached[1] == state.category
+        ):
+            return cached[3]
+        kind, class_type, role = _classify(state)
+        layout = osiwire.object_layout(
+            object_id=osi_id,
+            object_type=kind,
+            dimension=(
+                max(box.length, _MIN_DIMENSION),
+                max(box.width, _MIN_DIMENSION),
+                max(box.height, 0.0),
+            ),
+            classification_type=class_type,
+            classification_role=role,
+        )
+        self._layouts[osi_id] = (state.kind, state.category, box, layout)
+        return layout
+
+    def write(self, snapshot: WorldSnapshot, *, force: bool = False) -> bool:
+        """Record the snapshot if it is due (always with ``force``); returns whether it was.
+
+        Snapshots at or before the last recorded time are ignored.
+        """
+        if self._file is None:
+            raise ResultsError(f"recording {self.path} is already closed")
+        nanos = round(snapshot.time * 1e9)
+        if nanos < 0:
+            raise ValueError(f"snapshot time {snapshot.time} is before the scenario start")
+        if self._last_ns is not None and nanos <= self._last_ns:
+            return False
+        if not force and nanos < self._due_ns - 1000:
+            return False
+        if self._period_ns > 0:
+            self._due_ns = (nanos // self._period_ns + 1) * self._period_ns
+        if self._frames == 0:
+            self._write_map(nanos)
+        remainder, cos, sin, two_pi = math.remainder, math.cos, math.sin, 2.0 * math.pi
+        previous, ids = self._previous, self._ids
+        entries = []
+        present = set()
+        for state in snapshot.entities:
+            entity_id = state.id
+            osi_id = ids[entity_id] if entity_id in previous else self._osi_id(entity_id)
+            present.add(entity_id)
+            heading = state.heading
+            c, s = cos(heading), sin(heading)
+            box = state.box
+            speed, lateral, acceleration = state.speed, state.lateral_speed, state.acceleration
+            entries.append(
+                self._layout(osi_id, state).encode(
+                    (
+                        state.x + box.center_x * c - box.center_y * s,
+                        state.y + box.center_x * s + box.center_y * c,
+                        state.z + box.center_z,
+                    ),
+                    remainder(heading, two_pi),
+                    (speed * c - lateral * s, speed * s + lateral * c, 0.0),
+                    (acceleration * c, acceleration * s, 0.0),
+                    remainder(state.pitch, two_pi),
+                    remainder(state.roll, two_pi),
+                )
+            )
+        self._previous = present
+        if self._host_id is None and snapshot.entities:
+            self._host_id = min(state.id for state in snapshot.entities)
+        host = self._ids.get(self._host_id) if self._host_id is not None else None
+        head = osiwire.ground_truth_head(nanos=nanos, host_id=host)
+        self._writer.add_message(
+            self._gt_channel,
+            log_time=nanos,
+            data=head + b"".join(entries) + self._tail,
+            publish_time=nanos,
+            sequence=self._frames,
+        )
+        self._last_ns = nanos
+        self._frames += 1
+        return True
+
+    def _write_map(self, nanos: int) -> None:
+        if self._map_channel is None or self._map is None:
+            return
+        data = osiwire.map_message(self._map_reference, self._map)
+        self._writer.add_message(self._map_channel, log_time=nanos, data=data, publish_time=nanos)
+
+    def close(self) -> None:
+        """Finish the file (summary and index); safe to call twice."""
+        if self._file is None:
+            return
+        try:
+            if self._frames == 0:
+                self._write_map(0)
+            self._writer.finish()  # type: ignore[no-untyped-call]
+        finally:
+            self._file.close()
+            self._file = None

@@ -1,0 +1,190 @@
+"""Recorder end to end, read back with omega-prime (validation on) and with our own reader:
+object ids and counts, bounding-box centres (rotated boxes with lateral offsets), yaw within
+[-pi, pi], velocity with lateral speed, vehicle classification per category, pedestrians and misc
+objects, an entity leaving and coming back under a fresh id (no gaps), late and early-leaving
+entities, 20 Hz input thinned to 10 Hz, the embedded OpenDRIVE map and its map_reference,
+metadata records and channel metadata; and the write cost per frame with 20 objects."""
+
+from __future__ import annotations
+
+import math
+import time
+import warnings
+from pathlib import Path
+
+import pytest
+from mcap.reader import make_reader
+
+from simtest_operator.recording import Recorder, RecordingInfo, read_metadata, read_trajectories
+from simtest_operator.snapshots import BoundingBox, EntityKind, EntityState, WorldSnapshot
+
+XODR = (
+    Path(__file__).resolve().parents[3]
+    / "shared" / "scenarios-dev" / "esmini" / "resources" / "xodr" / "straight_500m.xodr"
+)  # fmt: skip
+CAR_BOX = BoundingBox(center_x=1.4, center_y=0.2, center_z=0.75, length=4.5, width=1.8, height=1.5)
+PERSON_BOX = BoundingBox(center_z=0.9, length=0.5, width=0.6, height=1.8)
+CONE_BOX = BoundingBox(center_z=0.3, length=0.4, width=0.4, height=0.6)
+CATEGORIES = {0: "car", 1: "truck", 2: "bus", 3: "bicycle", 4: "motorbike"}
+
+
+def world(t: float) -> WorldSnapshot:
+    """Five vehicles (ego 0), a pedestrian from t=1 s, a cone until t=3 s, and vehicle 4 missing
+    between t=2 s and t=3 s."""
+    entities = []
+    for entity_id, category in CATEGORIES.items():
+        if entity_id == 4 and 2.0 <= t < 3.0:
+            continue
+        entities.append(
+            EntityState(
+                id=entity_id, name=f"v{entity_id}", kind=EntityKind.VEHICLE, category=category,
+                x=20.0 * entity_id + 15.0 * t, y=-1.5, heading=3.5 if entity_id == 2 else 0.2,
+                speed=15.0, lateral_speed=0.5, acceleration=-1.0, box=CAR_BOX,
+            )
+        )  # fmt: skip
+    if t >= 1.0:
+        entities.append(
+            EntityState(
+                id=10, name="walker", kind=EntityKind.PEDESTRIAN, category="pedestrian",
+                x=60.0, y=-8.0 + t, heading=math.pi / 2, speed=1.0, box=PERSON_BOX,
+            )
+        )  # fmt: skip
+    if t < 3.0:
+        entities.append(
+            EntityState(
+                id=11, name="cone", kind=EntityKind.MISC_OBJECT, category="obstacle",
+                x=100.0, y=-1.5, box=CONE_BOX,
+            )
+        )  # fmt: skip
+    return WorldSnapshot(time=t, entities=tuple(entities))
+
+
+@pytest.fixture(scope="module")
+def recording(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    path = tmp_path_factory.mktemp("rec") / "run.mcap"
+    info = RecordingInfo(scenario_id="cut-in-7", seed=42, versions={"sumo": "1.28.0"})
+    with Recorder(
+        path, info=info, opendrive=XODR.read_bytes(), map_reference="straight_500m",
+        host_id=0, period=0.1,
+    ) as recorder:  # fmt: skip
+        for step in range(101):  # 5 s at 20 Hz
+            recorder.write(world(round(step * 0.05, 10)))
+        assert recorder.frames == 51
+    return path
+
+
+@pytest.fixture(scope="module")
+def omega(recording: Path):  # type: ignore[no-untyped-def]
+    with warnings.catch_warnings():
+        # omega-prime 0.3.7 still uses betterosi's deprecated class names.
+        warnings.simplefilter("ignore", DeprecationWarning)
+        import omega_prime
+
+        return omega_prime.Recording.from_file(
+            str(recording), validate=True, parse_map=True, apply_proj=False
+        )
+
+
+def test_omega_prime_validates_and_sees_every_object(omega) -> None:  # type: ignore[no-untyped-def]
+    df = omega.df
+    assert omega.host_vehicle_idx == 0
+    assert omega.map is not None
+    counts = dict(df.group_by("idx").len().sort("idx").iter_rows())
+    reissued = [idx for idx in counts if idx >= 1_000_000_000]
+    assert len(reissued) == 1
+    assert counts == {0: 51, 1: 51, 2: 51, 3: 51, 4: 20, 10: 41, 11: 30, reissued[0]: 21}
+    assert df["total_nanos"].n_unique() == 51
+    assert df["total_nanos"].max() == 5_000_000_000
+    types = dict(df.select("idx", "type").unique().iter_rows())
+    assert types[0] == 2 and types[10] == 3 and types[11] == 1
+    subtypes = dict(df.filter(df["type"] == 2).select("idx", "subtype").unique().iter_rows())
+    assert (subtypes[0], subtypes[1], subtypes[2], subtypes[3], subtypes[4]) == (4, 7, 13, 12, 11)
+
+
+def test_positions_are_box_centres(omega) -> None:  # type: ignore[no-untyped-def]
+    row = omega.df.filter((omega.df["idx"] == 2) & (omega.df["total_nanos"] == 1_500_000_000))
+    state = world(1.5).entity("v2")
+    assert state is not None
+    cx, cy, cz = state.box_center()
+    vx, vy = state.velocity()
+    assert row["x"][0] == pytest.approx(cx)
+    assert row["y"][0] == pytest.approx(cy)
+    assert row["z"][0] == pytest.approx(cz)
+    assert row["vel_x"][0] == pytest.approx(vx)
+    assert row["vel_y"][0] == pytest.approx(vy)
+    assert row["yaw"][0] == pytest.approx(3.5 - 2 * math.pi)
+    assert row["acc_x"][0] == pytest.approx(-math.cos(3.5))
+    assert (row["length"][0], row["width"][0], row["height"][0]) == (4.5, 1.8, 1.5)
+
+
+def test_own_reader_matches(recording: Path) -> None:
+    trajectories = read_trajectories(recording)
+    assert sorted(trajectories)[:7] == [0, 1, 2, 3, 4, 10, 11]
+    assert len(trajectories[0]) == 51
+    sample = trajectories[10][0]
+    assert sample.t == pytest.approx(1.0)
+    assert (sample.x, sample.y) == pytest.approx((60.0, -7.0))
+    assert sample.heading == pytest.approx(math.pi / 2)
+    assert sample.speed == pytest.approx(1.0)
+    times = [sample.t for sample in trajectories[4]]
+    assert times[-1] == pytest.approx(1.9)
+
+
+def test_metadata_map_and_channels(recording: Path) -> None:
+    metadata = read_metadata(recording)
+    trace = metadata["net.asam.osi.trace"]
+    assert trace["version"] == "3.7.0"
+    assert {"min_osi_version", "max_osi_version", "min_protobuf_version"} <= set(trace)
+    assert metadata["simtest.run"] == {
+        "scenario_id": "cut-in-7",
+        "seed": "42",
+        "version.sumo": "1.28.0",
+    }
+    with recording.open("rb") as stream:
+        summary = make_reader(stream).get_summary()
+    assert summary is not None
+    channels = {channel.topic: channel for channel in summary.channels.values()}
+    assert set(channels) == {"ground_truth", "ground_truth_map"}
+    for channel in channels.values():
+        assert channel.metadata["net.asam.osi.trace.channel.osi_version"] == "3.7.0"
+    schemas = {summary.schemas[c.schema_id].name for c in channels.values()}
+    assert schemas == {"osi3.GroundTruth", "osi3.MapAsamOpenDrive"}
+    assert recording.stat().st_size < 400_000
+
+
+def test_map_reference_matches(recording: Path) -> None:
+    import betterosi
+
+    osi = betterosi.v3_7_0
+    with recording.open("rb") as stream:
+        messages = {
+            channel.topic: message.data
+            for _, channel, message in make_reader(stream).iter_messages()
+        }
+    road = osi.MapAsamOpenDrive.from_binary(messages["ground_truth_map"])
+    last = osi.GroundTruth.from_binary(messages["ground_truth"])
+    assert road.map_reference == last.map_reference == "straight_500m"
+    assert road.open_drive_xml_content == XODR.read_text()
+
+
+def test_write_cost_per_frame(tmp_path: Path) -> None:
+    """Twenty vehicles, 60 s at 10 Hz: the cost the bench budget counts (printed)."""
+
+    def car(i: int, k: int) -> EntityState:
+        return EntityState(
+            id=i, name=f"v{i}", kind=EntityKind.VEHICLE, category="car",
+            x=10.0 * i + 2.0 * k, y=-1.5, heading=0.01 * k, speed=20.0, box=CAR_BOX,
+        )  # fmt: skip
+
+    snapshots = [
+        WorldSnapshot(time=k * 0.1, entities=tuple(car(i, k) for i in range(20)))
+        for k in range(600)
+    ]
+    started = time.perf_counter()
+    with Recorder(tmp_path / "bench.mcap", info=RecordingInfo(scenario_id="b", seed=1)) as rec:
+        for snapshot in snapshots:
+            rec.write(snapshot)
+    per_frame = (time.perf_counter() - started) / len(snapshots)
+    print(f"recording cost: {per_frame * 1e6:.0f} us per frame of 20 objects")
+    # Budget: 10% of a 100x real-time run at 10 frames per simulated second = 1 ms per frame.
+    assert per_frame < 1e-3
