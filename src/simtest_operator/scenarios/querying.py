@@ -1,0 +1,124 @@
+"""GraphQL scenario databases: POST the query, read back a list of ``{id, url | content}``.
+
+The response is untrusted like any download (bounded, strictly shaped). The list is the one field
+of ``data`` (``{"data": {"scenarios": [...]}}``), or the ``nodes``/``items``/``edges[].node`` of a
+connection object in that field. A bearer token comes from an injected secret provider (a
+Kubernetes Secret in the operator, an environment variable for ``simtest run``) and never appears
+in an error message.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from collections.abc import Callable, Mapping
+from pathlib import Path
+from typing import Any
+
+from simtest_operator.errors import SourceError
+from simtest_operator.scenarios import downloading
+from simtest_operator.scenarios.specs import GraphqlSource, SecretRef, SourceLimits
+
+SecretProvider = Callable[[SecretRef], str]
+"""Returns the value of a Secret key; raises SourceError when it is not available."""
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class GraphqlItem:
+    """One scenario named by the database."""
+
+    id: str
+    url: str | None = None
+    """Where to download the .xosc file."""
+    content: bytes | None = None
+    """The .xosc file inline."""
+
+
+def query(
+    source: GraphqlSource,
+    *,
+    limits: SourceLimits,
+    scratch: Path,
+    secrets: SecretProvider | None,
+) -> tuple[GraphqlItem, ...]:
+    """Run the source's query and return its items in response order."""
+    headers = {"Content-Type": "application/json", "Accept": "application/json"}
+    if source.secret is not None:
+        if secrets is None:
+            raise SourceError(
+                f"{source.endpoint}: the source needs Secret {source.secret.name}/"
+                f"{source.secret.key}, but no secret provider is configured"
+            )
+        headers["Authorization"] = f"Bearer {secrets(source.secret)}"
+    body = json.dumps({"query": source.query, "variables": dict(source.variables)}).encode()
+    raw = downloading.fetch_bytes(
+        source.endpoint, limits=limits, scratch=scratch, data=body, headers=headers
+    )
+    try:
+        document = json.loads(raw)
+    except (ValueError, UnicodeDecodeError) as exc:
+        raise SourceError(f"{source.endpoint}: response is not JSON ({exc})") from exc
+    return parse_response(document, endpoint=source.endpoint, limits=limits)
+
+
+def parse_response(
+    document: Any, *, endpoint: str, limits: SourceLimits
+) -> tuple[GraphqlItem, ...]:
+    """The items of a GraphQL response document; SourceError when it has errors or no list."""
+    if not isinstance(document, Mapping):
+        raise SourceError(f"{endpoint}: response must be a JSON object")
+    errors = document.get("errors")
+    if errors:
+        messages = [
+            str(e.get("message", e)) if isinstance(e, Mapping) else str(e)
+            for e in (errors if isinstance(errors, list) else [errors])
+        ]
+        raise SourceError(f"{endpoint}: query failed: {'; '.join(messages[:3])}")
+    rows = _the_list(document.get("data"), endpoint)
+    if len(rows) > limits.max_files:
+        raise SourceError(f"{endpoint}: more than {limits.max_files} scenarios in the response")
+    items: list[GraphqlItem] = []
+    seen: set[str] = set()
+    for index, row in enumerate(rows):
+        item = _item(row, index=index, endpoint=endpoint)
+        if item.id in seen:
+            raise SourceError(f"{endpoint}: scenario id {item.id!r} appears twice")
+        seen.add(item.id)
+        items.append(item)
+    return tuple(items)
+
+
+def _the_list(data: Any, endpoint: str) -> list[Any]:
+    if not isinstance(data, Mapping) or len(data) != 1:
+        raise SourceError(f"{endpoint}: 'data' must hold exactly one field with the scenario list")
+    (value,) = data.values()
+    if isinstance(value, list):
+        return value
+    if isinstance(value, Mapping):
+        for key in ("nodes", "items"):
+            if isinstance(value.get(key), list):
+                return list(value[key])
+        edges = value.get("edges")
+        if isinstance(edges, list):
+            return [edge.get("node") if isinstance(edge, Mapping) else edge for edge in edges]
+    raise SourceError(f"{endpoint}: the field in 'data' is not a list (or a connection)")
+
+
+def _item(row: Any, *, index: int, endpoint: str) -> GraphqlItem:
+    where = f"{endpoint}: item {index}"
+    if not isinstance(row, Mapping):
+        raise SourceError(f"{where} is not an object")
+    ident = row.get("id")
+    if isinstance(ident, bool) or not isinstance(ident, str | int) or str(ident) == "":
+        raise SourceError(f"{where} has no string or integer 'id'")
+    url, content = row.get("url"), row.get("content")
+    if (url is None) == (content is None):
+        raise SourceError(f"{where} ({ident}) must have exactly one of 'url' or 'content'")
+    if url is not None:
+        if not isinstance(url, str):
+            raise SourceError(f"{where} ({ident}) has a non-string 'url'")
+        downloading.check_http_url(url)
+        return GraphqlItem(id=str(ident), url=url)
+    if not isinstance(content, str):
+        raise SourceError(f"{where} ({ident}) has a non-string 'content'")
+    return GraphqlItem(id=str(ident), content=content.encode("utf-8"))

@@ -1,0 +1,140 @@
+"""Source URIs: one string per pinned scenario that says exactly where its file comes from.
+
+The frozen list must let anyone (``simtest run --frozen``, a simulator pod) fetch the very same
+bytes again, so a URI carries everything resolution decided (the git commit, the archive member):
+
+=============================================  ==================================================
+``file:///abs/dir/a.xosc``                     a local file (path sources)
+``git+https://host/repo.git@<commit>#<path>``  a file in a repository at a commit (40 hex digits)
+``https://host/suite.tgz#<member>``            a member of an HTTP archive
+``https://host/a.xosc``                        a single file over HTTP (no fragment)
+``graphql+https://host/graphql#<item id>``     inline content of a scenario-database item
+``configmap:<name>/<key>``                     a key of a ConfigMap in the campaign's namespace
+=============================================  ==================================================
+
+Fragments (paths, ids, keys) are percent-encoded, so ``#`` and ``@`` inside them are unambiguous.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+import urllib.parse
+from pathlib import Path, PurePosixPath
+
+from simtest_operator.errors import SourceError
+
+_GIT = re.compile(r"^git\+(?P<url>.+)@(?P<commit>[0-9a-f]{40})#(?P<path>.*)$")
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class FileUri:
+    """A local file."""
+
+    path: Path
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class GitUri:
+    """A file in a git repository at a commit."""
+
+    url: str
+    commit: str
+    path: str
+    """Path inside the repository (POSIX)."""
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class HttpUri:
+    """A file over HTTP, either the body itself or a member of an archive body."""
+
+    url: str
+    member: str | None = None
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class GraphqlUri:
+    """Inline content of one scenario-database item."""
+
+    endpoint: str
+    item: str
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class ConfigMapUri:
+    """A key of a ConfigMap."""
+
+    name: str
+    key: str
+
+
+SourceUri = FileUri | GitUri | HttpUri | GraphqlUri | ConfigMapUri
+
+
+def _quote(text: str) -> str:
+    return urllib.parse.quote(text, safe="/-._~")
+
+
+def file_uri(path: Path) -> str:
+    """URI of an absolute local path."""
+    return path.absolute().as_uri()
+
+
+def git_uri(url: str, commit: str, path: str) -> str:
+    """URI of ``path`` inside the repository at ``url`` and ``commit``."""
+    return f"git+{url}@{commit}#{_quote(path)}"
+
+
+def http_uri(url: str, member: str | None = None) -> str:
+    """URI of an HTTP file, or of ``member`` inside the archive at ``url``."""
+    base = url.split("#", 1)[0]
+    return base if member is None else f"{base}#{_quote(member)}"
+
+
+def graphql_uri(endpoint: str, item: str) -> str:
+    """URI of the inline content of item ``item``."""
+    return f"graphql+{endpoint}#{_quote(item)}"
+
+
+def configmap_uri(name: str, key: str) -> str:
+    """URI of a ConfigMap key."""
+    return f"configmap:{name}/{_quote(key)}"
+
+
+def parse(uri: str) -> SourceUri:
+    """Split a source URI into its parts; raises SourceError for anything else."""
+    if uri.startswith("git+"):
+        match = _GIT.match(uri)
+        if match is None:
+            raise SourceError(f"malformed git source URI {uri!r} (git+URL@COMMIT#PATH expected)")
+        path = _checked_relative(urllib.parse.unquote(match["path"]), uri)
+        return GitUri(url=match["url"], commit=match["commit"], path=path)
+    if uri.startswith("graphql+"):
+        endpoint, _, item = uri.removeprefix("graphql+").partition("#")
+        if not endpoint.startswith(("http://", "https://")) or not item:
+            raise SourceError(f"malformed graphql source URI {uri!r}")
+        return GraphqlUri(endpoint=endpoint, item=urllib.parse.unquote(item))
+    if uri.startswith("configmap:"):
+        name, _, key = uri.removeprefix("configmap:").partition("/")
+        if not name or not key:
+            raise SourceError(f"malformed ConfigMap source URI {uri!r}")
+        return ConfigMapUri(name=name, key=urllib.parse.unquote(key))
+    parts = urllib.parse.urlsplit(uri)
+    if parts.scheme == "file":
+        if parts.netloc not in ("", "localhost"):
+            raise SourceError(f"file URI {uri!r} names a remote host")
+        return FileUri(path=Path(urllib.parse.unquote(parts.path)))
+    if parts.scheme in ("http", "https"):
+        base = urllib.parse.urlunsplit(parts._replace(fragment=""))
+        member = urllib.parse.unquote(parts.fragment) if parts.fragment else None
+        if member is not None:
+            member = _checked_relative(member, uri)
+        return HttpUri(url=base, member=member)
+    raise SourceError(f"unknown source URI scheme in {uri!r}")
+
+
+def _checked_relative(path: str, uri: str) -> str:
+    pure = PurePosixPath(path)
+    if pure.is_absolute() or ".." in pure.parts or not path:
+        raise SourceError(f"source URI {uri!r} names a path outside its source")
+    return pure.as_posix()
