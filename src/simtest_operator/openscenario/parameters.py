@@ -161,34 +161,38 @@ def declare(
     *,
     overrides: Mapping[str, str] | None = None,
     on_mistyped: Callable[[str], None] | None = None,
+    strict_overrides: bool = True,
 ) -> tuple[Scope, tuple[ParameterDeclaration, ...]]:
     """Declare parameters ``(name, type, raw value, line)`` in order inside ``scope``.
 
     Each value may refer to parameters declared before it. ``overrides`` replace the raw value of
     the parameter with the same name (caller overrides, catalog ParameterAssignments). Returns the
-    new scope and the declarations with their final typed values. Errors carry no location; the
-    caller adds it.
+    new scope and the declarations with their final typed values. Errors carry the entry's line
+    but no file; the caller adds it.
 
     A literal value that does not fit its declared type (real files declare ``double`` with
     value ``time``) is an error unless ``on_mistyped`` is given: then the value is kept as text,
-    ``on_mistyped`` receives a note, and any typed use of it fails where it is used.
+    ``on_mistyped`` receives a note, and any typed use of it fails where it is used. With
+    ``strict_overrides`` (caller overrides) overridden values are always checked strictly;
+    catalog ParameterAssignments pass False and get the same leniency as literals.
     """
     overrides = overrides or {}
     declared: dict[str, ParameterDeclaration] = {}
     current = scope
     for name, type_text, raw, line in entries:
-        kind = parse_type(type_text)
         text = overrides.get(name, raw)
         try:
+            kind = parse_type(type_text)
             resolved = resolve(text, current)
         except ScenarioError as exc:
-            raise ScenarioError(f"parameter {name!r}: {exc.args[0]}") from exc
+            raise ScenarioError(f"parameter {name!r}: {exc.args[0]}", line=line) from exc
         value: ParameterValue
         try:
             value = convert(resolved, kind)
         except ScenarioError as exc:
-            if on_mistyped is None or not isinstance(resolved, str):
-                raise ScenarioError(f"parameter {name!r}: {exc.args[0]}") from exc
+            strict = strict_overrides and name in overrides
+            if on_mistyped is None or strict or not isinstance(resolved, str):
+                raise ScenarioError(f"parameter {name!r}: {exc.args[0]}", line=line) from exc
             on_mistyped(f"parameter {name!r} kept as text: {exc.args[0]}")
             value = resolved
         declared[name] = ParameterDeclaration(name=name, type=kind, value=value, line=line)

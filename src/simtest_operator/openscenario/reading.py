@@ -236,14 +236,20 @@ class Context:
             if pending:
                 raise self.error(el, f"no parameters declared to assign: {', '.join(pending)}")
             return inner, ()
-        return inner.declare(block, pending)
+        return inner.declare(block, pending, strict_overrides=False)
 
     def declare(
-        self, block: Element, overrides: Mapping[str, str] | None = None
+        self,
+        block: Element,
+        overrides: Mapping[str, str] | None = None,
+        *,
+        strict_overrides: bool = True,
     ) -> tuple[Context, tuple[ParameterDeclaration, ...]]:
         """Declare the ParameterDeclaration children of ``block`` with optional overrides.
 
-        Every override must name a parameter declared in ``block``.
+        Every override must name a parameter declared in ``block``. Caller overrides are type
+        checked strictly; catalog assignments (``strict_overrides=False``) may keep mistyped text
+        like literals do (see :func:`parameters.declare`).
         """
         entries = [
             (
@@ -259,10 +265,20 @@ class Context:
             raise self.error(block, f"assigned parameters are not declared: {', '.join(unknown)}")
         try:
             scope, decls = parameters.declare(
-                entries, self.scope, overrides=overrides, on_mistyped=self._note_at(block)
+                entries,
+                self.scope,
+                overrides=overrides,
+                on_mistyped=self._note_at(block),
+                strict_overrides=strict_overrides,
             )
         except ScenarioError as exc:
-            raise self.error(block, str(exc.args[0])) from exc
+            message = str(exc.args[0]).removesuffix(f" (line {exc.line})")
+            raise ScenarioError(
+                message,
+                file=self.file,
+                element="ParameterDeclaration" if exc.line else str(block.tag),
+                line=exc.line or block.sourceline,
+            ) from exc
         return self.with_scope(scope), decls
 
     def note(self, el: Element | None, message: str) -> None:
