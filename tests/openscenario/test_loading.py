@@ -414,6 +414,43 @@ def test_openscenario_1_0_spellings(write_scenario: ScenarioWriter) -> None:
     assert second.body.condition.coordinate_system is model.CoordinateSystem.ROAD
 
 
+OVERRIDE = """<OverrideControllerValueAction>
+  <Throttle value="0" active="{active}"/><Brake value="0" active="false"/>
+  <Clutch value="0" active="false"/><ParkingBrake value="0" active="false"/>
+  <SteeringWheel value="0" active="false"/><Gear number="0" active="false"/>
+</OverrideControllerValueAction>"""
+ASSIGN = '<AssignControllerAction><Controller name="drv"/></AssignControllerAction>'
+
+
+@pytest.mark.parametrize(
+    ("inner", "expected"),
+    [
+        (ASSIGN + OVERRIDE.format(active="false"), "assign"),
+        (ASSIGN + '<ActivateControllerAction lateral="true" longitudinal="false"/>', "merged"),
+        (ASSIGN + OVERRIDE.format(active="true"), "unsupported"),
+    ],
+    ids=["1.0-assign-with-inactive-override", "1.1-assign-and-activate", "active-override"],
+)
+def test_controller_action_combinations(
+    write_scenario: ScenarioWriter, inner: str, expected: str
+) -> None:
+    init = f'<Private entityRef="Ego"><PrivateAction><ControllerAction>{inner}'
+    init += "</ControllerAction></PrivateAction></Private>"
+    scenario = load_scenario(write_scenario(minor=1, init=init))
+    (action,) = scenario.storyboard.init.private[0].actions
+    if expected == "unsupported":
+        assert isinstance(action, model.Unsupported)
+        assert action.element == "OverrideControllerValueAction"
+        assert scenario.unsupported() == (action,)
+        return
+    assert isinstance(action, model.AssignControllerAction)
+    assert isinstance(action.controller, model.Controller) and action.controller.name == "drv"
+    if expected == "merged":
+        assert (action.activate_lateral, action.activate_longitudinal) == (True, False)
+    else:
+        assert (action.activate_lateral, action.activate_longitudinal) == (None, None)
+
+
 def test_rejects_wrong_files(write_scenario: ScenarioWriter, tmp_path: Path) -> None:
     path = write_scenario(road='<LogicFile filepath="missing.xodr"/>')
     with pytest.raises(ScenarioError, match=r"road network file 'missing\.xodr' not found") as info:

@@ -79,23 +79,46 @@ def activate(el: Element, ctx: reading.Context) -> ctl.ActivateControllerAction:
 
 
 def controller_action(el: Element, ctx: reading.Context) -> a.PrivateAction:
-    """Read a ``<ControllerAction>`` (1.0: assign + override; 1.1+: one of assign/override/
-    activate)."""
+    """Read a ``<ControllerAction>``.
+
+    1.0 requires AssignControllerAction plus OverrideControllerValueAction; 1.1 allows any
+    combination of assign/override/activate; 1.2+ exactly one. Assign and activate are merged
+    into one AssignControllerAction (activate flags filled from the ActivateControllerAction);
+    an override with any active value is unsupported, an all-inactive one is a no-op.
+    """
     assign = reading.child(el, "AssignControllerAction")
+    activate_el = reading.child(el, "ActivateControllerAction")
+    override = reading.child(el, "OverrideControllerValueAction")
+    if override is not None and _override_active(override, ctx):
+        return ctx.unsupported(
+            override, "overriding controller values (pedals, steering, gear) is not supported"
+        )
+    switch = activate(activate_el, ctx) if activate_el is not None else None
     if assign is not None:
+        lateral = ctx.opt_boolean(assign, "activateLateral")
+        longitudinal = ctx.opt_boolean(assign, "activateLongitudinal")
+        lighting = ctx.opt_boolean(assign, "activateLighting")
+        animation = ctx.opt_boolean(assign, "activateAnimation")
         return ctl.AssignControllerAction(
             controller=controller_or_ref(ctx.choice(assign), ctx),
-            activate_lateral=ctx.opt_boolean(assign, "activateLateral"),
-            activate_longitudinal=ctx.opt_boolean(assign, "activateLongitudinal"),
-            activate_lighting=ctx.opt_boolean(assign, "activateLighting"),
-            activate_animation=ctx.opt_boolean(assign, "activateAnimation"),
+            activate_lateral=lateral if switch is None or lateral is not None else switch.lateral,
+            activate_longitudinal=longitudinal
+            if switch is None or longitudinal is not None
+            else switch.longitudinal,
+            activate_lighting=lighting
+            if switch is None or lighting is not None
+            else switch.lighting,
+            activate_animation=animation
+            if switch is None or animation is not None
+            else switch.animation,
             line=assign.sourceline,
         )
-    chosen = ctx.choice(el)
-    if chosen.tag == "ActivateControllerAction":
-        return activate(chosen, ctx)
-    if chosen.tag == "OverrideControllerValueAction":
-        return ctx.unsupported(
-            chosen, "overriding controller values (pedals, steering) is not supported"
-        )
-    return ctx.unsupported(chosen, f"unknown controller action {chosen.tag}")
+    if switch is not None:
+        return switch
+    if override is not None:
+        return ctx.unsupported(override, "an inactive controller override alone does nothing")
+    return ctx.unsupported(ctx.choice(el), "unknown controller action")
+
+
+def _override_active(el: Element, ctx: reading.Context) -> bool:
+    return any(ctx.opt_boolean(node, "active", False) for node in reading.children(el))
