@@ -8,20 +8,26 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from simtest_operator.errors import ResultsError
 from simtest_operator.results import postgres, sqlite, sqlstore, stores
 
 
-def open_store(target: str | Path, *, clock: sqlstore.Clock = sqlstore.utc_now) -> stores.Store:
-    """Open (creating and migrating as needed) the store at ``target``.
+def open_store(
+    target: str | Path, *, clock: sqlstore.Clock = sqlstore.utc_now, create: bool = True
+) -> stores.Store:
+    """Open (migrating as needed) the store at ``target``.
 
     ``postgresql://...`` or ``postgres://...`` -> PostgreSQL; an existing folder -> its
-    ``results.sqlite``; anything else -> that SQLite file.
+    ``results.sqlite``; anything else -> that SQLite file. With ``create=False`` a missing SQLite
+    file is an error instead of a new empty database (readers should not leave files behind).
     """
     if isinstance(target, str) and postgres.is_dsn(target):
         return postgres.PostgresStore(target, clock=clock)
     path = Path(target)
     if path.is_dir():
         path = path / sqlite.DEFAULT_FILENAME
+    if not create and not path.is_file():
+        raise ResultsError(f"no results database at {path}")
     return sqlite.SqliteStore(path, clock=clock)
 
 

@@ -1,0 +1,125 @@
+"""``simtest report``: the HTML report (and optionally JUnit XML) of a run's output folder.
+
+Parses options, wires the recording reader into the results package (the two sit on the same
+layer and do not import each other) and prints what :func:`results.publishing.publish` returns.
+"""
+
+from __future__ import annotations
+
+import datetime
+import socket
+from collections.abc import Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import click
+
+from simtest_operator.errors import SimtestError
+
+if TYPE_CHECKING:
+    from simtest_operator.results import details
+
+
+def read_recording(path: Path) -> Sequence[details.Trajectory]:
+    """Trajectories of every object in an omega-prime recording, for the developer view.
+
+    Objects are named from the recording's ``simtest.run`` metadata (``entity.<id>`` keys) when it
+    has them, else ``ego`` / ``object <id>``; the ego is the OSI host vehicle, by the recorder's
+    convention the smallest id.
+    """
+    from simtest_operator import recording
+    from simtest_operator.results import details
+
+    samples = recording.read_trajectories(path)
+    names = recording.read_metadata(path).get("simtest.run", {})
+    ego = min(samples, default=None)
+    return [
+        details.Trajectory(
+            entity=names.get(
+                f"entity.{object_id}", "ego" if object_id == ego else f"object {object_id}"
+            ),
+            points=details.thin([(s.t, s.x, s.y) for s in track]),
+            is_ego=object_id == ego,
+        )
+        for object_id, track in sorted(samples.items())
+    ]
+
+
+@click.command()
+@click.argument("outdir", type=click.Path(exists=True, file_okay=False, path_type=Path))
+@click.option(
+    "--compare",
+    "compare",
+    metavar="OTHER_OUTDIR|DSN",
+    help="Compare with the newest run in another output folder (or database).",
+)
+@click.option(
+    "--out",
+    "out",
+    type=click.Path(dir_okay=False, path_type=Path),
+    help="Report file to write  [default: OUTDIR/report.html]",
+)
+@click.option(
+    "--junit",
+    "junit",
+    type=click.Path(dir_okay=False, path_type=Path),
+    help="Also write JUnit XML for CI to this file.",
+)
+@click.option(
+    "--database",
+    metavar="DSN",
+    envvar="SIMTEST_RESULTS_DATABASE",
+    help="Read the run from this PostgreSQL database instead of OUTDIR/results.sqlite "
+    "(env SIMTEST_RESULTS_DATABASE).",
+)
+@click.option("--run", "run_key", metavar="KEY", help="Run key to report  [default: newest run]")
+@click.option("--compare-run", metavar="KEY", help="Run key in the comparison store.")
+def report(
+    outdir: Path,
+    compare: str | None,
+    out: Path | None,
+    junit: Path | None,
+    database: str | None,
+    run_key: str | None,
+    compare_run: str | None,
+) -> None:
+    """Write a self-contained HTML report of the run in OUTDIR (overview, coverage, per-scenario
+    detail with trajectories, and a comparison with another run)."""
+    from simtest_operator.results import opening, publishing, records
+
+    target: str | Path = database or outdir
+    other = None
+    if compare is not None or compare_run is not None:
+        compare_target: str | Path = compare if compare is not None else target
+        if isinstance(compare_target, str) and not compare_target.startswith("postgres"):
+            compare_target = Path(compare_target)
+        other = publishing.RunRef(
+            target=compare_target,
+            run_key=records.RunKey(compare_run) if compare_run else None,
+        )
+    try:
+        published = publishing.publish(
+            publishing.RunRef(
+                target=target,
+                run_key=records.RunKey(run_key) if run_key else None,
+                base_dir=outdir,
+            ),
+            now=datetime.datetime.now(datetime.UTC),
+            report_path=out or outdir / publishing.REPORT_FILENAME,
+            junit_path=junit,
+            compare_with=other,
+            read_trajectories=read_recording,
+            hostname=socket.gethostname(),
+        )
+    except SimtestError as exc:
+        click.echo(f"simtest report: {exc}", err=True)
+        raise SystemExit(2) from None
+    counts = ", ".join(f"{n} {v.lower()}" for v, n in published.totals.items() if n)
+    click.echo(f"run {published.run_key} ({opening.describe(target)}): {counts}")
+    if published.comparison is not None:
+        moved = ", ".join(f"{n} {c.value}" for c, n in published.comparison.items() if n)
+        click.echo(f"compared with {compare or compare_run}: {moved or 'no scenarios'}")
+    if published.report is not None:
+        click.echo(f"report: {published.report}")
+    if published.junit is not None:
+        click.echo(f"junit: {published.junit}")
