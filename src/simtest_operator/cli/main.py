@@ -10,6 +10,7 @@ import click
 
 from simtest_operator import __version__
 from simtest_operator.cli import crds, devcluster
+from simtest_operator.cli import report as report_command
 
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
@@ -20,6 +21,7 @@ def cli() -> None:
 
 cli.add_command(crds.crds)
 cli.add_command(devcluster.dev_cluster)
+cli.add_command(report_command.report)
 
 
 def main() -> None:
