@@ -53,6 +53,7 @@ def parse(data: bytes, *, source: str = "<xodr>", max_bytes: int = MAX_BYTES) ->
     """Parse OpenDRIVE XML given as bytes (``source`` names it in error messages)."""
     if len(data) > max_bytes:
         raise ScenarioError(f"OpenDRIVE data is {len(data)} bytes, limit {max_bytes}", file=source)
+    _refuse_doctype(data, source)
     try:
         root = etree.fromstring(data, parser=_parser())
     except etree.XMLSyntaxError as exc:
@@ -63,6 +64,14 @@ def parse(data: bytes, *, source: str = "<xodr>", max_bytes: int = MAX_BYTES) ->
     if _local(root) != "OpenDRIVE":
         raise ScenarioError(f"root element is <{_local(root)}>, expected <OpenDRIVE>", file=source)
     return _Reader(source).document(root)
+
+
+def _refuse_doctype(data: bytes, source: str) -> None:
+    """DTDs (and with them every entity trick) have no place in OpenDRIVE; refuse them early."""
+    root_at = data.find(b"<OpenDRIVE")
+    prolog = data[: root_at if root_at >= 0 else len(data)]
+    if b"<!DOCTYPE" in prolog.upper():
+        raise ScenarioError("DOCTYPE declarations are not allowed in OpenDRIVE files", file=source)
 
 
 def _local(element: etree._Element) -> str:
@@ -341,6 +350,7 @@ def without_signals(data: bytes, *, source: str = "<xodr>") -> bytes:
     """
     if len(data) > MAX_BYTES:
         raise ScenarioError(f"OpenDRIVE data is {len(data)} bytes, limit {MAX_BYTES}", file=source)
+    _refuse_doctype(data, source)
     try:
         root = etree.fromstring(data, parser=_parser())
     except etree.XMLSyntaxError as exc:

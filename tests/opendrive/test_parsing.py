@@ -1,0 +1,105 @@
+"""Safe parsing of untrusted OpenDRIVE: DOCTYPE/entities and external entities refused, size limit,
+malformed XML, missing or invalid attributes reported with element and line, unsupported
+geometries, namespaced root, every esmini road file parses into the model (roads, lane sections,
+junction connections including direct junctions' linkedRoad), and signal stripping."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from simtest_operator.errors import ScenarioError
+from simtest_operator.opendrive import models, parse, without_signals
+from tests.opendrive.conftest import single_road
+
+LINE = '<geometry s="0" x="0" y="0" hdg="0" length="10"><line/></geometry>'
+
+
+def test_entities_and_doctype_are_refused(tmp_path: Path) -> None:
+    secret = tmp_path / "secret.txt"
+    secret.write_text("TOPSECRET")
+    external = (
+        f'<?xml version="1.0"?><!DOCTYPE r [<!ENTITY x SYSTEM "file://{secret}">]>'
+        "<OpenDRIVE><header revMajor='1' revMinor='4' name='&x;'/></OpenDRIVE>"
+    ).encode()
+    with pytest.raises(ScenarioError, match="DOCTYPE"):
+        parse(external)
+    laughs = (
+        b'<?xml version="1.0"?><!DOCTYPE r [<!ENTITY a "aaaaaaaaaa">'
+        b'<!ENTITY b "&a;&a;&a;&a;&a;&a;&a;&a;&a;&a;">]><OpenDRIVE>&b;</OpenDRIVE>'
+    )
+    with pytest.raises(ScenarioError):
+        parse(laughs)
+
+
+def test_size_limit() -> None:
+    data = single_road(LINE, length=10)
+    with pytest.raises(ScenarioError, match="limit"):
+        parse(data, max_bytes=100)
+
+
+def test_malformed_and_wrong_root() -> None:
+    with pytest.raises(ScenarioError, match="malformed") as caught:
+        parse(b"<OpenDRIVE><road>", source="bad.xodr")
+    assert caught.value.file == "bad.xodr"
+    with pytest.raises(ScenarioError, match="expected <OpenDRIVE>"):
+        parse(b"<OpenSCENARIO/>")
+
+
+def test_missing_attribute_names_element_and_line() -> None:
+    data = single_road('<geometry s="0" x="0" y="0" hdg="0"><line/></geometry>', length=10)
+    with pytest.raises(ScenarioError) as caught:
+        parse(data, source="r.xodr")
+    assert caught.value.element == "geometry"
+    assert caught.value.line == 1
+    assert "length" in str(caught.value)
+
+
+def test_invalid_number_and_unknown_geometry() -> None:
+    with pytest.raises(ScenarioError, match="hdg='north'"):
+        parse(single_road(LINE.replace('hdg="0"', 'hdg="north"'), length=10))
+    with pytest.raises(ScenarioError, match="unsupported planView geometry <nurbs>"):
+        parse(single_road(LINE.replace("<line/>", "<nurbs/>"), length=10))
+
+
+def test_namespaced_document_parses() -> None:
+    data = single_road(LINE, length=10).replace(
+        b"<OpenDRIVE>",
+        b'<OpenDRIVE xmlns="http://code.asam.net/simulation/standard/opendrive_schema">',
+    )
+    document = parse(data)
+    assert document.roads[0].geometries[0].kind is models.GeometryKind.LINE
+    assert document.roads[0].lane_sections[0].lane_ids == (1, -1, -2)
+
+
+@pytest.mark.parametrize(
+    "name",
+    sorted(p.name for p in (Path(__file__).resolve().parents[3] / "shared" / "scenarios-dev"
+                            / "esmini" / "resources" / "xodr").glob("*.xodr")),
+)  # fmt: skip
+def test_esmini_maps_parse(name: str, xodr_dir: Path) -> None:
+    document = parse((xodr_dir / name).read_bytes(), source=name)
+    assert document.rev_major == 1
+    for road in document.roads:
+        assert road.geometries and road.lane_sections
+        assert abs(sum(g.length for g in road.geometries) - road.length) < 1e-3 * max(
+            1.0, road.length
+        )
+
+
+def test_direct_junction_uses_linked_road(xodr_dir: Path) -> None:
+    document = parse((xodr_dir / "soderleden.xodr").read_bytes())
+    (junction,) = document.junctions
+    assert {(c.incoming_road, c.connecting_road) for c in junction.connections} == {
+        ("2", "0"),
+        ("5", "0"),
+    }
+
+
+def test_without_signals(xodr_dir: Path) -> None:
+    original = (xodr_dir / "straight_500m_signs.xodr").read_bytes()
+    assert b"<signal " in original
+    stripped = without_signals(original)
+    assert b"<signal" not in stripped
+    assert len(parse(stripped).roads) == len(parse(original).roads)
