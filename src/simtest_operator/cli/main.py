@@ -9,7 +9,7 @@ from __future__ import annotations
 import click
 
 from simtest_operator import __version__
-from simtest_operator.cli import crds, devcluster
+from simtest_operator.cli import crds, devcluster, scenario
 from simtest_operator.cli import report as report_command
 
 
@@ -20,6 +20,7 @@ def cli() -> None:
 
 
 cli.add_command(crds.crds)
+cli.add_command(scenario.scenario)
 cli.add_command(devcluster.dev_cluster)
 cli.add_command(report_command.report)
 

@@ -100,12 +100,21 @@ class OnlineEvaluator:
         if ego is None:
             return
         ego_radius = _radius(ego)
+        cos_h, sin_h = math.cos(ego.heading), math.sin(ego.heading)
+        ego_x, ego_y, _ = ego.box_center()
+        half_width = ego.box.width / 2.0
         for other, radius in zip(entities, radii, strict=True):
             if other is ego:
                 continue
             centre_gap = geometry.reference_distance(ego, other) - ego_radius - radius
             if centre_gap < self._min_distance:
                 self._min_distance = min(self._min_distance, geometry.box_distance(ego, other))
+            # Cheap bounding-circle test in the ego frame before the exact in-path geometry.
+            other_x, other_y, _ = other.box_center()
+            ahead = (other_x - ego_x) * cos_h + (other_y - ego_y) * sin_h
+            across = -(other_x - ego_x) * sin_h + (other_y - ego_y) * cos_h
+            if ahead + radius <= 0.0 or abs(across) >= half_width + radius:
+                continue
             self._min_ttc = min(self._min_ttc, geometry.time_to_collision(ego, other))
             self._min_thw = min(self._min_thw, geometry.time_headway(ego, other))
         self._max_decel = max(self._max_decel, -ego.acceleration)

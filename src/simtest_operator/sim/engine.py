@@ -197,8 +197,7 @@ class Simulation:
     def _advance(self, actor: Actor, dt: float) -> None:
         world = self.world
         speed_before = actor.speed
-        t_before = motion.lateral_position(world, actor)
-        road_before = actor.road_id
+        before = (actor.road_id, actor.lane_id, actor.offset)
         runs = self._dispatcher.runs(actor)
         longitudinal = runs.get(Domain.LONGITUDINAL)
         lateral = runs.get(Domain.LATERAL)
@@ -215,7 +214,7 @@ class Simulation:
             actor.offset = driver.lateral_offset(actor.offset, dt)
         if actor.mode is Mode.PATH and Domain.LATERAL not in self._dispatcher.runs(actor):
             world.attach(actor)
-        motion.move(world, actor, dt, t_before=t_before, road_before=road_before)
+        motion.move(world, actor, dt, before=before)
         actor.acceleration = (actor.speed - speed_before) / dt if dt > 0 else 0.0
 
     def _sync(self) -> WorldSnapshot:

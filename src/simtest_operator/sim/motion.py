@@ -25,14 +25,19 @@ def lateral_position(world: World, actor: Actor) -> float:
     return world.lane_t(actor.road_id, actor.s, actor.lane_id) + actor.offset
 
 
-def move(
-    world: World, actor: Actor, dt: float, *, t_before: float, road_before: str | None
-) -> None:
-    """Advance ``actor`` by ``dt`` (speed and offset already updated for this step)."""
+def move(world: World, actor: Actor, dt: float, *, before: tuple[str | None, int, float]) -> None:
+    """Advance ``actor`` by ``dt`` (speed and offset already updated for this step);
+    ``before`` is its (road, lane, offset) at the start of the step."""
     x0, y0 = actor.x, actor.y
+    road_before, lane_before, offset_before = before
     if actor.mode is Mode.ROAD and actor.road_id is not None and world.roads is not None:
-        t_now = lateral_position(world, actor)
-        lateral_rate = (t_now - t_before) / dt if road_before == actor.road_id and dt > 0 else 0.0
+        lateral_rate = 0.0
+        if road_before == actor.road_id and dt > 0:
+            if lane_before == actor.lane_id:
+                lateral_rate = (actor.offset - offset_before) / dt
+            else:
+                t_before = world.lane_t(actor.road_id, actor.s, lane_before) + offset_before
+                lateral_rate = (lateral_position(world, actor) - t_before) / dt
         distance = actor.speed * dt
         stretched = distance * actor.stretch
         location = world.roads.advance(

@@ -11,9 +11,10 @@ Conventions translated here and nowhere else:
 - Network coordinates = OpenDRIVE coordinates + the net's ``netOffset`` (zero for nets the cache
   builds with ``--offset.disable-normalization``, non-zero for some hand-made SUMO inputs).
 
-Engine-driven actors get ``speedMode 0`` / ``laneChangeMode 0`` and are placed every step with
-``moveToXY(keepRoute=2)`` (exact, even off the lanes). SUMO runs with ``--collision.action none``;
-the engine detects collisions from bounding boxes itself.
+Engine-driven actors get ``speedMode 0`` / ``laneChangeMode 0`` and are placed with
+``moveToXY(keepRoute=2)`` (exact, even off the lanes) before each step when mirroring is on
+(:attr:`BackendConfig.mirror`). SUMO runs with ``--collision.action none``; the engine detects
+collisions from bounding boxes itself.
 """
 
 from __future__ import annotations
@@ -35,6 +36,9 @@ _ROUTE_ID = "simtest_route"
 _POSITION, _ANGLE, _SPEED = 0x42, 0x43, 0x40
 """libsumo.constants VAR_POSITION, VAR_ANGLE, VAR_SPEED (stable TraCI protocol numbers)."""
 _SUBSCRIBED = (_POSITION, _ANGLE, _SPEED)
+_MATCH_THRESHOLD = 3.0
+"""Lane search radius (m) of moveToXY: enough to land on the lane an actor drives in, and far
+cheaper than SUMO's default 100 m on maps with long, finely shaped lanes."""
 _OFFSET_RE = re.compile(rb'netOffset="(-?[0-9.]+),(-?[0-9.]+)"')
 _NET_FILE_RE = re.compile(rb'<net-file\s+value="([^"]+)"')
 
@@ -74,7 +78,17 @@ def _config_net(sumo_config: Path) -> Path | None:
 class SumoBackend:
     """Backend protocol on libsumo."""
 
-    __slots__ = ("_external", "_lib", "_offset", "_placed", "_specs", "_speeds", "_started")
+    __slots__ = (
+        "_added",
+        "_external",
+        "_lib",
+        "_mirror",
+        "_offset",
+        "_placed",
+        "_specs",
+        "_speeds",
+        "_started",
+    )
 
     def __init__(self) -> None:
         self._lib: Any = None
@@ -84,6 +98,8 @@ class SumoBackend:
         self._external: dict[str, tuple[float, float]] = {}
         self._offset = (0.0, 0.0)
         self._started = False
+        self._mirror = False
+        self._added: set[str] = set()
 
     def start(self, config: BackendConfig) -> None:
         lib = _load_libsumo()
@@ -131,10 +147,17 @@ class SumoBackend:
             raise SimulationError(f"SUMO failed to start: {exc}") from exc
         self._lib = lib
         self._offset = read_net_offset(net) if net is not None else (0.0, 0.0)
+        self._mirror = (
+            config.mirror if config.mirror is not None else config.sumo_config is not None
+        )
         self._started = True
 
     def add(self, spec: ActorSpec) -> None:
-        lib = self._require()
+        self._require()
+        self._specs[spec.name] = spec
+
+    def _insert(self, spec: ActorSpec) -> None:
+        lib = self._lib
         type_id = f"simtest_{spec.name}"
         try:
             lib.vehicletype.copy("DEFAULT_VEHTYPE", type_id)
@@ -148,21 +171,11 @@ class SumoBackend:
             lib.vehicle.setLaneChangeMode(spec.name, 0)
         except lib.TraCIException as exc:
             raise SimulationError(f"SUMO refused actor {spec.name!r}: {exc}") from exc
-        self._specs[spec.name] = spec
+        self._added.add(spec.name)
 
     def place(self, name: str, *, x: float, y: float, heading: float, speed: float) -> None:
-        lib = self._require()
+        self._require()
         spec = self._specs[name]
-        cos_h, sin_h = math.cos(heading), math.sin(heading)
-        front_x = x + spec.front_offset * cos_h + self._offset[0]
-        front_y = y + spec.front_offset * sin_h + self._offset[1]
-        try:
-            lib.vehicle.moveToXY(name, "", -1, front_x, front_y, sumo_angle(heading), keepRoute=2)
-            if self._speeds.get(name) != speed:
-                lib.vehicle.setSpeed(name, max(speed, 0.0))
-                self._speeds[name] = speed
-        except lib.TraCIException as exc:
-            raise SimulationError(f"SUMO could not place {name!r}: {exc}") from exc
         self._placed[name] = ActorState(
             name=name,
             x=x,
@@ -174,12 +187,41 @@ class SumoBackend:
             front_offset=spec.front_offset,
         )
 
+    def _push(self) -> None:
+        """Mirror the engine-driven actors' poses into SUMO for the coming step."""
+        lib = self._lib
+        offset_x, offset_y = self._offset
+        for name, state in self._placed.items():
+            if name not in self._added:
+                self._insert(self._specs[name])
+            cos_h, sin_h = math.cos(state.heading), math.sin(state.heading)
+            front_x = state.x + state.front_offset * cos_h + offset_x
+            front_y = state.y + state.front_offset * sin_h + offset_y
+            try:
+                lib.vehicle.moveToXY(
+                    name,
+                    "",
+                    -1,
+                    front_x,
+                    front_y,
+                    sumo_angle(state.heading),
+                    keepRoute=2,
+                    matchThreshold=_MATCH_THRESHOLD,
+                )
+                if self._speeds.get(name) != state.speed:
+                    lib.vehicle.setSpeed(name, max(state.speed, 0.0))
+                    self._speeds[name] = state.speed
+            except lib.TraCIException as exc:
+                raise SimulationError(f"SUMO could not place {name!r}: {exc}") from exc
+
     def step(self) -> None:
         lib = self._require()
+        if self._mirror:
+            self._push()
         try:
             lib.simulationStep()
             for vid in lib.simulation.getDepartedIDList():
-                if vid not in self._specs:
+                if vid not in self._added:
                     lib.vehicle.subscribe(vid, _SUBSCRIBED)
                     self._external[vid] = (
                         lib.vehicle.getLength(vid),
@@ -222,6 +264,7 @@ class SumoBackend:
             self._close_quietly(self._lib)
         self._started = False
         self._specs.clear()
+        self._added.clear()
         self._placed.clear()
         self._external.clear()
         self._speeds.clear()

@@ -15,6 +15,7 @@ from simtest_operator.errors import ScenarioError
 from simtest_operator.opendrive import RoadCoord, RoadNetwork
 from simtest_operator.openscenario import model
 from simtest_operator.sim.actors import Actor, Mode
+from simtest_operator.sim.lanecache import LaneCache
 from simtest_operator.snapshots import EntityState
 
 ROAD_SNAP_ANGLE = math.radians(60.0)
@@ -25,6 +26,7 @@ class World:
     """Everything that changes during a run, plus the static road network."""
 
     __slots__ = (
+        "_lanes",
         "_states",
         "actors",
         "dt",
@@ -47,6 +49,7 @@ class World:
         variables: dict[str, model.ParameterValue],
     ) -> None:
         self.roads = roads
+        self._lanes = LaneCache(roads) if roads is not None else None
         self.actors = {actor.name: actor for actor in actors}
         self.dt = dt
         self.time = 0.0
@@ -123,9 +126,8 @@ class World:
 
     def lane_t(self, road_id: str, s: float, lane_id: int) -> float:
         """t of a lane's centre at s (0 for the centre lane or a lane that does not exist)."""
-        assert self.roads is not None
-        bounds = self.roads.lane_bounds(road_id, s, lane_id)
-        return bounds.t_center if bounds is not None else 0.0
+        assert self._lanes is not None
+        return self._lanes.lane_t(road_id, s, lane_id)
 
     def current_lane(self, actor: Actor) -> int:
         """The lane containing the actor's reference point (its logical lane while changing)."""
@@ -140,10 +142,10 @@ class World:
 
     def pose_on_road(self, actor: Actor, lateral_angle: float = 0.0) -> None:
         """Recompute a ROAD-mode actor's pose from its lane coordinates."""
-        assert self.roads is not None and actor.road_id is not None
-        pose = self.roads.lane_pose(actor.road_id, actor.s, actor.lane_id, actor.offset)
-        actor.x, actor.y, actor.z = pose.x, pose.y, pose.z
-        base = pose.heading if actor.direction > 0 else pose.heading + math.pi
+        assert self._lanes is not None and actor.road_id is not None
+        x, y, z, heading = self._lanes.pose(actor.road_id, actor.s, actor.lane_id, actor.offset)
+        actor.x, actor.y, actor.z = x, y, z
+        base = heading if actor.direction > 0 else heading + math.pi
         actor.heading = math.remainder(base + lateral_angle, 2.0 * math.pi)
 
     def neighbour_lane(

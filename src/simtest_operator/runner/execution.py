@@ -1,0 +1,263 @@
+"""Executing one scenario: simulation + online evaluation + recording -> one outcome.
+
+``sim``, ``evaluation`` and ``recording`` sit on the same layer and do not know each other; this
+module wires them: the simulation yields a snapshot per step, the evaluator judges each one, the
+recorder writes them (thinned to the recording rate). Every way a run can end becomes a verdict
+with a one-line reason -- bad or unsupported input ``Invalid``, infrastructure ``Error``, a
+violated criterion ``Failed``, the time limit ``Timeout`` -- never an exception.
+
+libsumo allows one simulation per process: call :func:`run_scenario` from one thread per process
+(the local executor and ``simtest scenario check`` use worker processes).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import multiprocessing
+import time
+from collections.abc import Iterator, Mapping, Sequence
+from pathlib import Path
+
+from simtest_operator import __version__, evaluation, recording
+from simtest_operator.errors import ScenarioError, SimtestError
+from simtest_operator.settings import SimulationSettings
+from simtest_operator.sim import BackendChoice, Simulation, SutConfig, open_simulation
+from simtest_operator.snapshots import WorldSnapshot
+from simtest_operator.verdicts import ScenarioOutcome, Verdict
+
+Sample = tuple[float, float, float, float, float]
+"""(t, x, y, heading, speed) of an entity's reference point, as in esmini-reference.json."""
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class RunRequest:
+    """Everything needed to run one scenario once."""
+
+    scenario: Path
+    nets_dir: Path
+    """Cache directory of converted SUMO networks (``settings.cache.nets``)."""
+    scenario_id: str | None = None
+    """Id for results and the recording; default: the file name."""
+    overrides: Mapping[str, str] = dataclasses.field(default_factory=dict)
+    """Global parameter overrides (ParameterValueDistribution runs, campaign parameters)."""
+    sut: SutConfig = dataclasses.field(default_factory=SutConfig)
+    criteria: evaluation.Criteria = dataclasses.field(default_factory=evaluation.Criteria)
+    simulation: SimulationSettings = dataclasses.field(default_factory=SimulationSettings)
+    output_dir: Path | None = None
+    """Where the recording, log and result file go; None writes nothing."""
+    record: bool = True
+    wall_clock_limit: float | None = None
+    """Seconds of wall time after which the run stops as ``Timeout``."""
+    backend: BackendChoice = BackendChoice.SUMO
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class RunReport:
+    """The outcome plus the details reports and reference comparisons need."""
+
+    outcome: ScenarioOutcome
+    storyboard_complete: bool
+    collisions: tuple[evaluation.Collision, ...] = ()
+    samples: Mapping[str, tuple[Sample, ...]] = dataclasses.field(default_factory=dict)
+    """1 Hz samples per entity (t, x, y, heading, speed)."""
+    ego: str | None = None
+    net_from_cache: bool = False
+    startup_seconds: float = 0.0
+    """Wall time to load the scenario, map and network and start the backend."""
+
+
+class _Samples:
+    __slots__ = ("_next", "data")
+
+    def __init__(self) -> None:
+        self.data: dict[str, list[Sample]] = {}
+        self._next = 0.0
+
+    def observe(self, snapshot: WorldSnapshot) -> None:
+        if snapshot.time + 1e-6 < self._next:
+            return
+        self._next = float(int(snapshot.time + 1e-6) + 1)
+        for e in snapshot.entities:
+            sample = (
+                round(snapshot.time, 3),
+                round(e.x, 3),
+                round(e.y, 3),
+                round(e.heading, 4),
+                round(e.speed, 3),
+            )
+            self.data.setdefault(e.name, []).append(sample)
+
+
+def run_scenario(request: RunRequest) -> RunReport:
+    """Run one scenario to its verdict; never raises for scenario or simulator problems."""
+    started = time.perf_counter()
+    scenario_id = request.scenario_id or request.scenario.name
+    out = request.output_dir
+    log: list[str] = [f"scenario {request.scenario} id {scenario_id}"]
+    artifacts: dict[str, str] = {}
+    versions = {"simtest": __version__, "sut": f"{request.sut.name} {request.sut.version}"}
+    try:
+        opened = open_simulation(
+            request.scenario,
+            sut=request.sut,
+            settings=request.simulation,
+            nets_dir=request.nets_dir,
+            overrides=request.overrides,
+            backend=request.backend,
+        )
+    except SimtestError as exc:
+        verdict = Verdict.INVALID if isinstance(exc, ScenarioError) else Verdict.ERROR
+        wall = time.perf_counter() - started
+        outcome = ScenarioOutcome(
+            scenario_id=scenario_id,
+            verdict=verdict,
+            reason=_one_line(exc),
+            wall_seconds=wall,
+            versions=versions,
+        )
+        return RunReport(outcome=outcome, storyboard_complete=False)
+    simulation = opened.simulation
+    log.append(
+        f"network {opened.net_file} (cache {'hit' if opened.net_from_cache else 'miss'}, "
+        f"{opened.net_seconds:.2f} s); ego {simulation.ego}"
+    )
+    evaluator = evaluation.OnlineEvaluator(
+        request.criteria, ego=simulation.ego, off_road=simulation.off_road
+    )
+    samples = _Samples()
+    recorder = None
+    invalid: str | None = None
+    error: str | None = None
+    wall_hit = False
+    startup = 0.0
+    try:
+        if out is not None and request.record:
+            logic = opened.scenario.road_network.logic_file
+            recorder = recording.Recorder(
+                out / "recording.mcap",
+                info=recording.RecordingInfo(
+                    scenario_id=scenario_id, seed=request.simulation.seed, versions=versions
+                ),
+                opendrive=logic.read_bytes() if logic is not None else None,
+                map_reference=logic.name if logic is not None else "map",
+                host_id=_ego_id(simulation),
+                period=1.0 / request.simulation.record_hz,
+            )
+            artifacts["recording"] = str(out / "recording.mcap")
+        snapshot = simulation.start()
+        startup = time.perf_counter() - started
+        wall_hit = _loop(request, simulation, snapshot, evaluator, samples, recorder, started)
+    except ScenarioError as exc:
+        invalid = _one_line(exc)
+    except SimtestError as exc:
+        error = _one_line(exc)
+    except Exception as exc:
+        error = f"internal error: {type(exc).__name__}: {exc}"
+    finally:
+        simulation.close()
+        if recorder is not None:
+            recorder.close()
+    wall = time.perf_counter() - started
+    facts = evaluation.RunFacts(
+        simulated_seconds=simulation.time,
+        wall_seconds=wall,
+        storyboard_complete=simulation.complete,
+        invalid_reason=invalid,
+        error_reason=error,
+        wall_limit_hit=wall_hit,
+        ignored_elements=simulation.ignored,
+    )
+    judgement = evaluation.judge(evaluator, facts)
+    outcome = ScenarioOutcome(
+        scenario_id=scenario_id,
+        verdict=judgement.verdict,
+        reason=judgement.reason,
+        metrics=judgement.metrics,
+        simulated_seconds=simulation.time,
+        wall_seconds=wall,
+        artifacts=artifacts,
+        ignored_elements=simulation.ignored,
+        versions=versions,
+    )
+    report = RunReport(
+        outcome=outcome,
+        storyboard_complete=simulation.complete,
+        collisions=evaluator.collisions,
+        samples={name: tuple(values) for name, values in samples.data.items()},
+        ego=simulation.ego,
+        net_from_cache=opened.net_from_cache,
+        startup_seconds=startup,
+    )
+    if out is not None:
+        _write_outputs(out, report, log)
+    return report
+
+
+def _loop(
+    request: RunRequest,
+    simulation: Simulation,
+    snapshot: WorldSnapshot,
+    evaluator: evaluation.OnlineEvaluator,
+    samples: _Samples,
+    recorder: recording.Recorder | None,
+    started: float,
+) -> bool:
+    """Step until the storyboard completes or a limit is hit; True when the wall limit hit."""
+    limit = request.criteria.time_limit
+    wall_limit = request.wall_clock_limit
+    steps = 0
+    while True:
+        evaluator.observe(snapshot)
+        samples.observe(snapshot)
+        if recorder is not None:
+            recorder.write(snapshot)
+        if simulation.complete or simulation.time >= limit - 1e-9:
+            return False
+        steps += 1
+        wall_check = wall_limit is not None and steps % 200 == 0
+        if wall_check and time.perf_counter() - started > (wall_limit or 0.0):
+            return True
+        snapshot = simulation.step()
+
+
+def _ego_id(simulation: Simulation) -> int | None:
+    ego = simulation.ego
+    return simulation.world.actors[ego].id if ego is not None else None
+
+
+def _one_line(exc: BaseException) -> str:
+    return " ".join(str(exc).split()) or type(exc).__name__
+
+
+def _write_outputs(out: Path, report: RunReport, log: list[str]) -> None:
+    out.mkdir(parents=True, exist_ok=True)
+    outcome = report.outcome
+    log.append(f"verdict {outcome.verdict} - {outcome.reason}")
+    if outcome.ignored_elements:
+        log.append(f"ignored: {', '.join(outcome.ignored_elements)}")
+    for c in report.collisions:
+        log.append(f"collision {c.first} & {c.second} at t={c.time:.2f} s")
+    (out / "run.log").write_text("\n".join(log) + "\n", encoding="utf-8")
+    result = outcome.to_json()
+    result["artifacts"] = {**dict(outcome.artifacts), "log": str(out / "run.log")}
+    (out / "result.json").write_text(
+        json.dumps(result, indent=2, sort_keys=True) + "\n", encoding="utf-8"
+    )
+
+
+def run_many(requests: Sequence[RunRequest], *, jobs: int) -> Iterator[tuple[int, RunReport]]:
+    """Run requests in ``jobs`` worker processes (spawned: one libsumo per process), yielding
+    (index, report) as runs finish. ``jobs`` 1 runs in this process."""
+    if jobs <= 1:
+        for index, request in enumerate(requests):
+            yield index, run_scenario(request)
+        return
+    context = multiprocessing.get_context("spawn")
+    with context.Pool(processes=jobs) as pool:
+        yield from pool.imap_unordered(_indexed, list(enumerate(requests)))
+
+
+def _indexed(item: tuple[int, RunRequest]) -> tuple[int, RunReport]:
+    index, request = item
+    return index, run_scenario(request)
