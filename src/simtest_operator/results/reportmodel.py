@@ -42,10 +42,14 @@ class GroupRow:
     failing: int
 
     @property
+    def ran(self) -> int:
+        """Scenarios that reached a verdict other than Skipped."""
+        return self.total - self.counts.get("Skipped", 0) - self.counts.get(NOT_RUN, 0)
+
+    @property
     def pass_rate(self) -> float:
-        """Passed over scenarios that ran to a verdict (not skipped or never run)."""
-        ran = self.total - self.counts.get("Skipped", 0) - self.counts.get(NOT_RUN, 0)
-        return self.passed / ran if ran else 0.0
+        """Passed over scenarios that ran (0 when none did)."""
+        return self.passed / self.ran if self.ran else 0.0
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
