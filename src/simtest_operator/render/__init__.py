@@ -1,1 +1,31 @@
-"""render package."""
+"""Pure rendering of environment templates (``helm-templates/``) into Helm values, the simulator
+pod and a run-specific helmfile; plus the run-spec contract between pod and runner."""
+
+from simtest_operator.render.inputs import (
+    SIMULATOR_RESOURCE,
+    Amounts,
+    ArtifactTarget,
+    EnvironmentRequest,
+    OwnerRef,
+    PvcVolume,
+    ScenarioRef,
+    SecretKey,
+)
+from simtest_operator.render.rendering import RenderedEnvironment, render_environment
+from simtest_operator.render.runspecs import RunSpec
+from simtest_operator.render.templates import TemplateLibrary
+
+__all__ = [
+    "SIMULATOR_RESOURCE",
+    "Amounts",
+    "ArtifactTarget",
+    "EnvironmentRequest",
+    "OwnerRef",
+    "PvcVolume",
+    "RenderedEnvironment",
+    "RunSpec",
+    "ScenarioRef",
+    "SecretKey",
+    "TemplateLibrary",
+    "render_environment",
+]

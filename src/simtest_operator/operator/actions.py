@@ -1,0 +1,115 @@
+"""Actions: what a plan asks the API client to do. Plain data, applied by ``controlling``.
+
+Every action is idempotent against the API (creates of deterministic names tolerate
+``AlreadyExists``, deletes tolerate ``NotFound``), so applying a plan twice — after a crash, or
+from a stale cache — changes nothing the second time.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import datetime
+import enum
+from collections.abc import Mapping
+from typing import Any
+
+from simtest_operator.operator.records import ResultRecord
+
+
+class Kind(enum.StrEnum):
+    """Object kinds the operator writes."""
+
+    CAMPAIGN = "testcampaigns"
+    BATCH = "scenariobatches"
+    ENVIRONMENT = "simenvironments"
+    POD = "pods"
+    CONFIG_MAP = "configmaps"
+    SERVICE_ACCOUNT = "serviceaccounts"
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Create:
+    """Create an object (``AlreadyExists`` counts as done)."""
+
+    kind: Kind
+    body: Mapping[str, Any]
+
+    @property
+    def name(self) -> str:
+        """Name of the object to create."""
+        return str(self.body["metadata"]["name"])
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Provision:
+    """Create a SimEnvironment's pod, then record it in the environment's status."""
+
+    environment: str
+    pod: Mapping[str, Any]
+    status: Mapping[str, Any]
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class PatchStatus:
+    """Merge-patch the status subresource; with ``resource_version`` the patch is conditional
+    (``409 Conflict`` when someone else wrote in between: re-plan from fresh state)."""
+
+    kind: Kind
+    name: str
+    patch: Mapping[str, Any]
+    resource_version: str | None = None
+    folded: tuple[ResultRecord, ...] = ()
+    """Results this patch records for the first time (counted in metrics once it succeeds)."""
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Delete:
+    """Delete an object (``NotFound`` counts as done)."""
+
+    kind: Kind
+    name: str
+    uid: str | None = None
+    """Precondition: delete only this incarnation."""
+    grace_seconds: int | None = None
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Emit:
+    """Post a Kubernetes Event about an object (rate limited by the applier)."""
+
+    kind: Kind
+    name: str
+    uid: str
+    reason: str
+    message: str
+    warning: bool = False
+    terminal: bool = False
+    """Terminal events bypass the rate limit."""
+
+
+Action = Create | Provision | PatchStatus | Delete | Emit
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Observation:
+    """Numbers a plan exposes for metrics (gauges, latencies)."""
+
+    in_flight: int = 0
+    queued: int = 0
+    window: int = 0
+    start_latencies: tuple[float, ...] = ()
+    """Seconds from environment creation to container start, for environments that started."""
+    overheads: tuple[float, ...] = ()
+    """Seconds of orchestration per scenario folded (wall time of the attempt minus run time)."""
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Plan:
+    """The actions of one reconcile step, in the order they must be applied."""
+
+    actions: tuple[Action, ...] = ()
+    wake_at: datetime.datetime | None = None
+    """When to plan again even if nothing changes (a time limit, a deferred status write)."""
+    observation: Observation = dataclasses.field(default_factory=Observation)
+    finished: bool = False
+    """Every scenario has its recorded verdict and nothing is left to clean up."""

@@ -1,0 +1,283 @@
+"""Scenario states and work selection: which scenario is where, and what starts next.
+
+Everything is derived from child objects — ScenarioBatch status (final results), live
+SimEnvironments (attempts in flight) and their assessments — so a restarted operator computes
+exactly what the previous one knew. A scenario is:
+
+* ``FOLDED``: its final result is in its batch's status (durable, counted, never run again);
+* ``DONE``: it has a final verdict that is not yet in the batch status;
+* ``RETRY``: its latest attempt ended with ``Error`` and attempts remain;
+* ``RUNNING``: its latest attempt is in flight;
+* ``PENDING``: nothing has started it yet.
+
+Work is picked in frozen-list order, retries first: in *window* mode as many units as there are
+free slots, in *barrier* mode the whole next batch once every scenario of the previous one has a
+final verdict (the seed paper's behaviour, kept for comparison).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import enum
+from collections.abc import Iterable, Mapping, Sequence
+
+from simtest_operator.operator.environments import Assessment
+from simtest_operator.operator.observed import BatchView, EnvironmentView, NodeView
+from simtest_operator.operator.records import ResultRecord
+from simtest_operator.verdicts import Verdict
+
+
+class State(enum.StrEnum):
+    """Where a scenario is."""
+
+    PENDING = "Pending"
+    RUNNING = "Running"
+    RETRY = "Retry"
+    DONE = "Done"
+    FOLDED = "Folded"
+
+    @property
+    def final(self) -> bool:
+        """The scenario has its final verdict (whether or not it is recorded yet)."""
+        return self in (State.DONE, State.FOLDED)
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class ScenarioState:
+    """One scenario of the frozen list."""
+
+    position: int
+    """Index in the frozen list."""
+    id: str
+    state: State
+    attempt: int = 0
+    """Latest attempt started (0: none)."""
+    result: ResultRecord | None = None
+    """The final result (DONE, FOLDED) or the latest attempt's (RETRY)."""
+    durable: bool = False
+    """For DONE: the result is recorded in the SimEnvironment status, so it may be folded."""
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Layout:
+    """How the frozen list is sliced."""
+
+    ids: tuple[str, ...]
+    batch_size: int
+
+    def batch_of(self, position: int) -> int:
+        """Batch index of a list position."""
+        return position // self.batch_size
+
+    def slot_of(self, position: int) -> int:
+        """Position inside its batch."""
+        return position % self.batch_size
+
+    def batch_count(self) -> int:
+        """Number of batches."""
+        return (len(self.ids) + self.batch_size - 1) // self.batch_size
+
+    def positions(self, batch_index: int) -> range:
+        """List positions of a batch."""
+        start = batch_index * self.batch_size
+        return range(start, min(start + self.batch_size, len(self.ids)))
+
+
+def scenario_states(
+    layout: Layout,
+    *,
+    batches: Iterable[BatchView],
+    envs: Iterable[EnvironmentView],
+    assessments: Mapping[str, Assessment],
+    retries: int,
+) -> tuple[ScenarioState, ...]:
+    """The state of every scenario in list order."""
+    folded: dict[str, ResultRecord] = {}
+    for batch in batches:
+        for record in batch.results:
+            folded.setdefault(record.id, record)
+    latest: dict[str, tuple[int, EnvironmentView]] = {}
+    for env in envs:
+        for scenario_id in env.scenario_ids:
+            seen = latest.get(scenario_id)
+            if seen is None or env.attempt > seen[0]:
+                latest[scenario_id] = (env.attempt, env)
+    states = []
+    for position, scenario_id in enumerate(layout.ids):
+        kept = folded.get(scenario_id)
+        if kept is not None:
+            states.append(
+                ScenarioState(
+                    position=position,
+                    id=scenario_id,
+                    state=State.FOLDED,
+                    attempt=kept.attempts,
+                    result=kept,
+                    durable=True,
+                )
+            )
+            continue
+        entry = latest.get(scenario_id)
+        if entry is None:
+            states.append(ScenarioState(position=position, id=scenario_id, state=State.PENDING))
+            continue
+        attempt, env = entry
+        states.append(_attempt_state(position, scenario_id, attempt, env, assessments, retries))
+    return tuple(states)
+
+
+def _attempt_state(
+    position: int,
+    scenario_id: str,
+    attempt: int,
+    env: EnvironmentView,
+    assessments: Mapping[str, Assessment],
+    retries: int,
+) -> ScenarioState:
+    assessment = assessments.get(env.name)
+    if assessment is None or assessment.results is None:
+        return ScenarioState(
+            position=position, id=scenario_id, state=State.RUNNING, attempt=attempt
+        )
+    record = next((r for r in assessment.results if r.id == scenario_id), None)
+    if record is None:  # the environment ended without a word about this scenario
+        record = ResultRecord(
+            id=scenario_id,
+            verdict=Verdict.ERROR,
+            reason="no result for this scenario",
+            attempts=attempt,
+        )
+    if record.verdict.retriable and attempt < retries + 1:
+        return ScenarioState(
+            position=position, id=scenario_id, state=State.RETRY, attempt=attempt, result=record
+        )
+    return ScenarioState(
+        position=position,
+        id=scenario_id,
+        state=State.DONE,
+        attempt=attempt,
+        result=dataclasses.replace(record, attempts=attempt),
+        durable=env.finished,
+    )
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Unit:
+    """Work for one SimEnvironment: one scenario, or a queue of them on a warm simulator."""
+
+    batch_index: int
+    first: int
+    """Slot (position inside the batch) of the first scenario; names the environment."""
+    attempt: int
+    positions: tuple[int, ...]
+    """Frozen-list positions of the scenarios, in order."""
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Selection:
+    """Parameters of :func:`select`."""
+
+    free_slots: int
+    """Window mode: units that may start now."""
+    barrier: bool
+    barrier_limit: int | None
+    """Barrier mode: explicit maxParallel (None submits the whole batch, as the paper does)."""
+    in_flight: int
+    chunk: int
+    """Scenarios per unit: 1 for PerScenario, the warm-worker queue length for Reuse."""
+    suspended: bool
+
+
+def select(
+    states: Sequence[ScenarioState], layout: Layout, selection: Selection
+) -> tuple[Unit, ...]:
+    """Units to start now, in order."""
+    if selection.suspended:
+        return ()
+    candidates = [s for s in states if s.state is State.RETRY] + [
+        s for s in states if s.state is State.PENDING
+    ]
+    if selection.barrier:
+        open_batch = next((layout.batch_of(s.position) for s in states if not s.state.final), None)
+        if open_batch is None:
+            return ()
+        candidates = [c for c in candidates if layout.batch_of(c.position) == open_batch]
+        budget = (
+            len(candidates)
+            if selection.barrier_limit is None
+            else max(selection.barrier_limit - selection.in_flight, 0)
+        )
+    else:
+        budget = max(selection.free_slots, 0)
+    units = _group(candidates, layout, chunk=max(selection.chunk, 1))
+    return tuple(units[:budget])
+
+
+def _group(candidates: Sequence[ScenarioState], layout: Layout, *, chunk: int) -> list[Unit]:
+    units: list[Unit] = []
+    current: list[ScenarioState] = []
+
+    def flush() -> None:
+        if current:
+            first = current[0]
+            units.append(
+                Unit(
+                    batch_index=layout.batch_of(first.position),
+                    first=layout.slot_of(first.position),
+                    attempt=first.attempt + 1,
+                    positions=tuple(s.position for s in current),
+                )
+            )
+            current.clear()
+
+    for candidate in candidates:
+        if current and (
+            len(current) >= chunk
+            or layout.batch_of(candidate.position) != layout.batch_of(current[0].position)
+            or candidate.attempt != current[0].attempt
+        ):
+            flush()
+        current.append(candidate)
+    flush()
+    return units
+
+
+def cluster_slots(
+    nodes: Mapping[str, NodeView] | None,
+    *,
+    per_node: int,
+    node_selector: Mapping[str, str],
+    tolerated: Iterable[tuple[str | None, str | None, str | None, str]],
+) -> int:
+    """Simulator slots on the nodes a simulator pod may use (0 when unknown)."""
+    if nodes is None:
+        return 0
+    tolerations = tuple(tolerated)
+    total = 0
+    for node in nodes.values():
+        labels = dict(node.labels)
+        if not node.ready or node.unschedulable or node.slots <= 0:
+            continue
+        if any(labels.get(k) != v for k, v in node_selector.items()):
+            continue
+        if not all(_tolerates(taint, tolerations) for taint in node.taints):
+            continue
+        total += min(node.slots, per_node)
+    return total
+
+
+def _tolerates(
+    taint: tuple[str, str, str],
+    tolerations: Sequence[tuple[str | None, str | None, str | None, str]],
+) -> bool:
+    key, value, effect = taint
+    if effect == "PreferNoSchedule":
+        return True
+    for t_key, t_value, t_effect, operator in tolerations:
+        if t_effect not in (None, "", effect):
+            continue
+        if operator == "Exists" and (t_key in (None, "") or t_key == key):
+            return True
+        if operator == "Equal" and t_key == key and (t_value or "") == value:
+            return True
+    return False

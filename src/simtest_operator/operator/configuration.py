@@ -1,0 +1,83 @@
+"""Operator-level configuration: knobs that belong to the installation, not to a campaign.
+
+Built once by ``simtest operator`` (flags and ``SIMTEST_OPERATOR_*`` variables, see
+:func:`from_env`) and passed down; nothing below reads the environment.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+from collections.abc import Mapping
+from pathlib import Path
+
+from simtest_operator.render.inputs import PvcVolume
+
+ENV_PREFIX = "SIMTEST_OPERATOR_"
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class OperatorConfig:
+    """How the operator runs."""
+
+    templates_dir: Path = Path("helm-templates")
+    """Root of the environment templates (``helm-templates/``); ``SIMTEST_OPERATOR_TEMPLATES``."""
+    sources_dir: Path = Path()
+    """Folder relative ``path`` scenario sources are resolved against (the operator's scenario
+    volume); ``SIMTEST_OPERATOR_SOURCES``."""
+    cache_dir: Path = Path("/tmp/simtest-operator-cache")
+    """Downloads, git mirrors and unpacked archives of resolution; ``SIMTEST_OPERATOR_CACHE``."""
+    scenario_volume: PvcVolume | None = None
+    """PVC holding ``path`` sources, mounted read-only into simulator pods at ``sources_dir``
+    (``SIMTEST_OPERATOR_SCENARIO_CLAIM``); without it pods fetch ``file://`` sources from their
+    node, which only the local node agent supports."""
+    status_interval: float = 1.0
+    """Minimum seconds between two campaign status writes that change counters only; phase and
+    condition changes are written at once. Fewer writes, same end state."""
+    event_interval: float = 10.0
+    """Minimum seconds between two events on the same object (terminal phases always post)."""
+    missing_pod_grace: float = 10.0
+    """Seconds a pod recorded as created may be missing from the cache before it counts as
+    deleted."""
+    backstop_grace: float = 30.0
+    """Seconds past a pod's activeDeadlineSeconds before the operator ends the run as Timeout
+    itself (when no kubelet enforces the deadline)."""
+    keep_finished_environments: bool = False
+    """Keep SimEnvironments after their results are folded into the batch (debugging); by
+    default they are deleted so live objects stay bounded by the in-flight window."""
+    reuse_queue: int = 8
+    """Scenarios per warm simulator with isolation ``Reuse`` (bounded by the 4 KiB termination
+    message that carries their results)."""
+    coalesce_seconds: float = 0.02
+    """How long a campaign loop waits after a wake-up for more events to arrive."""
+    api_workers: int = 16
+    """Threads for Kubernetes API calls."""
+    metrics_port: int = 8080
+    """Port of ``/metrics``, ``/healthz`` and ``/readyz``; 0 disables the server."""
+
+    @classmethod
+    def from_env(cls, env: Mapping[str, str] | None = None, **overrides: object) -> OperatorConfig:
+        """Defaults, then ``SIMTEST_OPERATOR_*`` variables, then ``overrides`` (CLI flags)."""
+        env = os.environ if env is None else env
+        values: dict[str, object] = {}
+        for name, key, kind in (
+            ("templates_dir", "TEMPLATES", Path),
+            ("sources_dir", "SOURCES", Path),
+            ("cache_dir", "CACHE", Path),
+            ("status_interval", "STATUS_INTERVAL", float),
+            ("event_interval", "EVENT_INTERVAL", float),
+            ("missing_pod_grace", "MISSING_POD_GRACE", float),
+            ("backstop_grace", "BACKSTOP_GRACE", float),
+            ("reuse_queue", "REUSE_QUEUE", int),
+            ("metrics_port", "METRICS_PORT", int),
+        ):
+            raw = env.get(ENV_PREFIX + key)
+            if raw:
+                values[name] = kind(raw)
+        if env.get(ENV_PREFIX + "KEEP_ENVIRONMENTS", "").lower() in ("1", "true", "yes"):
+            values["keep_finished_environments"] = True
+        claim = env.get(ENV_PREFIX + "SCENARIO_CLAIM")
+        if claim:
+            values["scenario_volume"] = PvcVolume(claim_name=claim, read_only=True)
+        values.update({k: v for k, v in overrides.items() if v is not None})
+        return cls(**values)  # type: ignore[arg-type]

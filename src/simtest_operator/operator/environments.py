@@ -1,0 +1,421 @@
+"""SimEnvironment decisions: what its pod's state means, and what to do about it.
+
+Pure: one environment's view, its pod's view (or None), the nodes and the clock in; an
+:class:`Assessment` out. Every way a simulator pod can end maps to verdicts here:
+
+* the runner's termination message -> the runner's verdicts (Passed, Failed, Timeout, Invalid...);
+* ``DeadlineExceeded`` (activeDeadlineSeconds) or the operator's backstop -> ``Timeout``;
+* OOMKilled, eviction, deletion, a lost node, image errors, a crash without a result, Pending
+  beyond ``pendingTimeoutSeconds`` -> ``Error`` with a reason (retried per spec as a new attempt).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import datetime
+import enum
+from collections.abc import Mapping
+from typing import Any
+
+from simtest_operator.operator import conditions
+from simtest_operator.operator.observed import EnvironmentView, NodeView, PodView, Timings
+from simtest_operator.operator.records import ResultRecord, clip
+from simtest_operator.render import messages
+from simtest_operator.verdicts import ScenarioOutcome, Verdict
+
+IMAGE_ERRORS = frozenset(
+    {
+        "ErrImagePull",
+        "ImagePullBackOff",
+        "InvalidImageName",
+        "ErrImageNeverPull",
+        "CreateContainerConfigError",
+        "CreateContainerError",
+        "RunContainerError",
+    }
+)
+"""Waiting reasons that mean the container will not start without someone fixing something."""
+
+
+class Phase(enum.StrEnum):
+    """SimEnvironment phases (the API's ``EnvironmentPhase`` values)."""
+
+    PENDING = "Pending"
+    PROVISIONING = "Provisioning"
+    SCHEDULED = "Scheduled"
+    RUNNING = "Running"
+    FINISHED = "Finished"
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Limits:
+    """Time limits of one environment."""
+
+    timeout_seconds: float
+    """Per scenario (spec.execution.timeoutSeconds)."""
+    pending_seconds: float
+    """spec.execution.pendingTimeoutSeconds."""
+    deadline_seconds: float
+    """The pod's activeDeadlineSeconds."""
+    backstop_grace: float = 30.0
+    """How long past the deadline the operator waits for the kubelet before ending the run
+    itself (fake nodes and lost kubelets never enforce the deadline)."""
+    missing_grace: float = 10.0
+    """How long a pod recorded as created may be absent from the cache before it counts as
+    deleted (covers watch lag right after a restart)."""
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Assessment:
+    """What an environment is doing, and what the operator should do."""
+
+    phase: Phase
+    node: str | None
+    timings: Timings
+    results: tuple[ResultRecord, ...] | None
+    """One record per scenario once the environment has ended; None while it runs."""
+    reason: str = ""
+    needs_pod: bool = False
+    delete_pod: bool = False
+    force_delete: bool = False
+    """Delete with grace period 0 (the node is gone; nobody will confirm a graceful stop)."""
+    wake_at: datetime.datetime | None = None
+    """When a time limit next needs checking."""
+
+    @property
+    def ended(self) -> bool:
+        """The environment has final (per-attempt) results."""
+        return self.results is not None
+
+
+def assess(
+    env: EnvironmentView,
+    pod: PodView | None,
+    *,
+    nodes: Mapping[str, NodeView] | None,
+    now: datetime.datetime,
+    limits: Limits,
+) -> Assessment:
+    """Judge one environment from its pod."""
+    queued = env.timings.queued or env.created
+    if env.finished:
+        return Assessment(
+            phase=Phase.FINISHED,
+            node=env.node,
+            timings=env.timings,
+            results=env.results or _fail(env, Verdict.ERROR, env.reason or "no result"),
+            reason=env.reason,
+            delete_pod=pod is not None and not pod.deleting,
+        )
+    if env.deleting:
+        reason = f"SimEnvironment {env.name} was deleted before it finished"
+        return Assessment(
+            phase=Phase.FINISHED,
+            node=env.node,
+            timings=dataclasses.replace(env.timings, finished=now),
+            results=_fail(env, Verdict.ERROR, reason),
+            reason=reason,
+        )
+    if pod is None:
+        return _without_pod(env, now=now, limits=limits, queued=queued)
+    timings = Timings(
+        queued=queued,
+        scheduled=pod.scheduled_at,
+        started=pod.container.started_at or (pod.start_time if pod.container.state else None),
+        finished=pod.container.finished_at,
+    )
+    node = pod.node_name
+    if pod.terminated:
+        end = timings.finished or now
+        results, reason = _terminated(env, pod, timings=timings, end=end)
+        finished_timings = dataclasses.replace(timings, finished=end)
+        return Assessment(
+            phase=Phase.FINISHED,
+            node=node,
+            timings=finished_timings,
+            results=results,
+            reason=reason,
+            delete_pod=False,
+        )
+    failure = _failure(env, pod, nodes=nodes, now=now, limits=limits, queued=queued)
+    if failure is not None:
+        verdict, reason, force = failure
+        return Assessment(
+            phase=Phase.FINISHED,
+            node=node,
+            timings=dataclasses.replace(timings, finished=now),
+            results=_fail(env, verdict, reason, started=timings.started, end=now),
+            reason=reason,
+            delete_pod=not pod.deleting or force,
+            force_delete=force,
+        )
+    running = pod.container.state == "running"
+    phase = Phase.RUNNING if running else Phase.SCHEDULED if node else Phase.PROVISIONING
+    return Assessment(
+        phase=phase,
+        node=node,
+        timings=timings,
+        results=None,
+        wake_at=_next_check(pod, timings, limits=limits, queued=queued),
+    )
+
+
+def _without_pod(
+    env: EnvironmentView,
+    *,
+    now: datetime.datetime,
+    limits: Limits,
+    queued: datetime.datetime | None,
+) -> Assessment:
+    timings = dataclasses.replace(env.timings, queued=queued)
+    if env.provisioned_at is None and env.pod is None:
+        return Assessment(
+            phase=Phase.PENDING, node=None, timings=timings, results=None, needs_pod=True
+        )
+    since = env.provisioned_at or queued or now
+    grace_end = since + datetime.timedelta(seconds=limits.missing_grace)
+    if now < grace_end:
+        phase = Phase(env.phase) if env.phase in Phase.__members__.values() else Phase.PROVISIONING
+        return Assessment(
+            phase=phase, node=env.node, timings=timings, results=None, wake_at=grace_end
+        )
+    reason = f"simulator pod {env.pod or env.name} disappeared before it finished (deleted)"
+    return Assessment(
+        phase=Phase.FINISHED,
+        node=env.node,
+        timings=dataclasses.replace(timings, finished=now),
+        results=_fail(env, Verdict.ERROR, reason, started=timings.started, end=now),
+        reason=reason,
+    )
+
+
+def _failure(
+    env: EnvironmentView,
+    pod: PodView,
+    *,
+    nodes: Mapping[str, NodeView] | None,
+    now: datetime.datetime,
+    limits: Limits,
+    queued: datetime.datetime | None,
+) -> tuple[Verdict, str, bool] | None:
+    """An ending the pod itself does not report: (verdict, reason, force delete) or None."""
+    if pod.node_name and nodes is not None and pod.node_name not in nodes:
+        return Verdict.ERROR, f"node {pod.node_name} was lost while the pod ran", True
+    if pod.deleting:
+        cause = f": {pod.disruption}" if pod.disruption else ""
+        return (
+            Verdict.ERROR,
+            f"simulator pod {pod.name} was deleted before it finished{cause}",
+            False,
+        )
+    waiting = pod.container
+    if waiting.state == "waiting" and waiting.reason in IMAGE_ERRORS:
+        detail = f": {waiting.message}" if waiting.message else ""
+        return Verdict.ERROR, f"container cannot start ({waiting.reason}){detail}", False
+    started = pod.container.started_at
+    if started is None and pod.container.state != "running":
+        since = pod.created or queued or now
+        waited = (now - since).total_seconds()
+        if waited >= limits.pending_seconds:
+            why = f" ({pod.unschedulable})" if pod.unschedulable else ""
+            return (
+                Verdict.ERROR,
+                f"pod still Pending after {waited:.0f}s (pendingTimeoutSeconds "
+                f"{limits.pending_seconds:.0f}){why}",
+                False,
+            )
+        return None
+    begin = started or pod.start_time or since_or(pod.created, now)
+    ran = (now - begin).total_seconds()
+    if ran >= limits.deadline_seconds + limits.backstop_grace:
+        return (
+            Verdict.TIMEOUT,
+            f"ran {ran:.0f}s, past the {limits.deadline_seconds:.0f}s deadline "
+            "(timeoutSeconds); stopped by the operator",
+            False,
+        )
+    return None
+
+
+def since_or(value: datetime.datetime | None, default: datetime.datetime) -> datetime.datetime:
+    """``value`` unless None."""
+    return value if value is not None else default
+
+
+def _next_check(
+    pod: PodView, timings: Timings, *, limits: Limits, queued: datetime.datetime | None
+) -> datetime.datetime | None:
+    if timings.started is None and pod.container.state != "running":
+        since = pod.created or queued
+        return since + datetime.timedelta(seconds=limits.pending_seconds) if since else None
+    begin = timings.started or pod.start_time
+    if begin is None:
+        return None
+    return begin + datetime.timedelta(seconds=limits.deadline_seconds + limits.backstop_grace)
+
+
+def _terminated(
+    env: EnvironmentView, pod: PodView, *, timings: Timings, end: datetime.datetime
+) -> tuple[tuple[ResultRecord, ...], str]:
+    container = pod.container
+    exit_text = (
+        f"exit code {container.exit_code}" if container.exit_code is not None else "no exit code"
+    )
+    if pod.reason == "DeadlineExceeded":
+        reason = clip(f"exceeded its deadline (activeDeadlineSeconds): {pod.message}".rstrip(": "))
+        return _fail(env, Verdict.TIMEOUT, reason, started=timings.started, end=end), reason
+    if pod.reason == "Evicted":
+        reason = clip(f"evicted: {pod.message}".rstrip(": "))
+        return _fail(env, Verdict.ERROR, reason, started=timings.started, end=end), reason
+    if container.reason == "OOMKilled":
+        reason = f"simulator killed for exceeding its memory limit (OOMKilled, {exit_text})"
+        return _fail(env, Verdict.ERROR, reason, started=timings.started, end=end), reason
+    default_id = env.scenarios[0].id if len(env.scenarios) == 1 else None
+    try:
+        outcomes = messages.decode(container.message, default_id=default_id)
+    except messages.MessageError:
+        outcomes = ()
+    if outcomes:
+        return _from_outcomes(env, outcomes, started=timings.started, end=end)
+    tail = (
+        clip(container.message.strip().splitlines()[-1], 300) if container.message.strip() else ""
+    )
+    if container.exit_code == 0 and not tail:
+        reason = "runner finished without writing a result (empty termination message)"
+    else:
+        cause = f" ({container.reason})" if container.reason else ""
+        reason = f"runner ended with {exit_text}{cause} and no result" + (
+            f": {tail}" if tail else ""
+        )
+    return _fail(env, Verdict.ERROR, reason, started=timings.started, end=end), reason
+
+
+def _from_outcomes(
+    env: EnvironmentView,
+    outcomes: tuple[ScenarioOutcome, ...],
+    *,
+    started: datetime.datetime | None,
+    end: datetime.datetime,
+) -> tuple[tuple[ResultRecord, ...], str]:
+    by_id = {o.scenario_id: o for o in outcomes}
+    records = []
+    fallback = _elapsed(started, end)
+    for scenario in env.scenarios:
+        outcome = by_id.get(scenario.id)
+        if outcome is None:
+            records.append(
+                ResultRecord(
+                    id=scenario.id,
+                    verdict=Verdict.ERROR,
+                    reason="the warm simulator ended before running this scenario",
+                    attempts=env.attempt,
+                )
+            )
+            continue
+        duration = outcome.wall_seconds if outcome.wall_seconds > 0 else fallback
+        records.append(ResultRecord.from_outcome(outcome, attempts=env.attempt, duration=duration))
+    last = records[-1]
+    return tuple(records), last.reason
+
+
+def _elapsed(started: datetime.datetime | None, end: datetime.datetime) -> float:
+    return max((end - started).total_seconds(), 0.0) if started else 0.0
+
+
+def _fail(
+    env: EnvironmentView,
+    verdict: Verdict,
+    reason: str,
+    *,
+    started: datetime.datetime | None = None,
+    end: datetime.datetime | None = None,
+) -> tuple[ResultRecord, ...]:
+    """The same non-runner verdict for every scenario of the environment that has none yet."""
+    known = {r.id: r for r in env.results}
+    duration = _elapsed(started, end) if end is not None else 0.0
+    return tuple(
+        known.get(s.id)
+        or ResultRecord(
+            id=s.id,
+            verdict=verdict,
+            reason=clip(reason),
+            duration_seconds=duration,
+            attempts=env.attempt,
+        )
+        for s in env.scenarios
+    )
+
+
+def _stamp(moment: datetime.datetime | None) -> str | None:
+    return conditions.rfc3339(moment) if moment is not None else None
+
+
+def desired_status(env: EnvironmentView, assessment: Assessment) -> dict[str, Any]:
+    """The status fields the assessment implies (a merge patch over the observed status)."""
+    timings = {
+        key: value
+        for key, value in (
+            ("queued", _stamp(assessment.timings.queued)),
+            ("scheduled", _stamp(assessment.timings.scheduled)),
+            ("started", _stamp(assessment.timings.started)),
+            ("finished", _stamp(assessment.timings.finished)),
+        )
+        if value is not None
+    }
+    status: dict[str, Any] = {
+        "phase": assessment.phase.value,
+        "observedGeneration": 1,
+        "scenario": env.scenarios[-1].id if assessment.results else env.scenarios[0].id,
+        "timings": timings,
+    }
+    if assessment.node:
+        status["node"] = assessment.node
+    if assessment.results is not None:
+        last = assessment.results[-1]
+        status["verdict"] = last.verdict.value
+        status["reason"] = clip(assessment.reason or last.reason)
+        status["results"] = [r.to_wire() for r in assessment.results]
+    return status
+
+
+def provisioned_status(
+    env: EnvironmentView, *, pod: str, rendered_hash: str, now: datetime.datetime
+) -> dict[str, Any]:
+    """Status recorded right after the pod was created."""
+    queued = env.timings.queued or env.created or now
+    return {
+        "phase": Phase.PROVISIONING.value,
+        "observedGeneration": 1,
+        "scenario": env.scenarios[0].id,
+        "pod": pod,
+        "renderedHash": rendered_hash,
+        "timings": {"queued": conditions.rfc3339(queued)},
+        "conditions": conditions.merge(
+            env.status.get("conditions"),
+            [
+                conditions.Desired(
+                    type="Provisioned",
+                    status=True,
+                    reason="PodCreated",
+                    message=f"pod {pod} created",
+                )
+            ],
+            now=now,
+        ),
+    }
+
+
+def render_failed_status(
+    env: EnvironmentView, reason: str, *, now: datetime.datetime
+) -> dict[str, Any]:
+    """Status of an environment whose pod cannot be rendered (an Error for each scenario)."""
+    records = _fail(env, Verdict.ERROR, reason)
+    return {
+        "phase": Phase.FINISHED.value,
+        "observedGeneration": 1,
+        "scenario": env.scenarios[-1].id,
+        "verdict": Verdict.ERROR.value,
+        "reason": clip(reason),
+        "results": [r.to_wire() for r in records],
+        "timings": {"finished": conditions.rfc3339(now)},
+    }

@@ -1,0 +1,387 @@
+"""Views: the few facts the operator needs from each watched object, parsed once.
+
+The kopf indexes store these instead of whole bodies (a pod body is kilobytes; its view is a few
+fields), and the planner works on them only. Parsing is pure and total: a malformed field becomes
+``None``/empty rather than an exception, because one odd object must not stop a campaign.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import datetime
+from collections.abc import Mapping
+from typing import Any
+
+from simtest_operator.api.v1alpha1 import ManifestError, TestCampaignSpec, parse_campaign
+from simtest_operator.operator import names
+from simtest_operator.operator.records import ResultRecord
+from simtest_operator.render.inputs import SIMULATOR_RESOURCE, ScenarioRef
+
+Raw = Mapping[str, Any]
+
+
+def timestamp(value: Any) -> datetime.datetime | None:
+    """An RFC 3339 timestamp as an aware datetime; None when absent or malformed."""
+    if not isinstance(value, str) or not value:
+        return None
+    try:
+        parsed = datetime.datetime.fromisoformat(value.replace("Z", "+00:00"))
+    except ValueError:
+        return None
+    return parsed if parsed.tzinfo else parsed.replace(tzinfo=datetime.UTC)
+
+
+def _meta(body: Raw) -> Raw:
+    meta = body.get("metadata")
+    return meta if isinstance(meta, Mapping) else {}
+
+
+def _status(body: Raw) -> Raw:
+    status = body.get("status")
+    return status if isinstance(status, Mapping) else {}
+
+
+def _spec(body: Raw) -> Raw:
+    spec = body.get("spec")
+    return spec if isinstance(spec, Mapping) else {}
+
+
+def _condition(status: Raw, kind: str) -> Raw | None:
+    for condition in status.get("conditions") or ():
+        if isinstance(condition, Mapping) and condition.get("type") == kind:
+            return condition
+    return None
+
+
+def _results(items: Any) -> tuple[ResultRecord, ...]:
+    records = []
+    for item in items or ():
+        try:
+            records.append(ResultRecord.from_wire(item))
+        except (KeyError, TypeError, ValueError):
+            continue
+    return tuple(records)
+
+
+# --- pods --------------------------------------------------------------------------------------
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class ContainerView:
+    """The simulator container's current state."""
+
+    state: str = ""
+    """``waiting``, ``running``, ``terminated`` or empty (no status yet)."""
+    reason: str = ""
+    message: str = ""
+    exit_code: int | None = None
+    started_at: datetime.datetime | None = None
+    finished_at: datetime.datetime | None = None
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class PodView:
+    """A simulator pod."""
+
+    name: str
+    namespace: str
+    uid: str
+    resource_version: str
+    campaign: str
+    created: datetime.datetime | None
+    deleting: bool
+    node_name: str | None
+    phase: str
+    reason: str
+    message: str
+    scheduled_at: datetime.datetime | None
+    unschedulable: str
+    """``PodScheduled=False`` reason and message while the scheduler cannot place the pod."""
+    start_time: datetime.datetime | None
+    container: ContainerView
+    disruption: str
+    """``DisruptionTarget`` reason and message (eviction, preemption, pod GC), if any."""
+
+    @property
+    def terminated(self) -> bool:
+        """The pod ran to an end (phase or container state say so)."""
+        return self.phase in ("Succeeded", "Failed") or self.container.state == "terminated"
+
+
+def pod_view(body: Raw) -> PodView:
+    """Parse a Pod body."""
+    meta, status, spec = _meta(body), _status(body), _spec(body)
+    scheduled = _condition(status, "PodScheduled")
+    scheduled_at = None
+    unschedulable = ""
+    if scheduled is not None:
+        if scheduled.get("status") == "True":
+            scheduled_at = timestamp(scheduled.get("lastTransitionTime"))
+        else:
+            unschedulable = " ".join(
+                str(p) for p in (scheduled.get("reason"), scheduled.get("message")) if p
+            )
+    disruption = _condition(status, "DisruptionTarget")
+    disruption_text = ""
+    if disruption is not None and disruption.get("status") == "True":
+        disruption_text = " ".join(
+            str(p) for p in (disruption.get("reason"), disruption.get("message")) if p
+        )
+    return PodView(
+        name=str(meta.get("name", "")),
+        namespace=str(meta.get("namespace", "")),
+        uid=str(meta.get("uid", "")),
+        resource_version=str(meta.get("resourceVersion", "")),
+        campaign=str((meta.get("labels") or {}).get(names.LABEL_CAMPAIGN, "")),
+        created=timestamp(meta.get("creationTimestamp")),
+        deleting=meta.get("deletionTimestamp") is not None,
+        node_name=spec.get("nodeName") or None,
+        phase=str(status.get("phase", "Pending")),
+        reason=str(status.get("reason", "")),
+        message=str(status.get("message", "")),
+        scheduled_at=scheduled_at,
+        unschedulable=unschedulable,
+        start_time=timestamp(status.get("startTime")),
+        container=_container(status),
+        disruption=disruption_text,
+    )
+
+
+def _container(status: Raw) -> ContainerView:
+    statuses = status.get("containerStatuses") or ()
+    chosen = next(
+        (s for s in statuses if isinstance(s, Mapping) and s.get("name") == "simulator"),
+        statuses[0] if statuses else None,
+    )
+    if not isinstance(chosen, Mapping):
+        return ContainerView()
+    state = chosen.get("state") or {}
+    for kind in ("terminated", "running", "waiting"):
+        detail = state.get(kind)
+        if isinstance(detail, Mapping):
+            exit_code = detail.get("exitCode")
+            return ContainerView(
+                state=kind,
+                reason=str(detail.get("reason", "")),
+                message=str(detail.get("message", "")),
+                exit_code=int(exit_code) if isinstance(exit_code, int) else None,
+                started_at=timestamp(detail.get("startedAt")),
+                finished_at=timestamp(detail.get("finishedAt")),
+            )
+    return ContainerView()
+
+
+# --- nodes -------------------------------------------------------------------------------------
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class NodeView:
+    """A node, as far as simulator placement goes."""
+
+    name: str
+    ready: bool
+    unschedulable: bool
+    slots: int
+    """Allocatable ``simtest.dev/simulator`` units."""
+    labels: tuple[tuple[str, str], ...]
+    taints: tuple[tuple[str, str, str], ...]
+    """(key, value, effect) of each taint."""
+
+
+def node_view(body: Raw) -> NodeView:
+    """Parse a Node body."""
+    meta, status, spec = _meta(body), _status(body), _spec(body)
+    ready = _condition(status, "Ready")
+    allocatable = status.get("allocatable") or {}
+    try:
+        slots = int(str(allocatable.get(SIMULATOR_RESOURCE, "0")))
+    except ValueError:
+        slots = 0
+    taints = tuple(
+        (str(t.get("key", "")), str(t.get("value", "")), str(t.get("effect", "")))
+        for t in spec.get("taints") or ()
+        if isinstance(t, Mapping)
+    )
+    return NodeView(
+        name=str(meta.get("name", "")),
+        ready=ready is not None and ready.get("status") == "True",
+        unschedulable=bool(spec.get("unschedulable")),
+        slots=slots,
+        labels=tuple(sorted((str(k), str(v)) for k, v in (meta.get("labels") or {}).items())),
+        taints=taints,
+    )
+
+
+# --- custom resources --------------------------------------------------------------------------
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Timings:
+    """SimEnvironment timings."""
+
+    queued: datetime.datetime | None = None
+    scheduled: datetime.datetime | None = None
+    started: datetime.datetime | None = None
+    finished: datetime.datetime | None = None
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class EnvironmentView:
+    """A SimEnvironment."""
+
+    name: str
+    namespace: str
+    uid: str
+    resource_version: str
+    campaign: str
+    batch: str
+    attempt: int
+    scenarios: tuple[ScenarioRef, ...]
+    created: datetime.datetime | None
+    deleting: bool
+    phase: str
+    pod: str | None
+    node: str | None
+    verdict: str | None
+    reason: str
+    rendered_hash: str | None
+    timings: Timings
+    results: tuple[ResultRecord, ...]
+    provisioned_at: datetime.datetime | None
+    """When the operator recorded creating the pod (condition ``Provisioned``)."""
+    status: Raw
+
+    @property
+    def scenario_ids(self) -> tuple[str, ...]:
+        """Ids of the scenarios this environment runs."""
+        return tuple(s.id for s in self.scenarios)
+
+    @property
+    def finished(self) -> bool:
+        """The environment's verdicts are recorded in its status (durable)."""
+        return self.phase in ("Finished", "TornDown")
+
+
+def environment_view(body: Raw) -> EnvironmentView:
+    """Parse a SimEnvironment body."""
+    meta, status, spec = _meta(body), _status(body), _spec(body)
+    timings = status.get("timings") or {}
+    provisioned = _condition(status, "Provisioned")
+    scenarios = tuple(
+        ScenarioRef(
+            id=str(s.get("id", "")),
+            source=str(s.get("source", "")),
+            sha256=str(s.get("sha256", "")),
+            overrides={str(k): str(v) for k, v in (s.get("overrides") or {}).items()},
+        )
+        for s in spec.get("scenarios") or ()
+        if isinstance(s, Mapping)
+    )
+    return EnvironmentView(
+        name=str(meta.get("name", "")),
+        namespace=str(meta.get("namespace", "")),
+        uid=str(meta.get("uid", "")),
+        resource_version=str(meta.get("resourceVersion", "")),
+        campaign=str(spec.get("campaign", "")),
+        batch=str(spec.get("batch", "")),
+        attempt=int(spec.get("attempt", 1) or 1),
+        scenarios=scenarios,
+        created=timestamp(meta.get("creationTimestamp")),
+        deleting=meta.get("deletionTimestamp") is not None,
+        phase=str(status.get("phase", "Pending")),
+        pod=status.get("pod") or None,
+        node=status.get("node") or None,
+        verdict=status.get("verdict") or None,
+        reason=str(status.get("reason", "")),
+        rendered_hash=status.get("renderedHash") or None,
+        timings=Timings(
+            queued=timestamp(timings.get("queued")),
+            scheduled=timestamp(timings.get("scheduled")),
+            started=timestamp(timings.get("started")),
+            finished=timestamp(timings.get("finished")),
+        ),
+        results=_results(status.get("results")),
+        provisioned_at=timestamp((provisioned or {}).get("lastTransitionTime"))
+        if provisioned is not None and provisioned.get("status") == "True"
+        else None,
+        status=status,
+    )
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class BatchView:
+    """A ScenarioBatch."""
+
+    name: str
+    namespace: str
+    uid: str
+    resource_version: str
+    campaign: str
+    index: int
+    scenario_ids: tuple[str, ...]
+    results: tuple[ResultRecord, ...]
+    status: Raw
+
+
+def batch_view(body: Raw) -> BatchView:
+    """Parse a ScenarioBatch body."""
+    meta, status, spec = _meta(body), _status(body), _spec(body)
+    return BatchView(
+        name=str(meta.get("name", "")),
+        namespace=str(meta.get("namespace", "")),
+        uid=str(meta.get("uid", "")),
+        resource_version=str(meta.get("resourceVersion", "")),
+        campaign=str(spec.get("campaign", "")),
+        index=int(spec.get("index", 0) or 0),
+        scenario_ids=tuple(
+            str(s.get("id", "")) for s in spec.get("scenarios") or () if isinstance(s, Mapping)
+        ),
+        results=_results(status.get("results")),
+        status=status,
+    )
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class CampaignView:
+    """A TestCampaign with its validated spec."""
+
+    name: str
+    namespace: str
+    uid: str
+    resource_version: str
+    generation: int
+    created: datetime.datetime | None
+    deleting: bool
+    spec: TestCampaignSpec | None
+    spec_error: str
+    """Why the spec does not validate (only when ``spec`` is None)."""
+    status: Raw
+
+
+def campaign_view(body: Raw) -> CampaignView:
+    """Parse a TestCampaign body; an invalid spec is kept as an error, not raised."""
+    meta, status = _meta(body), _status(body)
+    spec: TestCampaignSpec | None = None
+    error = ""
+    document = {
+        "apiVersion": body.get("apiVersion"),
+        "kind": body.get("kind"),
+        "metadata": {"name": meta.get("name"), "namespace": meta.get("namespace")},
+        "spec": _spec(body),
+    }
+    try:
+        spec = parse_campaign(document, source=f"testcampaign/{meta.get('name')}").spec
+    except ManifestError as exc:
+        error = "; ".join(f"{path}: {message}" for path, message in exc.problems)
+    return CampaignView(
+        name=str(meta.get("name", "")),
+        namespace=str(meta.get("namespace", "")),
+        uid=str(meta.get("uid", "")),
+        resource_version=str(meta.get("resourceVersion", "")),
+        generation=int(meta.get("generation", 1) or 1),
+        created=timestamp(meta.get("creationTimestamp")),
+        deleting=meta.get("deletionTimestamp") is not None,
+        spec=spec,
+        spec_error=error,
+        status=status,
+    )

@@ -1,0 +1,89 @@
+"""From a campaign's spec and one SimEnvironment to the render request of its pod.
+
+The only place where the wire spec (``api``) meets the render inputs; rendering itself never sees
+pydantic models.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from simtest_operator.api.v1alpha1 import API_VERSION, TestCampaignSpec
+from simtest_operator.operator import names
+from simtest_operator.operator.configuration import OperatorConfig
+from simtest_operator.operator.observed import EnvironmentView
+from simtest_operator.render import (
+    Amounts,
+    ArtifactTarget,
+    EnvironmentRequest,
+    OwnerRef,
+    PvcVolume,
+    SecretKey,
+)
+
+
+def environment_request(
+    spec: TestCampaignSpec, env: EnvironmentView, *, config: OperatorConfig
+) -> EnvironmentRequest:
+    """What the environment's pod renders from."""
+    execution = spec.execution
+    requests = execution.resources.requests
+    limits = execution.resources.limits or requests
+    environment = spec.environment
+    database = spec.results.database_secret_ref
+    return EnvironmentRequest(
+        template=environment.template,
+        namespace=env.namespace,
+        name=env.name,
+        campaign=env.campaign,
+        batch=env.batch,
+        attempt=env.attempt,
+        labels=names.environment_labels(env.campaign, env.batch, env.attempt),
+        owner=OwnerRef(api_version=API_VERSION, kind="SimEnvironment", name=env.name, uid=env.uid),
+        service_account=names.service_account(env.campaign),
+        scenarios=env.scenarios,
+        isolation=execution.isolation.value,
+        image=environment.simulator.image,
+        requests=Amounts(cpu=requests.cpu, memory=requests.memory, gpu=requests.gpu),
+        limits=Amounts(cpu=limits.cpu, memory=limits.memory, gpu=limits.gpu),
+        timeout_seconds=execution.timeout_seconds,
+        node_selector=dict(execution.node_selector),
+        tolerations=tuple(t.to_wire() for t in execution.tolerations),
+        artifacts=_artifacts(spec, env.campaign),
+        scenario_volume=config.scenario_volume,
+        scenario_mount=str(config.sources_dir.absolute())
+        if config.scenario_volume
+        else "/scenarios",
+        results_dsn=SecretKey(name=database.name, key=database.key) if database else None,
+        sut=environment.sut.to_wire(),
+        simulator=environment.simulator.to_wire(),
+        evaluation=spec.evaluation.to_wire(),
+        values=dict(environment.values),
+    )
+
+
+def _artifacts(spec: TestCampaignSpec, campaign: str) -> ArtifactTarget:
+    pvc = spec.artifacts.pvc
+    if pvc is None:
+        return ArtifactTarget()
+    sub = "/".join(p for p in (pvc.sub_path, campaign) if p)
+    return ArtifactTarget(
+        pvc=PvcVolume(claim_name=pvc.claim_name, sub_path=sub),
+        uri_prefix=f"pvc://{pvc.claim_name}/{sub}",
+    )
+
+
+def tolerations(spec: TestCampaignSpec) -> list[tuple[str | None, str | None, str | None, str]]:
+    """(key, value, effect, operator) of each toleration, for slot counting."""
+    out = []
+    for t in spec.execution.tolerations:
+        wire: dict[str, Any] = t.to_wire()
+        out.append(
+            (
+                wire.get("key"),
+                wire.get("value"),
+                wire.get("effect"),
+                str(wire.get("operator", "Equal")),
+            )
+        )
+    return out

@@ -1,0 +1,135 @@
+"""What rendering one environment needs, as plain immutable values.
+
+``render`` sits beside ``api`` in the layer map and must not import it (nor pydantic): the operator
+converts a campaign's wire spec into these dataclasses and passes them in, so rendering stays a
+pure function of values that tests can build by hand (STYLE rule 7).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+from typing import Any
+
+SIMULATOR_RESOURCE = "simtest.dev/simulator"
+"""Extended resource: one unit is one simulator slot on a node."""
+GPU_RESOURCE = "nvidia.com/gpu"
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class ScenarioRef:
+    """One frozen scenario the environment runs."""
+
+    id: str
+    source: str
+    """URI the runner fetches the file from (``file://``, ``git+...``, ``http(s)://``, ...)."""
+    sha256: str
+    overrides: Mapping[str, str] = dataclasses.field(default_factory=dict)
+    """OpenSCENARIO parameter values for this run."""
+
+    def to_json(self) -> dict[str, Any]:
+        """Wire form (camelCase), as it appears in the run spec."""
+        return {
+            "id": self.id,
+            "source": self.source,
+            "sha256": self.sha256,
+            "overrides": dict(sorted(self.overrides.items())),
+        }
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class OwnerRef:
+    """The object that owns the rendered pod (its SimEnvironment)."""
+
+    api_version: str
+    kind: str
+    name: str
+    uid: str
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Amounts:
+    """cpu / memory quantities and a GPU count."""
+
+    cpu: str
+    memory: str
+    gpu: int = 0
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class PvcVolume:
+    """A PersistentVolumeClaim mounted into the simulator pod."""
+
+    claim_name: str
+    sub_path: str = ""
+    read_only: bool = False
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class ArtifactTarget:
+    """Where the runner writes artifacts: a PVC folder, or the pod's scratch space."""
+
+    pvc: PvcVolume | None = None
+    uri_prefix: str = ""
+    """Prefix of the artifact URIs the runner reports (``pvc://claim/sub/campaign/env``)."""
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class SecretKey:
+    """A key of a Secret, exposed to the runner as an environment variable (never inlined)."""
+
+    name: str
+    key: str
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class EnvironmentRequest:
+    """Everything one SimEnvironment renders from: identity, scenarios, settings, placement."""
+
+    template: str
+    """Folder under the templates root, e.g. ``default``."""
+    namespace: str
+    name: str
+    """SimEnvironment name; the pod and the artifact folder take it too."""
+    campaign: str
+    batch: str
+    attempt: int
+    labels: Mapping[str, str]
+    """Labels the operator selects its pods by (campaign, batch, environment, attempt)."""
+    owner: OwnerRef
+    service_account: str
+    scenarios: tuple[ScenarioRef, ...]
+    isolation: str
+    """``PerScenario`` or ``Reuse``."""
+    image: str
+    requests: Amounts
+    limits: Amounts
+    timeout_seconds: int
+    """Wall-clock limit of one scenario."""
+    node_selector: Mapping[str, str] = dataclasses.field(default_factory=dict)
+    tolerations: tuple[Mapping[str, Any], ...] = ()
+    """Pod tolerations in core/v1 wire form."""
+    artifacts: ArtifactTarget = dataclasses.field(default_factory=ArtifactTarget)
+    scenario_volume: PvcVolume | None = None
+    """Read-only volume holding ``file://`` scenario sources, mounted at ``scenario_mount``."""
+    scenario_mount: str = "/scenarios"
+    results_dsn: SecretKey | None = None
+    """Results database DSN, handed to the runner through a secretKeyRef."""
+    sut: Mapping[str, Any] = dataclasses.field(default_factory=dict)
+    """System-under-test config in wire form (camelCase)."""
+    simulator: Mapping[str, Any] = dataclasses.field(default_factory=dict)
+    """Simulator settings in wire form (camelCase)."""
+    evaluation: Mapping[str, Any] = dataclasses.field(default_factory=dict)
+    """Evaluation spec in wire form (criteria plus per-scenario overrides)."""
+    values: Mapping[str, Any] = dataclasses.field(default_factory=dict)
+    """The campaign's Helm value overrides, deep-merged over the template's values."""
+
+    @property
+    def deadline_seconds(self) -> int:
+        """``activeDeadlineSeconds``: every queued scenario's limit plus a start-up allowance."""
+        return self.timeout_seconds * len(self.scenarios) + STARTUP_ALLOWANCE_SECONDS
+
+
+STARTUP_ALLOWANCE_SECONDS = 30
+"""Time a pod may spend starting (image, volumes, interpreter) before its scenario clock runs;
+the runner enforces ``timeout_seconds`` itself, the deadline is the backstop."""

@@ -1,0 +1,158 @@
+"""Render one environment: Helm values, the simulator pod and the run-specific helmfile.
+
+Pure: the output depends only on the request and the template files — no clock, no cluster, no
+random names — so the same request always yields byte-identical files and the same content hash.
+The pod is checked against the invariants the operator relies on (one simulator slot, the
+restricted Pod Security profile, owner reference, deadline) whatever the template says.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+from typing import Any
+
+import jinja2
+import yaml
+
+from simtest_operator.errors import RenderError
+from simtest_operator.render import documents, podchecks
+from simtest_operator.render.inputs import EnvironmentRequest
+from simtest_operator.render.runspecs import RunSpec
+from simtest_operator.render.templates import TemplateLibrary
+
+ARTIFACTS_MOUNT = "/artifacts"
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class RenderedEnvironment:
+    """The rendered files of one environment and their digest."""
+
+    values: Mapping[str, Any]
+    """Helm values of every release, template defaults merged with the campaign's overrides."""
+    pod: Mapping[str, Any]
+    """The simulator pod manifest (direct provisioner)."""
+    helmfile: str | None
+    """Run-specific ``helmfile.yaml`` (when the template has one)."""
+    run_spec: RunSpec
+    content_hash: str
+    """sha256 over values, pod and helmfile; recorded in the SimEnvironment status."""
+
+    def files(self) -> dict[str, str]:
+        """File name to text, for ``--out DIR`` and golden tests."""
+        out = {
+            "values.yaml": documents.to_yaml(self.values),
+            "pod.yaml": documents.to_yaml(self.pod),
+        }
+        if self.helmfile is not None:
+            out["helmfile.yaml"] = self.helmfile
+        return out
+
+
+def run_spec_for(request: EnvironmentRequest) -> RunSpec:
+    """The run spec the pod's runner receives."""
+    return RunSpec(
+        campaign=request.campaign,
+        environment=request.name,
+        attempt=request.attempt,
+        scenarios=request.scenarios,
+        isolation=request.isolation,
+        timeout_seconds=request.timeout_seconds,
+        artifacts_dir=f"{ARTIFACTS_MOUNT}/{request.name}",
+        artifacts_uri=f"{request.artifacts.uri_prefix}/{request.name}"
+        if request.artifacts.uri_prefix
+        else "",
+        evaluation=request.evaluation,
+        sut=request.sut,
+        simulator=request.simulator,
+    )
+
+
+def render_environment(
+    request: EnvironmentRequest, library: TemplateLibrary
+) -> RenderedEnvironment:
+    """Render ``request`` with its template from ``library``."""
+    templates = library.load(request.template)
+    run_spec = run_spec_for(request)
+    context = _context(request, run_spec)
+    base_values = _render_mapping(templates.values, context, what="values.yaml.j2")
+    values = documents.deep_merge(base_values, request.values)
+    context = {**context, "values": values}
+    pod = _render_mapping(templates.pod, context, what="pod.yaml.j2")
+    helmfile = (
+        _render_text(templates.helmfile, context, what="helmfile.yaml.j2")
+        if templates.helmfile is not None
+        else None
+    )
+    podchecks.check_pod(pod, request)
+    digest = documents.content_hash({"values": values, "pod": pod, "helmfile": helmfile})
+    return RenderedEnvironment(
+        values=values, pod=pod, helmfile=helmfile, run_spec=run_spec, content_hash=digest
+    )
+
+
+def _context(request: EnvironmentRequest, run_spec: RunSpec) -> dict[str, Any]:
+    env = {
+        "name": request.name,
+        "namespace": request.namespace,
+        "campaign": request.campaign,
+        "batch": request.batch,
+        "attempt": request.attempt,
+        "isolation": request.isolation,
+        "labels": dict(sorted(request.labels.items())),
+        "owner": {
+            "apiVersion": request.owner.api_version,
+            "kind": request.owner.kind,
+            "name": request.owner.name,
+            "uid": request.owner.uid,
+        },
+        "serviceAccount": request.service_account,
+        "image": request.image,
+        "requests": dataclasses.asdict(request.requests),
+        "limits": dataclasses.asdict(request.limits),
+        "timeoutSeconds": request.timeout_seconds,
+        "deadlineSeconds": request.deadline_seconds,
+        "nodeSelector": dict(sorted(request.node_selector.items())),
+        "tolerations": [dict(t) for t in request.tolerations],
+        "artifacts": {
+            "mountPath": ARTIFACTS_MOUNT,
+            "pvc": dataclasses.asdict(request.artifacts.pvc) if request.artifacts.pvc else None,
+            "uriPrefix": request.artifacts.uri_prefix,
+        },
+        "scenarioVolume": dataclasses.asdict(request.scenario_volume)
+        if request.scenario_volume
+        else None,
+        "scenarioMount": request.scenario_mount,
+        "resultsDsn": dataclasses.asdict(request.results_dsn) if request.results_dsn else None,
+    }
+    return {
+        "env": env,
+        "scenarios": [s.to_json() for s in request.scenarios],
+        "scenario": request.scenarios[0].to_json(),
+        "sut": dict(request.sut),
+        "simulator": dict(request.simulator),
+        "evaluation": dict(request.evaluation),
+        "runSpec": run_spec.dumps(),
+    }
+
+
+def _render_text(template: jinja2.Template, context: Mapping[str, Any], *, what: str) -> str:
+    try:
+        return template.render(context)
+    except (jinja2.TemplateError, TypeError, ValueError) as exc:
+        raise RenderError(f"{what}: {exc}") from exc
+
+
+def _render_mapping(
+    template: jinja2.Template, context: Mapping[str, Any], *, what: str
+) -> dict[str, Any]:
+    text = _render_text(template, context, what=what)
+    try:
+        loaded = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        raise RenderError(f"{what} did not render to valid YAML: {exc}") from exc
+    if loaded is None:
+        return {}
+    if not isinstance(loaded, dict):
+        raise RenderError(f"{what} must render to a mapping, got {type(loaded).__name__}")
+    return loaded

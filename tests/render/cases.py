@@ -1,0 +1,82 @@
+"""Render requests used by the golden tests (one per interesting combination)."""
+
+from __future__ import annotations
+
+from simtest_operator import render
+
+OWNER = render.OwnerRef(
+    api_version="simtest.dev/v1alpha1",
+    kind="SimEnvironment",
+    name="demo-b00003-e007-a2",
+    uid="0d1e2f3a",
+)
+SCENARIO = render.ScenarioRef(
+    id="cut-in/fast.xosc",
+    source="git+https://example.org/scenarios.git@0123456789abcdef0123456789abcdef01234567#cut-in/fast.xosc",
+    sha256="ab" * 32,
+    overrides={"EgoSpeed": "30"},
+)
+
+
+def request(**changes: object) -> render.EnvironmentRequest:
+    base = render.EnvironmentRequest(
+        template="default",
+        namespace="ci",
+        name="demo-b00003-e007-a2",
+        campaign="demo",
+        batch="demo-b00003",
+        attempt=2,
+        labels={
+            "simtest.dev/campaign": "demo",
+            "simtest.dev/batch": "demo-b00003",
+            "simtest.dev/attempt": "2",
+        },
+        owner=OWNER,
+        service_account="demo-simulator",
+        scenarios=(SCENARIO,),
+        isolation="PerScenario",
+        image="registry.example.org/simtest-runner:0.1.0",
+        requests=render.Amounts(cpu="500m", memory="1Gi"),
+        limits=render.Amounts(cpu="1", memory="2Gi"),
+        timeout_seconds=60,
+        sut={"name": "idm-driver", "version": "1.2.3", "driverModel": {"timeHeadway": 1.8}},
+        simulator={"stepLength": 0.05, "seed": 7},
+        evaluation={"criteria": {"collision": "Forbidden", "minTtc": 1.5}},
+    )
+    import dataclasses
+
+    return dataclasses.replace(base, **changes)  # type: ignore[arg-type]
+
+
+CASES = {
+    "minimal": request(),
+    "gpu-pvc-placement": request(
+        limits=render.Amounts(cpu="4", memory="8Gi", gpu=1),
+        requests=render.Amounts(cpu="4", memory="8Gi", gpu=1),
+        node_selector={"simtest.dev/pool": "gpu"},
+        tolerations=({"key": "nvidia.com/gpu", "operator": "Exists", "effect": "NoSchedule"},),
+        artifacts=render.ArtifactTarget(
+            pvc=render.PvcVolume(claim_name="artifacts", sub_path="runs/demo"),
+            uri_prefix="pvc://artifacts/runs/demo",
+        ),
+        results_dsn=render.SecretKey(name="results-db", key="dsn"),
+        scenario_volume=render.PvcVolume(claim_name="scenarios", read_only=True),
+    ),
+    "reuse-values-override": request(
+        isolation="Reuse",
+        scenarios=(
+            SCENARIO,
+            render.ScenarioRef(
+                id="cut-in/slow.xosc", source="file:///s/slow.xosc", sha256="cd" * 32
+            ),
+        ),
+        sut={"name": "ros-stack", "version": "2.0.0", "image": "registry.example.org/stack:2.0.0"},
+        values={
+            "simulator": {
+                "podAnnotations": {"simtest.dev/fake-duration": "3s"},
+                "extraEnv": [{"name": "LOG_LEVEL", "value": "debug"}],
+            },
+            "evaluator": None,
+        },
+    ),
+}
