@@ -3,6 +3,7 @@
 #
 #   bash deploy/devcluster/build.sh            # everything (idempotent; seconds when cached)
 #   bash deploy/devcluster/build.sh etcd kwok  # a subset: etcd kubernetes kwok helm helmfile
+#   bash deploy/devcluster/build.sh --cache-dir DIR ...   # instead of $SIMTEST_CACHE_DIR
 #
 # Versions: deploy/devcluster/versions.env (the one place they are pinned).
 # Output:   ${SIMTEST_CACHE_DIR:-${XDG_CACHE_HOME:-~/.cache}/simtest}/toolchain/
@@ -18,6 +19,10 @@ HERE="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 source "$HERE/versions.env"
 
 CACHE_ROOT="${SIMTEST_CACHE_DIR:-${XDG_CACHE_HOME:-$HOME/.cache}/simtest}"
+if [[ "${1:-}" == --cache-dir ]]; then
+    [[ -n "${2:-}" ]] || { echo "build.sh: error: --cache-dir needs a directory" >&2; exit 2; }
+    CACHE_ROOT="$2"; shift 2
+fi
 TC="$CACHE_ROOT/toolchain"
 ALL_COMPONENTS=(etcd kwok kubernetes helm helmfile)
 JOBS="${SIMTEST_BUILD_JOBS:-2}"
@@ -58,6 +63,21 @@ require_go() {
     fi
 }
 
+# go_get <module@version>...: add tools to the wrapper module in the current directory; keep the
+# output short (no per-module "added" lines) and turn a failure into one clear message.
+go_get() {
+    local out rc=0
+    out="$(go get -tool "$@" 2>&1)" || rc=$?
+    grep -v '^go: \(added\|upgraded\|downgraded\|downloading\) ' <<<"$out" >&2 || true
+    if [[ $rc != 0 ]]; then
+        if grep -q 'verifying module.*404' <<<"$out"; then
+            die "the checksum database ($(go env GOSUMDB)) does not know a version above; pin a released one in versions.env"
+        fi
+        die "go get $* failed (exit $rc); output above"
+    fi
+    log "  resolved $(grep -c '^go: added ' <<<"$out" || true) modules for $*"
+}
+
 # new_wrapper <dir> <module>: a fresh throw-away main module.
 new_wrapper() {
     rm -rf "$1"; mkdir -p "$1"
@@ -82,7 +102,7 @@ build_etcd() {
     new_wrapper "$w" local/etcdbin
     (
         cd "$w"
-        go get -tool "go.etcd.io/etcd/server/v3@v$v"
+        go_get "go.etcd.io/etcd/server/v3@v$v"
         "${GO_BUILD[@]}" -ldflags "-s -w" -o "$w/out/etcd" go.etcd.io/etcd/server/v3
     )
     install_bins "$w/out" "$dir"
@@ -101,7 +121,7 @@ build_kwok() {
     new_wrapper "$w" local/kwokbin
     (
         cd "$w"
-        go get -tool "sigs.k8s.io/kwok/cmd/kwok@v$v" "sigs.k8s.io/kwok/cmd/kwokctl@v$v"
+        go_get "sigs.k8s.io/kwok/cmd/kwok@v$v" "sigs.k8s.io/kwok/cmd/kwokctl@v$v"
         "${GO_BUILD[@]}" -ldflags "-s -w" -o "$w/out/" sigs.k8s.io/kwok/cmd/kwok sigs.k8s.io/kwok/cmd/kwokctl
     )
     install_bins "$w/out" "$dir"
@@ -145,7 +165,7 @@ build_kubernetes() {
         go mod edit -go=1.26.0 -godebug="default=$KUBERNETES_GODEBUG"
         for m in $K8S_STAGING; do go mod edit -replace="k8s.io/$m=k8s.io/$m@v0.${v#1.}"; done
         log "kubernetes $v: resolving modules"
-        go get -tool "${gets[@]}"
+        go_get "${gets[@]}"
         log "kubernetes $v: compiling (cold: ~20-30 min on 2 cores)"
         "${GO_BUILD[@]}" -ldflags "$ldf" -o "$w/out/" "${pkgs[@]}"
     )
@@ -167,7 +187,7 @@ build_helm() {
     ldf+=" -X helm.sh/helm/v3/pkg/lint/rules.k8sVersionMajor=1 -X helm.sh/helm/v3/pkg/lint/rules.k8sVersionMinor=$kminor"
     (
         cd "$w"
-        go get -tool "helm.sh/helm/v3/cmd/helm@v$v"
+        go_get "helm.sh/helm/v3/cmd/helm@v$v"
         "${GO_BUILD[@]}" -ldflags "$ldf" -o "$w/out/helm" helm.sh/helm/v3/cmd/helm
     )
     install_bins "$w/out" "$dir"
@@ -184,7 +204,7 @@ build_helmfile() {
     new_wrapper "$w" local/helmfilebin
     (
         cd "$w"
-        go get -tool "github.com/helmfile/helmfile@v$v"
+        go_get "github.com/helmfile/helmfile@v$v"
         "${GO_BUILD[@]}" -ldflags "-s -w -X go.szostok.io/version.version=v$v" \
             -o "$w/out/helmfile" github.com/helmfile/helmfile
     )

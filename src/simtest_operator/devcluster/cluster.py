@@ -43,13 +43,20 @@ COMPONENT_USERS = ("kube-controller-manager", "kube-scheduler", "kwok")
 
 
 class DevCluster:
-    """One dev cluster, living in ``root`` (PKI, kubeconfig, logs, etcd data, state file)."""
+    """One dev cluster, living in ``root`` (PKI, kubeconfig, logs, etcd data, state file).
 
-    __slots__ = ("_procs", "layout", "toolchain")
+    ``tied_to_this_process=True`` (test fixtures) makes the kernel stop the components when the
+    Python process that started them dies; the CLI leaves it off so the cluster outlives ``up``.
+    """
 
-    def __init__(self, root: Path, toolchain: Toolchain) -> None:
+    __slots__ = ("_procs", "layout", "tied", "toolchain")
+
+    def __init__(
+        self, root: Path, toolchain: Toolchain, *, tied_to_this_process: bool = False
+    ) -> None:
         self.layout = Layout(root=root)
         self.toolchain = toolchain
+        self.tied = tied_to_this_process
         self._procs: dict[int, subprocess.Popen[bytes]] = {}
 
     # -- public API -----------------------------------------------------------------------------
@@ -181,7 +188,7 @@ class DevCluster:
         return pki
 
     def _spawn(self, state: ClusterState, name: str, argv: list[str]) -> ClusterState:
-        record, proc = spawn(name, argv, log=self.layout.log(name))
+        record, proc = spawn(name, argv, log=self.layout.log(name), die_with_parent=self.tied)
         self._procs[record.pid] = proc
         state = dataclasses.replace(state, processes=(*state.processes, record))
         state.save(self.layout.state)

@@ -8,6 +8,7 @@ cluster started and never a stranger that happens to reuse a pid. Linux only (re
 from __future__ import annotations
 
 import contextlib
+import ctypes
 import dataclasses
 import os
 import signal
@@ -49,14 +50,28 @@ def is_alive(record: ProcessRecord) -> bool:
     return _start_ticks(record.pid) == record.start_ticks
 
 
+_PR_SET_PDEATHSIG = 1
+
+
+def _die_with_parent() -> None:
+    """In the child before exec: ask the kernel for SIGTERM when our parent goes away."""
+    libc = ctypes.CDLL(None, use_errno=True)
+    libc.prctl(_PR_SET_PDEATHSIG, signal.SIGTERM)
+
+
 def spawn(
     name: str,
     argv: Sequence[str],
     *,
     log: Path,
     env: Mapping[str, str] | None = None,
+    die_with_parent: bool = False,
 ) -> tuple[ProcessRecord, subprocess.Popen[bytes]]:
-    """Start ``argv`` in its own session with stdout and stderr appended to ``log``."""
+    """Start ``argv`` in its own session with stdout and stderr appended to ``log``.
+
+    With ``die_with_parent`` the process gets SIGTERM when the starting process dies, so a killed
+    test run cannot leak a control plane; without it the process outlives a CLI call.
+    """
     log.parent.mkdir(parents=True, exist_ok=True)
     with log.open("ab") as out:
         out.write(f"\n=== {time.strftime('%Y-%m-%dT%H:%M:%S')} start: {' '.join(argv)}\n".encode())
@@ -68,6 +83,7 @@ def spawn(
             stderr=subprocess.STDOUT,
             start_new_session=True,  # survives the CLI that started it; no terminal signals
             env=None if env is None else dict(env),
+            preexec_fn=_die_with_parent if die_with_parent else None,
         )
     ticks = _start_ticks(proc.pid)
     record = ProcessRecord(
