@@ -15,6 +15,7 @@ from pathlib import Path
 import pytest
 from mcap.reader import make_reader
 
+from simtest_operator.errors import ResultsError
 from simtest_operator.recording import Recorder, RecordingInfo, read_metadata, read_trajectories
 from simtest_operator.snapshots import BoundingBox, EntityKind, EntityState, WorldSnapshot
 
@@ -188,3 +189,27 @@ def test_write_cost_per_frame(tmp_path: Path) -> None:
     print(f"recording cost: {per_frame * 1e6:.0f} us per frame of 20 objects")
     # Budget: 10% of a 100x real-time run at 10 frames per simulated second = 1 ms per frame.
     assert per_frame < 1e-3
+
+
+def test_force_and_closed_recorder(tmp_path: Path) -> None:
+    path = tmp_path / "short.mcap"
+    recorder = Recorder(path, info=RecordingInfo(scenario_id="s", seed=0), period=1.0)
+    assert recorder.write(world(0.0))
+    assert not recorder.write(world(0.5))
+    assert recorder.write(world(0.7), force=True)
+    assert not recorder.write(world(0.7), force=True)
+    recorder.close()
+    recorder.close()
+    with pytest.raises(ResultsError, match="closed"):
+        recorder.write(world(2.0))
+    assert [sample.t for sample in read_trajectories(path)[0]] == pytest.approx([0.0, 0.7])
+
+
+def test_empty_recording_still_has_the_map(tmp_path: Path) -> None:
+    path = tmp_path / "empty.mcap"
+    with Recorder(path, info=RecordingInfo(scenario_id="s", seed=0), opendrive="<OpenDRIVE/>"):
+        pass
+    with path.open("rb") as stream:
+        topics = [channel.topic for _, channel, _ in make_reader(stream).iter_messages()]
+    assert topics == ["ground_truth_map"]
+    assert read_trajectories(path) == {}

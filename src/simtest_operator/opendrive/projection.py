@@ -21,6 +21,8 @@ from simtest_operator.opendrive import lanes, planview
 
 SAMPLE_STEP = 2.0
 """Reference-line sampling distance of the search index, metres."""
+GRID_CELL = 20.0
+"""Cell size of the search grid, metres."""
 _CANDIDATE_SLACK = 1.0
 _MAX_CANDIDATES = 6
 
@@ -42,7 +44,7 @@ class Projection:
 class RoadIndex:
     """Sampled segments of every road, for nearest-road search."""
 
-    __slots__ = ("_bounds", "_ends", "_layouts", "_lines", "_seg", "_spans", "_starts")
+    __slots__ = ("_bounds", "_ends", "_grid", "_layouts", "_lines", "_seg", "_spans")
 
     def __init__(
         self, lines: Sequence[planview.ReferenceLine], layouts: Sequence[lanes.RoadLayout]
@@ -74,9 +76,9 @@ class RoadIndex:
         self._seg = np.array(columns, dtype=np.float64).reshape(8, -1)
         self._spans = spans
         nonempty = [(first, last) for first, last in spans if last > first]
-        self._starts = np.array([first for first, _ in nonempty], dtype=np.intp)
         self._ends = [last for _, last in nonempty]
         self._bounds = self._road_bounds()
+        self._grid = self._build_grid()
 
     def _road_bounds(self) -> _Array:
         """Per-road axis-aligned box (xmin, ymin, xmax, ymax) grown by the lateral extent."""
@@ -97,32 +99,60 @@ class RoadIndex:
             )
         return boxes
 
+    def _build_grid(self) -> dict[tuple[int, int], npt.NDArray[np.intp]]:
+        """Cells of GRID_CELL metres -> segments whose box, grown by the road's lateral extent
+        plus the candidate slack, touches the cell."""
+        seg = self._seg
+        x0, y0 = seg[0], seg[1]
+        x1, y1 = x0 + seg[2], y0 + seg[3]
+        grow = np.maximum(np.abs(seg[6]), np.abs(seg[7])) + _CANDIDATE_SLACK
+        low_x = np.floor((np.minimum(x0, x1) - grow) / GRID_CELL).astype(np.int64)
+        high_x = np.floor((np.maximum(x0, x1) + grow) / GRID_CELL).astype(np.int64)
+        low_y = np.floor((np.minimum(y0, y1) - grow) / GRID_CELL).astype(np.int64)
+        high_y = np.floor((np.maximum(y0, y1) + grow) / GRID_CELL).astype(np.int64)
+        cells: dict[tuple[int, int], list[int]] = {}
+        for k in range(seg.shape[1]):
+            for i in range(int(low_x[k]), int(high_x[k]) + 1):
+                for j in range(int(low_y[k]), int(high_y[k]) + 1):
+                    cells.setdefault((i, j), []).append(k)
+        return {cell: np.array(members, dtype=np.intp) for cell, members in cells.items()}
+
     def candidates(self, x: float, y: float) -> list[tuple[int, float]]:
         """(road index, approximate s) of the roads nearest to the point, best first."""
-        seg = self._seg
         if not self._ends:
             return []
+        members = self._grid.get((math.floor(x / GRID_CELL), math.floor(y / GRID_CELL)))
+        if members is not None:
+            best, found = self._scan(x, y, self._seg[:, members])
+            # Segments outside the cell are more than the slack off, so a hit this close is final.
+            if best <= _CANDIDATE_SLACK:
+                return found
+        return self._scan(x, y, self._seg)[1]
+
+    @staticmethod
+    def _scan(x: float, y: float, seg: _Array) -> tuple[float, list[tuple[int, float]]]:
+        """Best outside distance and the nearest roads among the given segments."""
         dx, dy = seg[2], seg[3]
         rx, ry = x - seg[0], y - seg[1]
         length2 = dx * dx + dy * dy
         with np.errstate(divide="ignore", invalid="ignore"):
             u = np.clip(np.where(length2 > 0, (rx * dx + ry * dy) / length2, 0.0), 0.0, 1.0)
-        px, py = rx - u * dx, ry - u * dy
-        distance = np.hypot(px, py)
-        side = dx * ry - dy * rx
-        margin = np.where(side >= 0, np.maximum(seg[7], 0.0), np.maximum(-seg[6], 0.0))
+        distance = np.hypot(rx - u * dx, ry - u * dy)
+        margin = np.where(dx * ry - dy * rx >= 0, np.maximum(seg[7], 0.0), np.maximum(-seg[6], 0.0))
         outside = np.maximum(distance - margin, 0.0)
-        per_road = np.minimum.reduceat(outside, self._starts)
-        best = float(per_road.min())
-        chosen = np.flatnonzero(per_road <= best + _CANDIDATE_SLACK)
-        chosen = chosen[np.argsort(per_road[chosen], kind="stable")][:_MAX_CANDIDATES]
+        order = np.argsort(outside, kind="stable")
+        best = float(outside[order[0]])
+        limit = best + _CANDIDATE_SLACK
         result: list[tuple[int, float]] = []
-        for position in chosen:
-            first = int(self._starts[position])
-            last = first + int(np.argmin(outside[first : self._ends[position]]))
-            road_index = int(seg[5, first])
-            result.append((road_index, float(seg[4, last] + u[last] * math.sqrt(length2[last]))))
-        return result
+        seen: set[int] = set()
+        for k in order.tolist():
+            if outside[k] > limit or len(result) >= _MAX_CANDIDATES:
+                break
+            road_index = int(seg[5, k])
+            if road_index not in seen:
+                seen.add(road_index)
+                result.append((road_index, float(seg[4, k] + u[k] * math.sqrt(length2[k]))))
+        return best, result
 
     def nearest_s(self, road_index: int, x: float, y: float) -> float:
         """Approximate s of the point on one road from its sampled segments."""
