@@ -182,3 +182,30 @@ def test_lane_offset_and_width_change_follow_polynomials() -> None:
     slope = 2 * 0.0001 * s - 0.01 - 0.02 / 2
     assert pose.heading == pytest.approx(math.atan(slope))
     assert net.lane_pose("r", s, 0).y == pytest.approx(centre)
+
+
+def test_lane_stretch_on_arcs_and_width_changes() -> None:
+    curvature = 0.02
+    net = RoadNetwork.from_bytes(
+        single_road(
+            f'<geometry s="0" x="0" y="0" hdg="0" length="100"><arc curvature="{curvature}"/>'
+            "</geometry>",
+            length=100,
+        )
+    )
+    assert net.lane_stretch("r", 50.0, -1) == pytest.approx(1 + curvature * 1.75)
+    assert net.lane_stretch("r", 50.0, 1) == pytest.approx(1 - curvature * 1.75)
+    assert net.lane_stretch("r", 50.0, 1, offset=0.25) == pytest.approx(1 - curvature * 2.0)
+    lanes = (
+        '<laneSection s="0"><center><lane id="0" type="none"/></center><right>'
+        '<lane id="-1" type="driving"><width sOffset="0" a="3.0" b="0.1"/></lane>'
+        "</right></laneSection>"
+    )
+    straight = RoadNetwork.from_bytes(
+        single_road(
+            '<geometry s="0" x="0" y="0" hdg="0" length="10"><line/></geometry>',
+            length=10,
+            lanes=lanes,
+        )
+    )
+    assert straight.lane_stretch("r", 5.0, -1) == pytest.approx(math.hypot(1.0, 0.05))

@@ -159,6 +159,24 @@ class RoadNetwork:
             heading=heading + math.atan2(slope, 1.0 - curvature * t),
         )
 
+    def lane_stretch(self, road_id: str, s: float, lane_id: int, offset: float = 0.0) -> float:
+        """Metres travelled along the lane line (centre + ``offset``) per metre of s.
+
+        Lanes outside a curve are longer than the reference line (1 - curvature * t), and
+        lanes that widen or shift run diagonally; divide a travelled distance by this to get ds.
+        """
+        k = self._slot(road_id)
+        _, _, _, curvature = self._lines[k].at(s)
+        layout = self._layouts[k]
+        if lane_id == 0:
+            t, slope = layout.offset(s)
+        else:
+            bounds = layout.lane_bounds(s, lane_id)
+            if bounds is None:
+                raise ScenarioError(f"road {road_id!r} has no lane {lane_id} at s={s:.2f}")
+            t, slope = bounds.t_center, bounds.slope_center
+        return math.hypot(1.0 - curvature * (t + offset), slope)
+
     # -- lanes ---------------------------------------------------------------------------------
 
     def lane_bounds(self, road_id: str, s: float, lane_id: int) -> lanes.LaneBounds | None:
@@ -306,21 +324,30 @@ class RoadNetwork:
         if not results:
             return None
         best_outside = min(result.outside for result in results)
-        close = [result for result in results if result.outside <= best_outside + 1e-6]
-        return self._coord(min(close, key=lambda result: self._rank(result, hint_road, heading)))
+        close = [
+            (result, self._coord(result))
+            for result in results
+            if result.outside <= best_outside + 1e-6
+        ]
+        return min(close, key=lambda pair: self._rank(pair[0], pair[1], hint_road, heading))[1]
 
     def _rank(
-        self, result: projection.Projection, hint_road: str | None, heading: float | None
-    ) -> tuple[float, float, float]:
-        road_id = self._order[result.road_index]
+        self,
+        result: projection.Projection,
+        coord: RoadCoord,
+        hint_road: str | None,
+        heading: float | None,
+    ) -> tuple[float, bool, float, float]:
+        """Order among roads the point is equally on: the hinted road, then roads connected to
+        it, then drivable lanes, then alignment with ``heading``, then closeness to the centre."""
         related = 0.0
-        if hint_road is not None and road_id != hint_road:
-            related = 0.5 if road_id in self._graph.connected_roads(hint_road) else 1.0
+        if hint_road is not None and coord.road_id != hint_road:
+            related = 0.5 if coord.road_id in self._graph.connected_roads(hint_road) else 1.0
         misalignment = 0.0
         if heading is not None:
-            diff = abs(math.remainder(heading - result.heading, math.pi))
-            misalignment = diff
-        return (related, misalignment, abs(result.t))
+            misalignment = abs(math.remainder(heading - result.heading, math.pi))
+        drivable = coord.lane_type in DRIVABLE_LANE_TYPES
+        return (related, not drivable, misalignment, abs(result.t))
 
     def _coord(self, found: projection.Projection) -> RoadCoord:
         road_id = self._order[found.road_index]
