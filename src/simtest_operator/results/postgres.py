@@ -19,7 +19,7 @@ import psycopg.conninfo
 import psycopg.types.json
 
 from simtest_operator.errors import ResultsError
-from simtest_operator.results import migrating, sqlstore
+from simtest_operator.results import migrating, sqlrows, sqlstore
 
 MIGRATION_LOCK = 0x73696D7465737400
 """Advisory lock key for migrations (``b"simtest\\0"`` as a big-endian integer)."""
@@ -63,7 +63,7 @@ class _PostgresTx:
     def __init__(self, connection: psycopg.Connection[Any]) -> None:
         self._connection = connection
 
-    def query(self, sql: str, params: Sequence[object] = ()) -> list[sqlstore.Row]:
+    def query(self, sql: str, params: Sequence[object] = ()) -> list[sqlrows.Row]:
         cursor = self._connection.execute(_placeholders(sql), tuple(params) if params else None)
         return list(cursor.fetchall()) if cursor.description is not None else []
 

@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from simtest_operator.errors import ResultsError
-from simtest_operator.results import migrating, sqlstore
+from simtest_operator.results import migrating, sqlrows, sqlstore
 
 DEFAULT_FILENAME = "results.sqlite"
 """File name of the store inside an output folder."""
@@ -46,7 +46,7 @@ class _SqliteTx:
     def __init__(self, connection: sqlite3.Connection) -> None:
         self._connection = connection
 
-    def query(self, sql: str, params: Sequence[object] = ()) -> list[sqlstore.Row]:
+    def query(self, sql: str, params: Sequence[object] = ()) -> list[sqlrows.Row]:
         return self._connection.execute(sql, tuple(params)).fetchall()
 
     def execute_many(self, sql: str, rows: Iterable[Sequence[object]]) -> None:

@@ -14,13 +14,12 @@ import datetime
 import math
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from types import TracebackType
-from typing import Any, Protocol, Self
+from typing import Protocol, Self
 
 from simtest_operator.errors import ResultsError
-from simtest_operator.results import comparing, migrating, records
-from simtest_operator.verdicts import ScenarioOutcome, Verdict
+from simtest_operator.results import comparing, migrating, records, sqlrows
+from simtest_operator.verdicts import ScenarioOutcome
 
-Row = tuple[Any, ...]
 Clock = Callable[[], datetime.datetime]
 
 
@@ -32,36 +31,13 @@ def utc_now() -> datetime.datetime:
 class Tx(Protocol):
     """One open transaction."""
 
-    def query(self, sql: str, params: Sequence[object] = ()) -> list[Row]:
+    def query(self, sql: str, params: Sequence[object] = ()) -> list[sqlrows.Row]:
         """Run a statement and return its rows (empty for statements without a result)."""
         ...
 
     def execute_many(self, sql: str, rows: Iterable[Sequence[object]]) -> None:
         """Run a statement once per parameter row."""
         ...
-
-
-class Codec(Protocol):
-    """Database representation of JSON values and timestamps."""
-
-    def json_in(self, value: object) -> object: ...
-
-    def json_out(self, raw: Any) -> Any: ...
-
-    def time_in(self, value: datetime.datetime) -> object: ...
-
-    def time_out(self, raw: Any) -> datetime.datetime: ...
-
-
-_OUTCOME_COLUMNS = (
-    "r.scenario_id, r.sha256, r.attempt, r.verdict, r.reason, r.simulated_seconds, "
-    "r.wall_seconds, r.artifacts, r.content_hashes, r.versions, r.recorded_at, "
-    "r.ignored_elements, s.source, s.tags, s.category, s.road"
-)
-_CAMPAIGN_COLUMNS = (
-    "run_key, name, namespace, manifest_sha256, started_at, finished_at, phase, sut_name, "
-    "sut_version, simulator_version, settings"
-)
 
 
 def require_aware(value: datetime.datetime, what: str) -> datetime.datetime:
@@ -76,7 +52,7 @@ class SqlStore(abc.ABC):
 
     dialect: migrating.Dialect
 
-    def __init__(self, *, codec: Codec, clock: Clock = utc_now) -> None:
+    def __init__(self, *, codec: sqlrows.Codec, clock: Clock = utc_now) -> None:
         self._codec = codec
         self._clock = clock
 
@@ -143,7 +119,7 @@ class SqlStore(abc.ABC):
         codec = self._codec
         with self._transaction(write=True) as tx:
             tx.query(
-                f"INSERT INTO campaigns ({_CAMPAIGN_COLUMNS}) "
+                f"INSERT INTO campaigns ({sqlrows.CAMPAIGN_COLUMNS}) "
                 "VALUES (?, ?, ?, ?, ?, NULL, '', ?, ?, ?, ?) ON CONFLICT (run_key) DO NOTHING",
                 (
                     key,
@@ -195,12 +171,17 @@ class SqlStore(abc.ABC):
             if not tx.query("SELECT 1 FROM campaigns WHERE run_key = ?", (run_key,)):
                 raise ResultsError(f"unknown campaign run {run_key!r}; call begin_campaign first")
             self._upsert_scenarios(tx, (scenario,))
-            tx.query(
-                "INSERT INTO campaign_scenarios (run_key, position, scenario_id, sha256) "
-                "SELECT ?, COALESCE(MAX(position), -1) + 1, ?, ? FROM campaign_scenarios "
-                "WHERE run_key = ? ON CONFLICT (run_key, scenario_id) DO NOTHING",
-                (run_key, scenario.scenario_id, scenario.sha256, run_key),
+            listed = tx.query(
+                "SELECT 1 FROM campaign_scenarios WHERE run_key = ? AND scenario_id = ?",
+                (run_key, scenario.scenario_id),
             )
+            if not listed:  # outside the frozen list: append it (the MAX scan is rare)
+                tx.query(
+                    "INSERT INTO campaign_scenarios (run_key, position, scenario_id, sha256) "
+                    "SELECT ?, COALESCE(MAX(position), -1) + 1, ?, ? FROM campaign_scenarios "
+                    "WHERE run_key = ? ON CONFLICT (run_key, scenario_id) DO NOTHING",
+                    (run_key, scenario.scenario_id, scenario.sha256, run_key),
+                )
             tx.query(
                 "INSERT INTO runs (run_key, scenario_id, attempt, sha256, verdict, reason, "
                 "simulated_seconds, wall_seconds, artifacts, content_hashes, versions, "
@@ -283,18 +264,18 @@ class SqlStore(abc.ABC):
         clause = f" WHERE {' AND '.join(where)}" if where else ""
         with self._transaction(write=False) as tx:
             rows = tx.query(
-                f"SELECT {_CAMPAIGN_COLUMNS} FROM campaigns{clause} "
+                f"SELECT {sqlrows.CAMPAIGN_COLUMNS} FROM campaigns{clause} "
                 "ORDER BY started_at DESC, run_key DESC LIMIT ?",
                 (*params, limit),
             )
-        return tuple(self._campaign(row) for row in rows)
+        return tuple(sqlrows.campaign(self._codec, row) for row in rows)
 
     def campaign(self, run_key: records.RunKey) -> records.CampaignRecord | None:
         with self._transaction(write=False) as tx:
             rows = tx.query(
-                f"SELECT {_CAMPAIGN_COLUMNS} FROM campaigns WHERE run_key = ?", (run_key,)
+                f"SELECT {sqlrows.CAMPAIGN_COLUMNS} FROM campaigns WHERE run_key = ?", (run_key,)
             )
-        return self._campaign(rows[0]) if rows else None
+        return sqlrows.campaign(self._codec, rows[0]) if rows else None
 
     def scenarios(self, run_key: records.RunKey) -> tuple[records.ScenarioInfo, ...]:
         with self._transaction(write=False) as tx:
@@ -305,14 +286,14 @@ class SqlStore(abc.ABC):
                 "WHERE c.run_key = ? ORDER BY c.position",
                 (run_key,),
             )
-        return tuple(self._scenario(*row) for row in rows)
+        return tuple(sqlrows.scenario(self._codec, *row) for row in rows)
 
     def outcomes(
         self, run_key: records.RunKey, *, final_only: bool = True
     ) -> tuple[records.StoredOutcome, ...]:
         with self._transaction(write=False) as tx:
             rows = tx.query(
-                f"SELECT {_OUTCOME_COLUMNS} FROM runs r JOIN scenarios s "
+                f"SELECT {sqlrows.OUTCOME_COLUMNS} FROM runs r JOIN scenarios s "
                 "ON s.scenario_id = r.scenario_id AND s.sha256 = r.sha256 WHERE r.run_key = ?",
                 (run_key,),
             )
@@ -325,7 +306,7 @@ class SqlStore(abc.ABC):
             metrics.setdefault((scenario_id, int(attempt)), {})[name] = (
                 math.nan if value is None else float(value)
             )
-        stored = [self._outcome(row, metrics) for row in rows]
+        stored = [sqlrows.outcome(self._codec, row, metrics) for row in rows]
         # Sorted here, not in SQL: PostgreSQL collations differ from SQLite's byte order.
         stored.sort(key=lambda s: (s.scenario.scenario_id, s.outcome.attempts))
         if final_only:
@@ -335,62 +316,4 @@ class SqlStore(abc.ABC):
     def compare(self, base: records.RunKey, other: records.RunKey) -> comparing.Comparison:
         return comparing.compare(
             self.outcomes(base), self.outcomes(other), base_label=base, other_label=other
-        )
-
-    # --- row conversion --------------------------------------------------------------------
-
-    def _campaign(self, row: Row) -> records.CampaignRecord:
-        codec = self._codec
-        return records.CampaignRecord(
-            run_key=records.RunKey(row[0]),
-            info=records.CampaignInfo(
-                name=row[1],
-                namespace=row[2],
-                manifest_sha256=row[3],
-                started_at=codec.time_out(row[4]),
-                sut_name=row[7],
-                sut_version=row[8],
-                simulator_version=row[9],
-                settings=codec.json_out(row[10]),
-            ),
-            finished_at=None if row[5] is None else codec.time_out(row[5]),
-            phase=row[6],
-        )
-
-    def _scenario(
-        self, scenario_id: str, sha256: str, source: str, tags: Any, category: str, road: str
-    ) -> records.ScenarioInfo:
-        return records.ScenarioInfo(
-            scenario_id=scenario_id,
-            sha256=sha256,
-            source=source,
-            tags=tuple(self._codec.json_out(tags)),
-            category=category,
-            road=road,
-        )
-
-    def _outcome(
-        self, row: Row, metrics: Mapping[tuple[str, int], Mapping[str, float]]
-    ) -> records.StoredOutcome:
-        codec = self._codec
-        (scenario_id, sha256, attempt, verdict, reason, simulated, wall, artifacts, hashes) = row[
-            :9
-        ]
-        versions, recorded_at, ignored, source, tags, category, road = row[9:]
-        return records.StoredOutcome(
-            scenario=self._scenario(scenario_id, sha256, source, tags, category, road),
-            outcome=ScenarioOutcome(
-                scenario_id=scenario_id,
-                verdict=Verdict(verdict),
-                reason=reason,
-                metrics=dict(metrics.get((scenario_id, int(attempt)), {})),
-                simulated_seconds=float(simulated),
-                wall_seconds=float(wall),
-                attempts=int(attempt),
-                artifacts=codec.json_out(artifacts),
-                ignored_elements=tuple(codec.json_out(ignored)),
-                versions=codec.json_out(versions),
-            ),
-            content_hashes=codec.json_out(hashes),
-            recorded_at=codec.time_out(recorded_at),
         )
