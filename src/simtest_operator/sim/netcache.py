@@ -21,7 +21,7 @@ import time
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
-import sumo  # type: ignore[import-untyped]  # no stubs; lead: add "sumo.*" to mypy overrides
+import sumo
 import sumolib
 
 from simtest_operator import opendrive
