@@ -1,8 +1,8 @@
 """Actions: what a plan asks the API client to do. Plain data, applied by ``controlling``.
 
 Every action is idempotent against the API (creates of deterministic names tolerate
-``AlreadyExists``, deletes tolerate ``NotFound``), so applying a plan twice — after a crash, or
-from a stale cache — changes nothing the second time.
+``AlreadyExists``, deletes tolerate ``NotFound``), so applying a plan twice — after a crash, or from
+a stale cache — changes nothing the second time.
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ class Kind(enum.StrEnum):
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
 class Create:
-    """Create an object (``AlreadyExists`` counts as done)."""
+    """Create an object (``AlreadyExistsError`` counts as done)."""
 
     kind: Kind
     body: Mapping[str, Any]
@@ -47,12 +47,14 @@ class Provision:
     environment: str
     pod: Mapping[str, Any]
     status: Mapping[str, Any]
+    scenario_ids: tuple[str, ...] = ()
+    attempt: int = 1
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
 class PatchStatus:
     """Merge-patch the status subresource; with ``resource_version`` the patch is conditional
-    (``409 Conflict`` when someone else wrote in between: re-plan from fresh state)."""
+    (``409 ConflictError`` when someone else wrote in between: re-plan from fresh state)."""
 
     kind: Kind
     name: str
@@ -64,7 +66,7 @@ class PatchStatus:
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
 class Delete:
-    """Delete an object (``NotFound`` counts as done)."""
+    """Delete an object (``NotFoundError`` counts as done)."""
 
     kind: Kind
     name: str

@@ -261,8 +261,11 @@ class _Step:
         try:
             rendered = self.render(request)
         except RenderError as exc:
-            status = environments.render_failed_status(
-                env, f"cannot render the pod: {exc}", now=self.now
+            status = environments.failed_status(
+                env.scenario_ids,
+                attempt=env.attempt,
+                reason=f"cannot render the pod: {exc}",
+                now=self.now,
             )
             self.actions.append(PatchStatus(kind=Kind.ENVIRONMENT, name=env.name, patch=status))
             return
@@ -273,6 +276,8 @@ class _Step:
                 status=environments.provisioned_status(
                     env, pod=env.name, rendered_hash=rendered.content_hash, now=self.now
                 ),
+                scenario_ids=env.scenario_ids,
+                attempt=env.attempt,
             )
         )
 

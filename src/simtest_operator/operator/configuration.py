@@ -56,7 +56,9 @@ class OperatorConfig:
     """Port of ``/metrics``, ``/healthz`` and ``/readyz``; 0 disables the server."""
 
     @classmethod
-    def from_env(cls, env: Mapping[str, str] | None = None, **overrides: object) -> OperatorConfig:
+    def from_env(
+        cls, env: Mapping[str, str] | None = None, overrides: Mapping[str, object] | None = None
+    ) -> OperatorConfig:
         """Defaults, then ``SIMTEST_OPERATOR_*`` variables, then ``overrides`` (CLI flags)."""
         env = os.environ if env is None else env
         values: dict[str, object] = {}
@@ -79,5 +81,5 @@ class OperatorConfig:
         claim = env.get(ENV_PREFIX + "SCENARIO_CLAIM")
         if claim:
             values["scenario_volume"] = PvcVolume(claim_name=claim, read_only=True)
-        values.update({k: v for k, v in overrides.items() if v is not None})
+        values.update({k: v for k, v in (overrides or {}).items() if v is not None})
         return cls(**values)  # type: ignore[arg-type]

@@ -14,7 +14,7 @@ from __future__ import annotations
 import dataclasses
 import datetime
 import enum
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 from simtest_operator.operator import conditions
@@ -405,15 +405,19 @@ def provisioned_status(
     }
 
 
-def render_failed_status(
-    env: EnvironmentView, reason: str, *, now: datetime.datetime
+def failed_status(
+    scenario_ids: Sequence[str], *, attempt: int, reason: str, now: datetime.datetime
 ) -> dict[str, Any]:
-    """Status of an environment whose pod cannot be rendered (an Error for each scenario)."""
-    records = _fail(env, Verdict.ERROR, reason)
+    """Status of an environment whose pod cannot be made (render failure, pod refused by the
+    API server): an Error for each of its scenarios."""
+    records = [
+        ResultRecord(id=i, verdict=Verdict.ERROR, reason=clip(reason), attempts=attempt)
+        for i in scenario_ids
+    ]
     return {
         "phase": Phase.FINISHED.value,
         "observedGeneration": 1,
-        "scenario": env.scenarios[-1].id,
+        "scenario": scenario_ids[-1],
         "verdict": Verdict.ERROR.value,
         "reason": clip(reason),
         "results": [r.to_wire() for r in records],

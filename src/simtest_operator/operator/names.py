@@ -1,7 +1,7 @@
 """Names and labels of the objects a campaign owns, derived from ids — never random.
 
 Deterministic names make every create idempotent (a repeated create after a crash or a stale
-cache is a harmless ``409 AlreadyExists``) and let a restarted operator find everything again.
+cache is a harmless ``409 AlreadyExistsError``) and let a restarted operator find everything again.
 
 ::
 

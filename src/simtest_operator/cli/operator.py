@@ -1,0 +1,78 @@
+"""``simtest operator``: run the Kubernetes operator in the foreground.
+
+The operator package sits beside ``cli`` in the layer map and neither imports the other, so the
+command loads the operator's entry point by module name — the same way ``kopf run -m`` does.
+"""
+
+from __future__ import annotations
+
+import importlib
+from pathlib import Path
+
+import click
+
+
+@click.command("operator")
+@click.option(
+    "--namespace",
+    "-n",
+    "namespaces",
+    multiple=True,
+    help="Namespace to watch (repeatable); without it the whole cluster is watched.",
+)
+@click.option(
+    "--kubeconfig",
+    type=click.Path(exists=True, dir_okay=False, path_type=Path),
+    help="Kubeconfig to use; default: in-cluster service account, else $KUBECONFIG.",
+)
+@click.option(
+    "--templates",
+    type=click.Path(exists=True, file_okay=False, path_type=Path),
+    help="Environment templates root (default: ./helm-templates or $SIMTEST_OPERATOR_TEMPLATES).",
+)
+@click.option(
+    "--sources",
+    type=click.Path(exists=True, file_okay=False, path_type=Path),
+    help="Folder that relative `path` scenario sources are resolved against.",
+)
+@click.option(
+    "--cache",
+    type=click.Path(file_okay=False, path_type=Path),
+    help="Cache folder for resolved sources (downloads, git mirrors).",
+)
+@click.option(
+    "--metrics-port",
+    type=int,
+    help="Port of /metrics, /healthz and /readyz (0 disables; default 8080).",
+)
+@click.option(
+    "--keep-environments",
+    is_flag=True,
+    default=None,
+    help="Keep finished SimEnvironments instead of deleting them once recorded.",
+)
+@click.option("--verbose", "-v", is_flag=True, help="Log every reconcile step.")
+def operator(
+    namespaces: tuple[str, ...],
+    kubeconfig: Path | None,
+    templates: Path | None,
+    sources: Path | None,
+    cache: Path | None,
+    metrics_port: int | None,
+    keep_environments: bool | None,
+    verbose: bool,
+) -> None:
+    """Run the simtest operator: TestCampaigns in, simulator pods and verdicts out."""
+    running = importlib.import_module("simtest_operator.operator.running")
+    running.run(
+        namespaces=namespaces,
+        kubeconfig=kubeconfig,
+        options={
+            "templates_dir": templates,
+            "sources_dir": sources,
+            "cache_dir": cache,
+            "metrics_port": metrics_port,
+            "keep_finished_environments": keep_environments,
+        },
+        verbose=verbose,
+    )

@@ -1,0 +1,209 @@
+"""Applying a plan through the API client: concurrent, idempotent, with expectations.
+
+Actions of one plan are independent of each other (the planner only creates environments in
+batches it has seen, and only deletes pods of environments whose status it has seen), so they are
+sent concurrently. Each successful write yields the expectation the next planning step waits
+for. A ``ConflictError`` on a conditional status patch means our view was stale: nothing is written
+and the loop plans again from fresh state. Events are rate limited per object.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import dataclasses
+import datetime
+import logging
+from collections.abc import Callable
+
+from simtest_operator.errors import ClusterError
+from simtest_operator.operator import bodies, environments, names
+from simtest_operator.operator.actions import (
+    Action,
+    Create,
+    Delete,
+    Emit,
+    Kind,
+    PatchStatus,
+    Plan,
+    Provision,
+)
+from simtest_operator.operator.client import AlreadyExistsError, ApiError, Client, ConflictError
+from simtest_operator.operator.expectations import Expectation, Want
+from simtest_operator.operator.metrics import Metrics
+
+log = logging.getLogger(__name__)
+
+KIND_NAMES = {
+    Kind.CAMPAIGN: "TestCampaign",
+    Kind.BATCH: "ScenarioBatch",
+    Kind.ENVIRONMENT: "SimEnvironment",
+}
+
+
+@dataclasses.dataclass(slots=True)
+class Applied:
+    """What applying one plan produced."""
+
+    expectations: list[Expectation] = dataclasses.field(default_factory=list)
+    conflict: bool = False
+    failures: int = 0
+    campaign_written: bool = False
+
+
+@dataclasses.dataclass(slots=True)
+class Applier:
+    """Applies plans of one campaign."""
+
+    client: Client
+    namespace: str
+    campaign: str
+    campaign_uid: Callable[[], str]
+    metrics: Metrics
+    event_interval: float
+    parallel: int = 16
+    _last_event: dict[tuple[Kind, str], datetime.datetime] = dataclasses.field(default_factory=dict)
+
+    async def apply(self, plan: Plan, *, now: datetime.datetime) -> Applied:
+        """Send every action; never raises for API errors (they are counted and logged)."""
+        applied = Applied()
+        gate = asyncio.Semaphore(self.parallel)
+
+        async def one(action: Action) -> None:
+            async with gate:
+                try:
+                    await self._one(action, applied, now=now)
+                except ConflictError:
+                    applied.conflict = True
+                except ClusterError as exc:
+                    applied.failures += 1
+                    log.warning(
+                        "%s/%s: %s failed: %s",
+                        self.namespace,
+                        self.campaign,
+                        type(action).__name__,
+                        exc,
+                    )
+
+        await asyncio.gather(*(one(a) for a in plan.actions))
+        return applied
+
+    async def _one(self, action: Action, applied: Applied, *, now: datetime.datetime) -> None:
+        if isinstance(action, Create):
+            with contextlib.suppress(AlreadyExistsError):
+                await self.client.create(action.kind, self.namespace, action.body)
+            applied.expectations.append(
+                Expectation(kind=action.kind, name=action.name, want=Want.PRESENT)
+            )
+        elif isinstance(action, Provision):
+            await self._provision(action, applied, now=now)
+        elif isinstance(action, PatchStatus):
+            reply = await self.client.patch_status(
+                action.kind,
+                self.namespace,
+                action.name,
+                action.patch,
+                resource_version=action.resource_version,
+            )
+            version = str((reply.get("metadata") or {}).get("resourceVersion", ""))
+            applied.expectations.append(
+                Expectation(kind=action.kind, name=action.name, want=Want.VERSION, version=version)
+            )
+            if action.kind is Kind.CAMPAIGN:
+                applied.campaign_written = True
+            for record in action.folded:
+                self.metrics.scenarios.labels(
+                    namespace=self.namespace, campaign=self.campaign, verdict=record.verdict.value
+                ).inc()
+        elif isinstance(action, Delete):
+            await self.client.delete(
+                action.kind,
+                self.namespace,
+                action.name,
+                uid=action.uid,
+                grace_seconds=action.grace_seconds,
+            )
+            applied.expectations.append(
+                Expectation(kind=action.kind, name=action.name, want=Want.ABSENT)
+            )
+        else:
+            await self._emit(action, now=now)
+
+    async def _provision(
+        self, action: Provision, applied: Applied, *, now: datetime.datetime
+    ) -> None:
+        for attempt in range(2):
+            try:
+                await self.client.create(Kind.POD, self.namespace, action.pod)
+                break
+            except AlreadyExistsError:
+                break
+            except ApiError as exc:
+                if attempt == 0 and exc.status == 403 and "serviceaccount" in str(exc).lower():
+                    await self._ensure_service_account()
+                    continue
+                if exc.status in (400, 422):
+                    await self._rejected(action, exc, now=now)
+                    return
+                raise
+        reply = await self.client.patch_status(
+            Kind.ENVIRONMENT, self.namespace, action.environment, action.status
+        )
+        applied.expectations.append(
+            Expectation(kind=Kind.POD, name=action.environment, want=Want.PRESENT)
+        )
+        applied.expectations.append(
+            Expectation(
+                kind=Kind.ENVIRONMENT,
+                name=action.environment,
+                want=Want.VERSION,
+                version=str((reply.get("metadata") or {}).get("resourceVersion", "")),
+            )
+        )
+
+    async def _rejected(self, action: Provision, exc: ApiError, *, now: datetime.datetime) -> None:
+        """The API server refuses the pod (admission, invalid spec): every attempt would be
+        refused the same way, so the environment ends as Error with the server's words."""
+        status = environments.failed_status(
+            action.scenario_ids,
+            attempt=action.attempt,
+            reason=f"the API server rejected the simulator pod: {exc}",
+            now=now,
+        )
+        await self.client.patch_status(Kind.ENVIRONMENT, self.namespace, action.environment, status)
+
+    async def _ensure_service_account(self) -> None:
+        body = bodies.service_account(
+            campaign=self.campaign, namespace=self.namespace, campaign_uid=self.campaign_uid()
+        )
+        try:
+            await self.client.create(Kind.SERVICE_ACCOUNT, self.namespace, body)
+        except AlreadyExistsError:
+            return
+
+    async def _emit(self, action: Emit, *, now: datetime.datetime) -> None:
+        key = (action.kind, action.name)
+        last = self._last_event.get(key)
+        if (
+            not action.terminal
+            and last is not None
+            and (now - last).total_seconds() < self.event_interval
+        ):
+            return
+        self._last_event[key] = now
+        involved = {
+            "apiVersion": "simtest.dev/v1alpha1",
+            "kind": KIND_NAMES.get(action.kind, str(action.kind)),
+            "name": action.name,
+            "namespace": self.namespace,
+            "uid": action.uid,
+        }
+        body = bodies.event(
+            involved=involved,
+            reason=action.reason,
+            message=action.message,
+            warning=action.warning,
+            now=now,
+            component=names.MANAGED_BY,
+        )
+        await self.client.create("events", self.namespace, body)

@@ -1,0 +1,47 @@
+"""Running the operator: configure kopf, register the handlers, hand kopf our memo.
+
+``simtest operator`` calls :func:`run`; ``kopf run -m simtest_operator.operator.handlers`` works
+too (configuration then comes from ``SIMTEST_OPERATOR_*`` variables and the credentials from
+``$KUBECONFIG`` or the in-cluster service account).
+"""
+
+from __future__ import annotations
+
+import importlib
+import logging
+import threading
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import kopf
+
+from simtest_operator.operator.client import load_credentials
+from simtest_operator.operator.configuration import OperatorConfig
+
+
+def run(
+    *,
+    namespaces: Sequence[str] = (),
+    kubeconfig: Path | None = None,
+    options: Mapping[str, object] | None = None,
+    verbose: bool = False,
+    stop_flag: threading.Event | None = None,
+    ready_flag: threading.Event | None = None,
+) -> None:
+    """Run until stopped (SIGINT/SIGTERM or ``stop_flag``); watches ``namespaces`` or, when
+    empty, the whole cluster."""
+    importlib.import_module("simtest_operator.operator.handlers")  # registers the handlers
+    kopf.configure(verbose=verbose, log_format=kopf.LogFormat.PLAIN)
+    logging.getLogger("aiohttp.access").setLevel(logging.WARNING)
+    memo = kopf.Memo(
+        config=OperatorConfig.from_env(overrides=options),
+        credentials=load_credentials(kubeconfig),
+    )
+    kopf.run(
+        clusterwide=not namespaces,
+        namespaces=list(namespaces),
+        memo=memo,
+        standalone=True,
+        stop_flag=stop_flag,
+        ready_flag=ready_flag,
+    )
