@@ -10,6 +10,7 @@ import click
 
 from simtest_operator import __version__
 from simtest_operator.cli import crds, devcluster, scenario
+from simtest_operator.cli import operator as operator_command
 from simtest_operator.cli import report as report_command
 
 
@@ -23,6 +24,7 @@ cli.add_command(crds.crds)
 cli.add_command(scenario.scenario)
 cli.add_command(devcluster.dev_cluster)
 cli.add_command(report_command.report)
+cli.add_command(operator_command.operator)
 
 
 def main() -> None:
