@@ -84,6 +84,16 @@ class Dispatcher:
         """A scenario of ``batch`` finished (for good; retries keep it open)."""
         self._open[batch] -= 1
 
+    def drain(self) -> list[tuple[int, PinnedScenario]]:
+        """Everything not handed out yet, ignoring the policy (for marking it as not run)."""
+        rest: list[tuple[int, PinnedScenario]] = []
+        while self._batch < len(self.batches):
+            batch = self.batches[self._batch]
+            rest.extend((batch.index, s) for s in batch.scenarios[self._offset :])
+            self._batch += 1
+            self._offset = 0
+        return rest
+
     @property
     def exhausted(self) -> bool:
         """Whether every scenario has been handed out."""

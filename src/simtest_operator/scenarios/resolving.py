@@ -57,6 +57,22 @@ class ResolvedSource:
     uris: Mapping[str, str]
     """File path -> source URI."""
 
+    def uri_for(self, path: Path) -> str:
+        """The source URI of ``path``, a file of this source (e.g. the scenario a distribution
+        names); SourceError when it lies outside the source and cannot be pinned."""
+        absolute = path.resolve()
+        root = self.root.resolve()
+        if absolute.is_relative_to(root):
+            found = self.uris.get(absolute.relative_to(root).as_posix())
+            if found is not None:
+                return found
+        if self.info.kind == "path" and absolute.is_file():
+            return uris.file_uri(absolute)
+        raise SourceError(
+            f"{path} is not a file of the {self.info.kind} source {self.info.location}; "
+            "a referenced scenario must come from the same source"
+        )
+
 
 def resolve(source: SourceSpec, ctx: FetchContext) -> ResolvedSource:
     """Materialise ``source`` and list its files."""

@@ -1,0 +1,133 @@
+"""Converters from the wire schema (pydantic, ``v1alpha1``) to the domain values the rest uses.
+
+The versioned, serialised shape stays in ``api``; every converter here is the one place a wire
+field turns into a domain field (kwok's ``internalversion/conversion.go``). A future ``v1beta1``
+adds converters, not a copied domain.
+"""
+
+from __future__ import annotations
+
+from simtest_operator.api import v1alpha1
+from simtest_operator.api.v1alpha1 import environment, evaluation, sources
+from simtest_operator.evaluation import DEFAULT_TIME_LIMIT, Criteria
+from simtest_operator.scenarios import batching, globbing, specs
+from simtest_operator.scenarios.pinned import PinnedScenario
+from simtest_operator.settings import SimulationSettings
+from simtest_operator.sim.sut import SutConfig
+
+
+def selection(spec: sources.ScenarioSelection) -> specs.Selection:
+    """The campaign's scenario selection."""
+    selector = spec.selector
+    return specs.Selection(
+        sources=tuple(source(entry) for entry in spec.sources),
+        include=tuple(spec.include),
+        exclude=tuple(spec.exclude),
+        selector=specs.Selector(
+            tags=tuple(selector.match_tags) if selector else (),
+            labels=dict(selector.match_labels) if selector else {},
+        ),
+        overrides=dict(spec.overrides),
+    )
+
+
+def source(spec: sources.ScenarioSource) -> specs.SourceSpec:
+    """One source entry (the wire model guarantees exactly one kind is set)."""
+    if spec.path is not None:
+        return specs.PathSource(path=spec.path)
+    if spec.git is not None:
+        return specs.GitSource(url=spec.git.url, revision=spec.git.revision, path=spec.git.path)
+    if spec.http is not None:
+        return specs.HttpSource(url=spec.http.url, sha256=spec.http.sha256)
+    if spec.graphql is not None:
+        ref = spec.graphql.secret_ref
+        return specs.GraphqlSource(
+            endpoint=spec.graphql.endpoint,
+            query=spec.graphql.query,
+            variables=dict(spec.graphql.variables),
+            secret=specs.SecretRef(name=ref.name, key=ref.key) if ref else None,
+        )
+    assert spec.config_map is not None
+    return specs.ConfigMapSource(name=spec.config_map.name, keys=tuple(spec.config_map.keys))
+
+
+def execution(spec: v1alpha1.ExecutionSpec) -> batching.ExecutionPolicy:
+    """Batching, parallelism, time limit and retries."""
+    return batching.ExecutionPolicy(
+        batch_size=spec.batch_size,
+        policy=batching.StartPolicy.BARRIER if spec.batch_barrier else batching.StartPolicy.WINDOW,
+        max_parallel=spec.max_parallel,
+        timeout_seconds=float(spec.timeout_seconds),
+        retries=spec.retries,
+    )
+
+
+def criteria(spec: evaluation.EvaluationSpec, scenario_id: str) -> Criteria:
+    """The criteria for one scenario: campaign-wide, then every matching override in order."""
+    base = spec.criteria
+    values: dict[str, object] = {
+        "collision": base.collision is evaluation.CollisionPolicy.FORBIDDEN,
+        "min_ttc": base.min_ttc,
+        "min_thw": base.min_thw,
+        "max_decel": base.max_deceleration,
+        "off_road": base.off_road,
+        "time_limit": base.complete_within or DEFAULT_TIME_LIMIT,
+    }
+    for override in spec.overrides:
+        if not globbing.matches(scenario_id, override.scenarios):
+            continue
+        patch = override.criteria
+        if patch.collision is not None:
+            values["collision"] = patch.collision is evaluation.CollisionPolicy.FORBIDDEN
+        for wire, domain in (
+            ("min_ttc", "min_ttc"),
+            ("min_thw", "min_thw"),
+            ("max_deceleration", "max_decel"),
+            ("off_road", "off_road"),
+            ("complete_within", "time_limit"),
+        ):
+            value = getattr(patch, wire)
+            if value is not None:
+                values[domain] = value
+    return Criteria(**values)  # type: ignore[arg-type]
+
+
+def sut(spec: environment.SutConfig) -> SutConfig:
+    """The stand-in system under test (identity and driver-model parameters)."""
+    model = spec.driver_model
+    return SutConfig(
+        name=spec.name,
+        version=spec.version,
+        desired_speed=model.desired_speed,
+        time_headway=model.time_headway,
+        min_gap=model.min_gap,
+        max_acceleration=model.max_acceleration,
+        comfortable_deceleration=model.comfortable_deceleration,
+        max_deceleration=model.max_deceleration,
+        acc=model.acc,
+        lane_keeping=model.lane_keeping,
+        aeb=model.aeb.enabled,
+        aeb_ttc_threshold=model.aeb.ttc_threshold,
+        aeb_deceleration=model.aeb.deceleration,
+    )
+
+
+def simulation(spec: environment.SimulatorSettings) -> SimulationSettings:
+    """Step length, seed and recording rate of the simulator stand-in."""
+    return SimulationSettings(
+        step_length=spec.step_length, seed=spec.seed, record_hz=spec.record_hz
+    )
+
+
+def pinned_to_wire(pinned: PinnedScenario) -> v1alpha1.FrozenScenario:
+    """A frozen-list entry as it appears in ScenarioBatch and SimEnvironment specs."""
+    return v1alpha1.FrozenScenario(
+        id=pinned.id, source=pinned.source, sha256=pinned.sha256, overrides=dict(pinned.overrides)
+    )
+
+
+def pinned_from_wire(wire: v1alpha1.FrozenScenario) -> PinnedScenario:
+    """Inverse of :func:`pinned_to_wire`."""
+    return PinnedScenario(
+        id=wire.id, source=wire.source, sha256=wire.sha256, overrides=dict(wire.overrides)
+    )

@@ -1,0 +1,36 @@
+"""The real engine behind the executor's task interface.
+
+:func:`execute` adapts a :class:`~simtest_operator.runner.tasks.ScenarioTask` to the engine's
+:func:`~simtest_operator.runner.execution.run_scenario` (simulation, online evaluation and
+recording in this process). The engine gets a wall-clock limit a little below the executor's, so
+a slow run normally ends as a clean ``Timeout`` with its metrics and a closed recording; the
+executor's kill is the backstop for a simulator that stops responding altogether.
+"""
+
+from __future__ import annotations
+
+from simtest_operator.runner import execution
+from simtest_operator.runner.tasks import ScenarioTask
+from simtest_operator.verdicts import ScenarioOutcome
+
+
+def soft_limit(timeout: float) -> float:
+    """The engine's own wall-clock limit for an executor timeout of ``timeout`` seconds."""
+    return max(timeout * 0.9, timeout - 2.0)
+
+
+def execute(task: ScenarioTask) -> ScenarioOutcome:
+    """Run one attempt of a scenario on the SUMO stand-in (module-level: workers import it)."""
+    request = execution.RunRequest(
+        scenario=task.scenario_path,
+        nets_dir=task.settings.cache.nets,
+        scenario_id=task.scenario_id,
+        overrides=dict(task.overrides),
+        sut=task.sut,
+        criteria=task.criteria,
+        simulation=task.settings.simulation,
+        output_dir=task.out_dir,
+        record=task.record,
+        wall_clock_limit=soft_limit(task.timeout_seconds),
+    )
+    return execution.run_scenario(request).outcome

@@ -1,0 +1,157 @@
+"""Resolving a campaign: sources, globs, headers, selector, distributions -> frozen list.
+
+This composes the domain layer (``scenarios``: fetching, globbing, pinning) with the OpenSCENARIO
+layer (header reading, distribution expansion), which ``scenarios`` may not import. The operator
+and ``simtest run`` both freeze through :func:`freeze`, so a campaign selects the same scenarios
+on a laptop and in a cluster.
+
+Rules (documented in docs/local-run.md):
+
+* catalog files are never scenarios and are left out (counted in the notes);
+* a file whose header cannot be read stays in the list: running it gives ``Invalid`` with the
+  reason, which is more useful than a silently missing test;
+* a ParameterValueDistribution expands into one run per parameter assignment, with id
+  ``<distribution path>#<k>-<hash>`` and the distribution's values over the campaign overrides;
+* ids are paths inside their source; a clash across sources gets the suffix ``~<source number>``.
+"""
+
+from __future__ import annotations
+
+import collections
+import dataclasses
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+from simtest_operator import openscenario
+from simtest_operator.errors import ScenarioError
+from simtest_operator.openscenario import headers
+from simtest_operator.scenarios import resolving, selecting
+from simtest_operator.scenarios.pinned import FrozenList, PinnedScenario, sha256_hex
+from simtest_operator.scenarios.specs import Selection
+
+Expander = Callable[[Path, int], Sequence[openscenario.ConcreteRun]]
+"""Expands a distribution file (with a seed for stochastic ones) into concrete runs."""
+
+
+def _expand(path: Path, seed: int) -> Sequence[openscenario.ConcreteRun]:
+    return openscenario.expand_distribution(path, seed=seed)
+
+
+@dataclasses.dataclass(slots=True)
+class _Collector:
+    overrides: dict[str, str]
+    entries: list[PinnedScenario] = dataclasses.field(default_factory=list)
+    ids: set[str] = dataclasses.field(default_factory=set)
+    skipped: collections.Counter[str] = dataclasses.field(default_factory=collections.Counter)
+    notes: list[str] = dataclasses.field(default_factory=list)
+
+    def add(
+        self,
+        ident: str,
+        source_number: int,
+        *,
+        uri: str,
+        path: Path,
+        overrides: dict[str, str] | None = None,
+    ) -> None:
+        if ident in self.ids:
+            ident = f"{ident}~{source_number}"
+        self.ids.add(ident)
+        self.entries.append(
+            PinnedScenario(
+                id=ident,
+                source=uri,
+                sha256=sha256_hex(path.read_bytes()),
+                overrides={**self.overrides, **(overrides or {})},
+            )
+        )
+
+
+def freeze(
+    selection: Selection,
+    ctx: resolving.FetchContext,
+    *,
+    campaign: str,
+    seed: int = 42,
+    expand: Expander = _expand,
+) -> FrozenList:
+    """Resolve every source of ``selection`` and return the campaign's frozen list."""
+    collector = _Collector(overrides=dict(selection.overrides))
+    infos = []
+    for number, spec in enumerate(selection.sources, start=1):
+        resolved = resolving.resolve(spec, ctx)
+        infos.append(resolved.info)
+        kept = selecting.by_globs(
+            resolved.files, include=selection.include, exclude=selection.exclude
+        )
+        for rel in kept:
+            _one(resolved, rel, number, selection, collector, seed=seed, expand=expand)
+    notes = list(collector.notes)
+    for reason, count in sorted(collector.skipped.items()):
+        notes.append(f"left out {count} file(s): {reason}")
+    return FrozenList(
+        campaign=campaign,
+        scenarios=tuple(collector.entries),
+        sources=tuple(infos),
+        notes=tuple(notes),
+    )
+
+
+def _one(
+    resolved: resolving.ResolvedSource,
+    rel: str,
+    number: int,
+    selection: Selection,
+    collector: _Collector,
+    *,
+    seed: int,
+    expand: Expander,
+) -> None:
+    path = resolved.root / rel
+    uri = resolved.uris[rel]
+    try:
+        header: headers.FileHeader | None = headers.read_header(path)
+    except ScenarioError as exc:
+        header = None
+        collector.notes.append(f"{rel}: header unreadable, kept (it will end as Invalid): {exc}")
+    if header is not None:
+        if header.kind is headers.DocumentKind.CATALOG:
+            collector.skipped["catalog files"] += 1
+            return
+        if not selection.selector.empty and not selecting.matches(
+            selection.selector, header.properties
+        ):
+            collector.skipped["not matching the selector"] += 1
+            return
+        if header.kind is headers.DocumentKind.DISTRIBUTION:
+            _distribution(resolved, rel, number, collector, seed=seed, expand=expand)
+            return
+    collector.add(rel, number, uri=uri, path=path)
+
+
+def _distribution(
+    resolved: resolving.ResolvedSource,
+    rel: str,
+    number: int,
+    collector: _Collector,
+    *,
+    seed: int,
+    expand: Expander,
+) -> None:
+    path = resolved.root / rel
+    try:
+        runs = expand(path, seed)
+    except ScenarioError as exc:
+        # Keep the distribution itself: running it reports Invalid with this reason.
+        collector.notes.append(f"{rel}: distribution cannot be expanded, kept as Invalid: {exc}")
+        collector.add(rel, number, uri=resolved.uris[rel], path=path)
+        return
+    for run in runs:
+        suffix = run.id.split("#", 1)[1] if "#" in run.id else run.id
+        collector.add(
+            f"{rel}#{suffix}",
+            number,
+            uri=resolved.uri_for(run.scenario),
+            path=run.scenario,
+            overrides=dict(run.overrides),
+        )

@@ -1,0 +1,68 @@
+"""One attempt at one scenario, as handed to a worker process, and the function that runs it.
+
+A task is a plain, picklable value: everything a worker needs (the local scenario file, parameter
+overrides, the system under test, the criteria, the simulator settings, where to write) and
+nothing it would have to look up. The function that executes it is passed by reference, so the
+same executor drives the real engine and the documented test double in :mod:`fakes`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable, Mapping
+from pathlib import Path
+
+from simtest_operator.evaluation import Criteria
+from simtest_operator.settings import Settings
+from simtest_operator.sim.sut import SutConfig
+from simtest_operator.verdicts import ScenarioOutcome
+
+RECORDING = "recording.mcap"
+"""File name of the omega-prime recording inside a scenario's output folder."""
+LOG = "log.txt"
+"""File name of the log (every attempt appended, with a header line per attempt)."""
+RESULT = "result.json"
+"""File name of the full result."""
+ENGINE_LOG = "run.log"
+"""File name of the engine's own summary log (written by the real engine only)."""
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class ScenarioTask:
+    """What a worker needs to run one attempt."""
+
+    scenario_id: str
+    scenario_path: Path
+    """Local file, already located and sha256-verified."""
+    overrides: Mapping[str, str] = dataclasses.field(default_factory=dict)
+    """OpenSCENARIO global parameter values."""
+    out_dir: Path
+    """The scenario's output folder (recording, log and result go here)."""
+    attempt: int = 1
+    sut: SutConfig = dataclasses.field(default_factory=SutConfig)
+    criteria: Criteria = dataclasses.field(default_factory=Criteria)
+    settings: Settings
+    """Cache folders and simulation settings (step, seed, recording rate) of the campaign."""
+    record: bool = True
+    """Write an omega-prime recording."""
+    timeout_seconds: float = 60.0
+    """Wall-clock limit the executor enforces; informative for the engine."""
+
+    @property
+    def recording_path(self) -> Path:
+        """Where the recording goes."""
+        return self.out_dir / RECORDING
+
+    @property
+    def log_path(self) -> Path:
+        """Where the attempt's log lines go."""
+        return self.out_dir / LOG
+
+
+ExecuteFn = Callable[[ScenarioTask], ScenarioOutcome]
+"""Runs one task in the current process and returns its outcome. Must be a module-level function
+(workers are spawned and receive it by reference). Raising is allowed: ScenarioError becomes
+Invalid, anything else Error."""
+
+ARTIFACT_FILES: Mapping[str, str] = {"recording": RECORDING, "log": LOG, "engineLog": ENGINE_LOG}
+"""Artifacts a scenario folder may hold besides its result, by name in ``outcome.artifacts``."""
