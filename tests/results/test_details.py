@@ -13,6 +13,7 @@ import dataclasses
 import json
 import math
 from pathlib import Path
+from typing import NamedTuple
 
 from simtest_operator import results
 from simtest_operator.errors import ResultsError
@@ -102,3 +103,18 @@ def test_recording_supplies_trajectories_unless_the_result_file_has_them(tmp_pat
     assert loaded.trajectories[0].points == ((0.0, 0.0, 0.0),)
     assert len(calls) == 1
     assert dataclasses.replace(loaded, notes=()) == loaded
+
+
+def test_trajectories_from_recording_samples() -> None:
+    class Sample(NamedTuple):
+        t: float
+        x: float
+        y: float
+
+    samples = {7: [Sample(0, 5, 5), Sample(1, 6, 5)], 3: [Sample(0, 0, 0), Sample(1, 1, 0)]}
+    unnamed = details.from_samples(samples)
+    assert [(t.entity, t.is_ego) for t in unnamed] == [("ego", True), ("object 7", False)]
+    assert unnamed[1].points == ((0, 5, 5), (1, 6, 5))
+    named = details.from_samples(samples, names={"entity.7": "cutter", "entity.3": "hero"})
+    assert [(t.entity, t.is_ego) for t in named] == [("hero", True), ("cutter", False)]
+    assert details.from_samples({}) == []

@@ -21,28 +21,12 @@ if TYPE_CHECKING:
 
 
 def read_recording(path: Path) -> Sequence[details.Trajectory]:
-    """Trajectories of every object in an omega-prime recording, for the developer view.
-
-    Objects are named from the recording's ``simtest.run`` metadata (``entity.<id>`` keys) when it
-    has them, else ``ego`` / ``object <id>``; the ego is the OSI host vehicle, by the recorder's
-    convention the smallest id.
-    """
+    """Trajectories of every object in an omega-prime recording, for the developer view."""
     from simtest_operator import recording
     from simtest_operator.results import details
 
-    samples = recording.read_trajectories(path)
     names = recording.read_metadata(path).get("simtest.run", {})
-    ego = min(samples, default=None)
-    return [
-        details.Trajectory(
-            entity=names.get(
-                f"entity.{object_id}", "ego" if object_id == ego else f"object {object_id}"
-            ),
-            points=details.thin([(s.t, s.x, s.y) for s in track]),
-            is_ego=object_id == ego,
-        )
-        for object_id, track in sorted(samples.items())
-    ]
+    return details.from_samples(recording.read_trajectories(path), names=names)
 
 
 @click.command()

@@ -23,7 +23,7 @@ import math
 import urllib.parse
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
 from simtest_operator.errors import ResultsError, SimtestError
 from simtest_operator.results import records
@@ -62,6 +62,45 @@ class ScenarioDetails:
 
 TrajectoryReader = Callable[[Path], Sequence[Trajectory]]
 """Reads a recording into trajectories; raises a :class:`SimtestError` if it cannot."""
+
+
+class Sample(Protocol):
+    """What a recording reader yields per object and instant (``recording.Sample`` fits)."""
+
+    @property
+    def t(self) -> float: ...
+
+    @property
+    def x(self) -> float: ...
+
+    @property
+    def y(self) -> float: ...
+
+
+def from_samples(
+    samples: Mapping[int, Sequence[Sample]], *, names: Mapping[str, str] | None = None
+) -> list[Trajectory]:
+    """Trajectories from a recording reader's ``{object id: samples}``.
+
+    Objects are named from ``entity.<id>`` keys of ``names`` (the recording's ``simtest.run``
+    metadata) when present, else ``ego`` / ``object <id>``; the ego is the OSI host vehicle, by
+    the recorder's convention the smallest id. Wire it up as::
+
+        lambda path: details.from_samples(recording.read_trajectories(path),
+                                          names=recording.read_metadata(path).get("simtest.run"))
+    """
+    ego = min(samples, default=None)
+    names = names or {}
+    return [
+        Trajectory(
+            entity=names.get(
+                f"entity.{object_id}", "ego" if object_id == ego else f"object {object_id}"
+            ),
+            points=thin([(s.t, s.x, s.y) for s in track]),
+            is_ego=object_id == ego,
+        )
+        for object_id, track in sorted(samples.items())
+    ]
 
 
 def thin(points: Sequence[Any], limit: int = MAX_POINTS) -> tuple[Any, ...]:
