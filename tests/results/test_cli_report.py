@@ -54,7 +54,8 @@ def test_recording_reader_names_the_ego(tmp_path: Path) -> None:
     ego = paths[0].points
     assert len(ego) == 101
     assert ego[0][0] == 0.0
-    assert ego[-1][:2] == (10.0, pytest.approx(100.0))
+    assert ego[-1][0] == 10.0
+    assert ego[-1][1] == pytest.approx(100.0)
 
 
 @pytest.mark.postgres

@@ -114,7 +114,7 @@ def test_trajectories_from_recording_samples() -> None:
     samples = {7: [Sample(0, 5, 5), Sample(1, 6, 5)], 3: [Sample(0, 0, 0), Sample(1, 1, 0)]}
     unnamed = details.from_samples(samples)
     assert [(t.entity, t.is_ego) for t in unnamed] == [("ego", True), ("object 7", False)]
-    assert unnamed[1].points == ((0, 5, 5), (1, 6, 5))
+    assert unnamed[1].points == ((0.0, 5.0, 5.0), (1.0, 6.0, 5.0))
     named = details.from_samples(samples, names={"entity.7": "cutter", "entity.3": "hero"})
     assert [(t.entity, t.is_ego) for t in named] == [("hero", True), ("cutter", False)]
     assert details.from_samples({}) == []

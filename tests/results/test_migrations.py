@@ -31,7 +31,9 @@ def _raw(store: results.Store, sql: str) -> list[tuple[object, ...]]:
         return tx.query(sql)
 
 
-def _open(target: str, *, auto_migrate: bool = True, now: datetime.datetime = T0) -> results.Store:
+def _open(
+    target: str, *, auto_migrate: bool = True, now: datetime.datetime = T0
+) -> sqlite.SqliteStore | postgres.PostgresStore:
     if postgres.is_dsn(target):
         return postgres.PostgresStore(target, clock=lambda: now, auto_migrate=auto_migrate)
     return sqlite.SqliteStore(target, clock=lambda: now, auto_migrate=auto_migrate)

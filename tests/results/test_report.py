@@ -21,8 +21,8 @@ from tests.results.resultdata import T0, sample_run
 NOW = T0 + datetime.timedelta(hours=1)
 
 
-def _run(**kwargs: bool) -> reportmodel.Run:
-    record, stored, listed = sample_run(**kwargs)
+def _run(*, finished: bool = True) -> reportmodel.Run:
+    record, stored, listed = sample_run(finished=finished)
     return reportmodel.Run(campaign=record, outcomes=tuple(stored), scenarios=tuple(listed))
 
 
