@@ -11,6 +11,7 @@ import click
 from simtest_operator import __version__
 from simtest_operator.cli import crds, devcluster, scenario
 from simtest_operator.cli import operator as operator_command
+from simtest_operator.cli import submit as submit_command
 from simtest_operator.cli import report as report_command
 from simtest_operator.cli import run as run_command
 
@@ -27,6 +28,7 @@ cli.add_command(devcluster.dev_cluster)
 cli.add_command(report_command.report)
 cli.add_command(run_command.run)
 cli.add_command(operator_command.operator)
+cli.add_command(submit_command.submit)
 
 
 def main() -> None:

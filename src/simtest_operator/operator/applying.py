@@ -73,8 +73,14 @@ class Applier:
             async with gate:
                 try:
                     await self._one(action, applied, now=now)
-                except ConflictError:
+                except ConflictError as exc:
                     applied.conflict = True
+                    log.info(
+                        "%s/%s: %s; planning again from fresh state",
+                        self.namespace,
+                        self.campaign,
+                        exc,
+                    )
                 except ClusterError as exc:
                     applied.failures += 1
                     log.warning(

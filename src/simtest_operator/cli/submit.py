@@ -1,0 +1,264 @@
+"""``simtest submit``: hand a TestCampaign to the cluster, optionally wait and write JUnit.
+
+For CI steps and GitOps checks. The manifest is validated locally first (same rules and field
+paths as the API server), then created. With ``--wait`` the command follows the campaign's
+``Complete`` condition, prints progress as it changes, collects the per-scenario results from the
+campaign's ScenarioBatches and exits like ``simtest run``: 0 all passed, 1 some failed or timed
+out, 2 errors (or the campaign could not be submitted, or the wait timed out).
+"""
+
+from __future__ import annotations
+
+import datetime
+import time
+from collections.abc import Iterator, Mapping
+from pathlib import Path
+from typing import Any
+
+import click
+import yaml
+
+from simtest_operator.api.v1alpha1 import GROUP, VERSION, ManifestError, parse_campaign
+from simtest_operator.results import junit, records
+from simtest_operator.verdicts import ScenarioOutcome, Verdict
+
+EXIT_PASSED, EXIT_FAILED, EXIT_ERROR = 0, 1, 2
+EXIT_BY_PHASE = {"Succeeded": EXIT_PASSED, "Failed": EXIT_FAILED}
+CAMPAIGN_LABEL = "simtest.dev/campaign"
+
+
+def _documents(path: Path) -> list[Any]:
+    try:
+        return [d for d in yaml.safe_load_all(path.read_text(encoding="utf-8")) if d is not None]
+    except (OSError, yaml.YAMLError) as exc:
+        raise click.ClickException(f"{path}: {exc}") from exc
+
+
+def _api(kubeconfig: Path | None, context: str | None) -> tuple[Any, str]:
+    import kubernetes.client
+    import kubernetes.config
+
+    try:
+        if kubeconfig is None:
+            try:
+                kubernetes.config.load_incluster_config()  # type: ignore[no-untyped-call]
+                return kubernetes.client.ApiClient(), "default"
+            except kubernetes.config.ConfigException:
+                pass
+        api = kubernetes.config.new_client_from_config(  # type: ignore[no-untyped-call]
+            config_file=str(kubeconfig) if kubeconfig else None, context=context
+        )
+        _, active = kubernetes.config.list_kube_config_contexts(  # type: ignore[no-untyped-call]
+            config_file=str(kubeconfig) if kubeconfig else None
+        )
+        namespace = (active or {}).get("context", {}).get("namespace") or "default"
+    except (kubernetes.config.ConfigException, OSError) as exc:
+        raise click.ClickException(f"cannot load Kubernetes credentials: {exc}") from exc
+    return api, str(namespace)
+
+
+@click.command("submit")
+@click.argument("manifest", type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@click.option("--namespace", "-n", help="Namespace (default: the manifest's, else the context's).")
+@click.option("--kubeconfig", type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@click.option("--context", help="Kubeconfig context.")
+@click.option("--wait", is_flag=True, help="Wait until the campaign is Complete; exit by verdict.")
+@click.option(
+    "--timeout", type=float, default=6 * 3600.0, show_default=True, help="Seconds to wait."
+)
+@click.option(
+    "--junit",
+    "junit_file",
+    type=click.Path(dir_okay=False, path_type=Path),
+    help="Write the results as JUnit XML (implies --wait).",
+)
+@click.option("--replace", is_flag=True, help="Delete an existing campaign of that name first.")
+def submit(
+    manifest: Path,
+    namespace: str | None,
+    kubeconfig: Path | None,
+    context: str | None,
+    wait: bool,
+    timeout: float,
+    junit_file: Path | None,
+    replace: bool,
+) -> None:
+    """Create the TestCampaign in MANIFEST on the cluster (and wait for its verdict)."""
+    documents = [
+        d for d in _documents(manifest) if isinstance(d, dict) and d.get("kind") == "TestCampaign"
+    ]
+    if len(documents) != 1:
+        raise click.ClickException(
+            f"{manifest}: expected exactly one TestCampaign, found {len(documents)}"
+        )
+    document = documents[0]
+    try:
+        parsed = parse_campaign(document, source=str(manifest))
+    except ManifestError as exc:
+        for path, message in exc.problems:
+            click.echo(f"{manifest}: {path}: {message}", err=True)
+        raise SystemExit(EXIT_ERROR) from exc
+    api, default_namespace = _api(kubeconfig, context)
+    namespace = namespace or parsed.namespace or default_namespace
+    body = {**document, "metadata": {**document["metadata"], "namespace": namespace}}
+    body.pop("status", None)
+    name = parsed.name
+    import kubernetes.client
+
+    custom = kubernetes.client.CustomObjectsApi(api)
+    _create(custom, namespace, body, replace=replace)
+    click.echo(f"testcampaign/{name} created in {namespace}")
+    if not (wait or junit_file):
+        return
+    status = _wait(custom, namespace, name, timeout=timeout)
+    results = _results(custom, namespace, name)
+    if junit_file is not None:
+        junit_file.parent.mkdir(parents=True, exist_ok=True)
+        junit_file.write_text(_junit(namespace, name, status, results), encoding="utf-8")
+        click.echo(f"JUnit: {junit_file}")
+    phase = str(status.get("phase", ""))
+    for result in sorted(results, key=lambda r: str(r["id"])):
+        if result.get("verdict") != "Passed":
+            click.echo(f"  {result['verdict']:<8} {result['id']}: {result.get('reason', '')}")
+    click.echo(f"{name}: {phase} ({_counts(status)})")
+    raise SystemExit(EXIT_BY_PHASE.get(phase, EXIT_ERROR))
+
+
+def _create(custom: Any, namespace: str, body: Mapping[str, Any], *, replace: bool) -> None:
+    from kubernetes.client.exceptions import ApiException
+
+    name = body["metadata"]["name"]
+    for attempt in range(2):
+        try:
+            custom.create_namespaced_custom_object(GROUP, VERSION, namespace, "testcampaigns", body)
+            return
+        except ApiException as exc:
+            if exc.status == 409 and replace and attempt == 0:
+                custom.delete_namespaced_custom_object(
+                    GROUP,
+                    VERSION,
+                    namespace,
+                    "testcampaigns",
+                    name,
+                    propagation_policy="Foreground",
+                )
+                _wait_gone(custom, namespace, name)
+                continue
+            if exc.status == 409:
+                raise click.ClickException(
+                    f"testcampaign/{name} already exists in {namespace}; pass --replace to rerun it"
+                ) from exc
+            raise click.ClickException(
+                f"the API server refused the campaign: {exc.status} {exc.reason}: {exc.body}"
+            ) from exc
+
+
+def _wait_gone(custom: Any, namespace: str, name: str, timeout: float = 120.0) -> None:
+    from kubernetes.client.exceptions import ApiException
+
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        try:
+            custom.get_namespaced_custom_object(GROUP, VERSION, namespace, "testcampaigns", name)
+        except ApiException as exc:
+            if exc.status == 404:
+                return
+            raise
+        time.sleep(0.5)
+    raise click.ClickException(f"testcampaign/{name} was not deleted within {timeout:.0f}s")
+
+
+def _complete(status: Mapping[str, Any]) -> bool:
+    return any(
+        c.get("type") == "Complete" and c.get("status") == "True"
+        for c in status.get("conditions") or ()
+    )
+
+
+def _watch(custom: Any, namespace: str, name: str, timeout: float) -> Iterator[Mapping[str, Any]]:
+    import kubernetes.watch
+
+    watcher = kubernetes.watch.Watch()  # type: ignore[no-untyped-call]
+    stream = watcher.stream(  # type: ignore[no-untyped-call]
+        custom.list_namespaced_custom_object,
+        GROUP,
+        VERSION,
+        namespace,
+        "testcampaigns",
+        field_selector=f"metadata.name={name}",
+        timeout_seconds=max(int(timeout), 1),
+    )
+    for event in stream:
+        yield event["object"]
+
+
+def _wait(custom: Any, namespace: str, name: str, *, timeout: float) -> Mapping[str, Any]:
+    deadline = time.monotonic() + timeout
+    last = ""
+    while time.monotonic() < deadline:
+        for obj in _watch(custom, namespace, name, deadline - time.monotonic()):
+            status = obj.get("status") or {}
+            line = f"{status.get('phase', 'Pending')} {status.get('progress', '')}".strip()
+            if line != last:
+                click.echo(f"{name}: {line}")
+                last = line
+            if _complete(status):
+                return status
+            if time.monotonic() >= deadline:
+                break
+    click.echo(f"{name}: not Complete after {timeout:.0f}s", err=True)
+    raise SystemExit(EXIT_ERROR)
+
+
+def _results(custom: Any, namespace: str, name: str) -> list[Mapping[str, Any]]:
+    reply = custom.list_namespaced_custom_object(
+        GROUP, VERSION, namespace, "scenariobatches", label_selector=f"{CAMPAIGN_LABEL}={name}"
+    )
+    results: list[Mapping[str, Any]] = []
+    for batch in reply.get("items", []):
+        digests = {s["id"]: s.get("sha256", "") for s in batch.get("spec", {}).get("scenarios", [])}
+        for result in (batch.get("status") or {}).get("results", []):
+            results.append({**result, "sha256": digests.get(result.get("id"), "")})
+    return results
+
+
+def _counts(status: Mapping[str, Any]) -> str:
+    keys = ("passed", "failed", "errored", "timedOut", "invalid", "skipped")
+    return ", ".join(f"{status.get(k, 0)} {k}" for k in keys if status.get(k)) or "no scenarios"
+
+
+def _time(value: Any) -> datetime.datetime | None:
+    if not isinstance(value, str):
+        return None
+    return datetime.datetime.fromisoformat(value.replace("Z", "+00:00"))
+
+
+def _junit(
+    namespace: str, name: str, status: Mapping[str, Any], results: list[Mapping[str, Any]]
+) -> str:
+    started = _time(status.get("startTime")) or datetime.datetime.now(datetime.UTC)
+    info = records.CampaignInfo(name=name, namespace=namespace, started_at=started)
+    campaign = records.CampaignRecord(
+        run_key=records.derive_run_key(info),
+        info=info,
+        finished_at=_time(status.get("completionTime")),
+        phase=str(status.get("phase", "")),
+    )
+    outcomes = [
+        records.StoredOutcome(
+            scenario=records.ScenarioInfo(
+                scenario_id=str(r["id"]), sha256=str(r.get("sha256") or "0" * 64)
+            ),
+            outcome=ScenarioOutcome(
+                scenario_id=str(r["id"]),
+                verdict=Verdict(r["verdict"]),
+                reason=str(r.get("reason", "")),
+                metrics={str(k): float(v) for k, v in (r.get("metrics") or {}).items()},
+                wall_seconds=float(r.get("durationSeconds", 0.0)),
+                attempts=int(r.get("attempts", 1)),
+                artifacts={str(k): str(v) for k, v in (r.get("artifacts") or {}).items()},
+            ),
+        )
+        for r in results
+    ]
+    return junit.render(campaign, outcomes)
