@@ -102,7 +102,7 @@ def _pedestrian_scenario(
     x, y, h = walk[0]
     init.add_init_action("Pedestrian", parts.teleport(xosc.WorldPosition(x, y, 0.0, h)))
     init.add_init_action("Pedestrian", parts.speed_step(0))
-    trigger_distance = round(speed * tta + EGO_FRONT, 1)
+    trigger_distance = round(speed * tta, 1)
     start = parts.event(
         "PedestrianWalks",
         [parts.walk_path("CrossingPath", walk), parts.speed_step("$WalkSpeed")],

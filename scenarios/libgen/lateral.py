@@ -5,7 +5,8 @@ lane-change: a faster vehicle overtakes in the left lane, changes into the ego's
     it and then slows down below the ego's speed.
 merge: a vehicle on the on-ramp acceleration lane merges into the ego's lane without yielding.
 
-All three run on right-hand traffic roads where the ego drives in lane -2 along +s.
+All three run on right-hand traffic roads where the ego drives in lane -2 along +s. Gaps are
+free space, bumper to bumper.
 """
 
 from __future__ import annotations
@@ -39,10 +40,10 @@ def cut_in(
     lane_change_time: float = 2.5,
 ) -> Blueprint:
     """Target `dv` m/s slower in the right lane starts ahead so that the ego closes in for
-    `lead_time` seconds; at a reference-point distance of `gap` m it cuts in."""
+    `lead_time` seconds; when the gap between them is `gap` m it cuts in."""
     road = roads.HIGHWAY
-    start_offset = round(gap + dv * lead_time, 1)
-    entities, init = _ego_and("Target", EGO_LANE - 1, "${$EgoS + $StartOffset}")
+    start_gap = round(gap + dv * lead_time, 1)
+    entities, init = _ego_and("Target", EGO_LANE - 1, parts.ahead_of_ego("$StartGap"))
     cut = parts.event(
         "TargetCutsIn",
         [parts.lane_change(EGO_LANE, "$LaneChangeTime")],
@@ -58,7 +59,7 @@ def cut_in(
             ("EgoSpeed", speed),
             ("EgoS", EGO_START),
             ("TargetSpeed", speed - dv),
-            ("StartOffset", start_offset),
+            ("StartGap", start_gap),
             ("CutInGap", gap),
             ("LaneChangeTime", lane_change_time),
         ),
@@ -81,8 +82,9 @@ def lane_change(
     slow_to: float = 5.0,
     decel: float = 3.0,
 ) -> Blueprint:
-    """Target `dv` m/s faster starts 5 m behind the ego in the left lane; once it is `gap` m
-    ahead it changes into the ego's lane in 3 s, then slows to `speed - slow_to` m/s."""
+    """Target `dv` m/s faster starts 5 m behind the ego in the left lane; once its rear is
+    `gap` m ahead of the ego's front it changes into the ego's lane in 3 s, then slows to
+    `speed - slow_to` m/s."""
     road = roads.HIGHWAY
     entities, init = _ego_and("Target", EGO_LANE + 1, "${$EgoS - 5}")
     change = parts.event(
@@ -129,11 +131,11 @@ MERGE_LEAD_TIME = 4.0
 
 def merge(*, speed: float, merger_speed: float, gap: float, duration: float = 20.0) -> Blueprint:
     """Ego in the right through lane; a vehicle in the acceleration lane at `merger_speed`
-    merges in front of it without yielding, `gap` m ahead (reference points) at the moment it
-    starts its 3 s lane change, then accelerates by 5 m/s at 1 m/s^2."""
+    merges in front of it without yielding, `gap` m ahead at the moment it starts its 3 s lane
+    change, then accelerates by 5 m/s at 1 m/s^2."""
     road = roads.MERGE
     merger_start = round(MERGE_POINT - merger_speed * MERGE_LEAD_TIME, 1)
-    ego_start = round(MERGE_POINT - gap - speed * MERGE_LEAD_TIME, 1)
+    ego_start = round(MERGE_POINT - gap - parts.CAR_LENGTH - speed * MERGE_LEAD_TIME, 1)
     if ego_start < 5.0:
         raise ValueError(f"merge v{speed} gap{gap}: the ego would start before the road")
     entities, init = _ego_and("Merger", EGO_LANE - 1, "$MergerS")

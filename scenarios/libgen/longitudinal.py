@@ -4,9 +4,7 @@ following: a lead vehicle slows down by a given amount and speeds up again.
 hard-braking: a lead vehicle brakes to a standstill.
 cut-out: the lead vehicle leaves the lane late and reveals a stopped or slow vehicle.
 
-Gaps are distances between reference points (rear-axle centres) along the lane; the free
-gap between bumpers is `gap - 4.5` m. Gaps derived from a time headway add the car length, so
-`thw` is bumper-to-bumper.
+Every gap and distance parameter is free space, bumper to bumper (time headways too).
 """
 
 from __future__ import annotations
@@ -26,8 +24,8 @@ SHORT = {"highway_straight": "highway", "rural_curved": "rural"}
 
 
 def headway_gap(speed: float, thw: float) -> float:
-    """Reference-point gap that gives a bumper-to-bumper time headway `thw` at `speed`."""
-    return round(speed * thw + parts.CAR_LENGTH, 1)
+    """Bumper-to-bumper gap that gives a time headway `thw` at `speed`."""
+    return round(speed * thw, 1)
 
 
 def _lead_pair(road: roads.RoadNet) -> tuple[xosc.Entities, xosc.Init]:
@@ -38,7 +36,7 @@ def _lead_pair(road: roads.RoadNet) -> tuple[xosc.Entities, xosc.Init]:
     entities.add_scenario_object("Lead", parts.car("lead_car"))
     init = xosc.Init()
     parts.init_ego(init, 1, lane, "$EgoS", "$EgoSpeed")
-    parts.init_vehicle(init, "Lead", 1, lane, "${$EgoS + $Gap}", "$LeadSpeed")
+    parts.init_vehicle(init, "Lead", 1, lane, parts.ahead_of_ego("$Gap"), "$LeadSpeed")
     return entities, init
 
 
@@ -88,7 +86,7 @@ def following(
         stories=(parts.story("Lead", "Lead", [slow, resume]),),
     )
     check_reach(blueprint, "Ego", EGO_START, speed)
-    check_reach(blueprint, "Lead", EGO_START + gap, speed)
+    check_reach(blueprint, "Lead", EGO_START + gap + parts.CAR_LENGTH, speed)
     return blueprint
 
 
@@ -140,12 +138,12 @@ def cut_out(
     duration: float = 25.0,
     obstacle_ahead: float = 300.0,
 ) -> Blueprint:
-    """Ego follows a lead (1.5 s headway) in the middle lane of the highway; when the lead is
+    """Ego follows a lead (1.2 s headway) in the middle lane of the highway; when the lead is
     `ttc` seconds from a stopped or slow vehicle ahead it changes to the left lane in 2 s."""
     road = roads.HIGHWAY
     lane = EGO_LANE[road.name]
-    gap = headway_gap(speed, 1.5)
-    cut_out_distance = round((speed - obstacle_speed) * ttc + parts.CAR_LENGTH, 1)
+    gap = headway_gap(speed, 1.2)
+    cut_out_distance = round((speed - obstacle_speed) * ttc, 1)
     entities, init = _lead_pair(road)
     entities.add_scenario_object("Obstacle", parts.car("obstacle_car"))
     parts.init_vehicle(init, "Obstacle", 1, lane, "${$EgoS + $ObstacleAhead}", "$ObstacleSpeed")
@@ -178,5 +176,5 @@ def cut_out(
         init=init,
         stories=(parts.story("Lead", "Lead", [leave]),),
     )
-    check_reach(blueprint, "Lead", EGO_START + gap, speed)
+    check_reach(blueprint, "Lead", EGO_START + gap + parts.CAR_LENGTH, speed)
     return blueprint

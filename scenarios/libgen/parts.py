@@ -55,6 +55,13 @@ def lane_position(road: int, lane: int, s: str | float) -> xosc.LanePosition:
     return xosc.LanePosition(s, 0, lane, road)
 
 
+def ahead_of_ego(gap: str) -> str:
+    """Expression for the s of a car whose rear bumper is `gap` (a `$Parameter`) metres in
+    front of the ego's front bumper, both in the same direction (reference points are rear
+    axles, so the reference points are `gap` + one car length apart)."""
+    return f"${{$EgoS + {gap} + {CAR_LENGTH:g}}}"
+
+
 def teleport(position: xosc.LanePosition | xosc.WorldPosition) -> xosc.TeleportAction:
     """Place an entity."""
     return xosc.TeleportAction(position)
@@ -126,13 +133,14 @@ def at_time(name: str, seconds: float) -> xosc.ValueTrigger:
 def when_close(
     name: str, trigger_entity: str, other: str, distance: str, rule: xosc.Rule
 ) -> xosc.EntityTrigger:
-    """Compare the longitudinal distance of two entities' reference points with `distance`."""
+    """Compare the longitudinal free space between two entities' bounding boxes (bumper to
+    bumper, 0 while they overlap lengthwise) with `distance`."""
     condition = xosc.RelativeDistanceCondition(
         distance,
         rule,
         xosc.RelativeDistanceType.longitudinal,
         other,
-        freespace=False,
+        freespace=True,
         coordinate_system=xosc.CoordinateSystem.entity,
     )
     return xosc.EntityTrigger(name, 0, xosc.ConditionEdge.none, condition, trigger_entity)

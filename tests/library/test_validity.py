@@ -11,7 +11,7 @@ import subprocess
 from pathlib import Path
 
 import pytest
-import sumo  # type: ignore[import-untyped]
+import sumo
 from lxml import etree
 
 from tests.library.conftest import LIBRARY_ROOT
