@@ -111,3 +111,32 @@ def test_sigint_stops_cleanly_and_the_same_command_resumes(tmp_path: Path) -> No
     assert again.returncode == 0, again.stdout + again.stderr
     assert "resuming campaign demo:" in again.stdout
     assert again.stdout.rstrip().splitlines()[-1] == "all 6 scenarios passed"
+
+
+@pytest.mark.slow
+def test_smoke_campaign_end_to_end(tmp_path: Path) -> None:
+    """The README's main command on the real engine: 5 of the 6 smoke scenarios pass and the
+    close cut-in fails (scenarios/README.md), with every artifact in place."""
+    repo = Path(__file__).resolve().parents[2]
+    out = tmp_path / "out"
+    args = [sys.executable, "-c", "from simtest_operator.cli.main import main; main()", "run",
+            str(repo / "scenarios/smoke-campaign.yaml"), "-o", str(out), "--plain"]  # fmt: skip
+    done = subprocess.run(args, capture_output=True, text=True, timeout=600, check=False)
+    output = done.stdout + done.stderr
+    assert done.returncode == 1, output
+    last = done.stdout.rstrip().splitlines()[-1]
+    assert last.startswith("1 of 6 scenarios failed (first: cut-in_highway_v30_gap8_dv12.xosc"), (
+        last
+    )
+    results = {
+        json.loads(p.read_text())["scenarioId"]: json.loads(p.read_text())
+        for p in (out / "scenarios").glob("*/result.json")
+    }
+    assert len(results) == 6
+    for document in results.values():
+        assert document["verdict"] in ("Passed", "Failed")
+        assert (out / document["artifacts"]["recording"]).stat().st_size > 1000
+        assert (out / document["artifacts"]["log"]).read_text().startswith("--- attempt 1")
+    junit = (out / "junit.xml").read_text()
+    assert 'tests="6"' in junit and 'failures="1"' in junit
+    assert (out / "report.html").stat().st_size > 10_000

@@ -24,6 +24,7 @@ from simtest_operator.results import publishing
 from simtest_operator.runner import executing, outputs, storing, summaries, tasks
 from simtest_operator.runner import preparing as prep
 from simtest_operator.runner.tasks import ExecuteFn
+from simtest_operator.runner.workers import Worker
 from simtest_operator.scenarios import batching
 from simtest_operator.scenarios.locating import Locator
 from simtest_operator.scenarios.pinned import PinnedScenario
@@ -108,6 +109,26 @@ def run(
     anything runs."""
     stop = stop or threading.Event()
     started = time.monotonic()
+    # Start the workers first: their imports (the simulator stack, about a second) overlap with
+    # reading the manifest and resolving the sources.
+    early = [Worker.start(request.execute) for _ in range(request.parallel or request.cpu_count)]
+    try:
+        return _run(request, on_event=on_event, stop=stop, now=now, started=started, early=early)
+    finally:
+        for worker in early:  # only those the executor never took over are still open
+            if worker.process.is_alive() and not worker.conn.closed:
+                worker.stop()
+
+
+def _run(
+    request: LocalRunRequest,
+    *,
+    on_event: Callable[[Event], None],
+    stop: threading.Event,
+    now: Callable[[], datetime.datetime],
+    started: float,
+    early: list[Worker],
+) -> LocalRunResult:
     plan = prep.prepare(request, now=now())
     out = plan.output
     notes = list(plan.notes)
@@ -148,7 +169,7 @@ def run(
             elif isinstance(event, executing.Finished):
                 tally.add(event.outcome)
                 results[event.pinned.id] = _finish(
-                    out, store, event.pinned, event.batch, event.outcome, on_event
+                    out, store, event.pinned, event.batch, event.outcome, on_event, event.timing
                 )
             else:
                 on_event(event)
@@ -161,6 +182,7 @@ def run(
             policy=plan.policy,
             parallel=parallel,
             make_task=prep.task_factory(plan, paths),
+            workers=early,
             on_event=forward,
             stop=stop,
         )
@@ -246,12 +268,25 @@ def _finish(
     batch: int,
     outcome: ScenarioOutcome,
     on_event: Callable[[Event], None],
+    timing: executing.Timing | None = None,
 ) -> ScenarioOutcome:
     outcome = dataclasses.replace(outcome, artifacts=_artifacts(out, pinned))
-    out.write_result(pinned, batch, outcome)
+    out.write_result(pinned, batch, outcome, timing=_timing_json(timing))
     store.attempt(pinned, outcome)
-    on_event(executing.Finished(outcome=outcome, batch=batch, pinned=pinned))
+    on_event(executing.Finished(outcome=outcome, batch=batch, pinned=pinned, timing=timing))
     return outcome
+
+
+def _timing_json(timing: executing.Timing | None) -> dict[str, object] | None:
+    if timing is None:
+        return None
+
+    def iso(epoch: float) -> str:
+        return datetime.datetime.fromtimestamp(epoch, datetime.UTC).isoformat(
+            timespec="milliseconds"
+        )
+
+    return {"started": iso(timing.started), "finished": iso(timing.finished), "pid": timing.pid}
 
 
 def _artifacts(out: outputs.OutputDir, pinned: PinnedScenario) -> Mapping[str, str]:

@@ -51,12 +51,23 @@ class Retrying:
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Timing:
+    """When the final attempt ran (epoch seconds) and on which worker process."""
+
+    started: float
+    finished: float
+    pid: int
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
 class Finished:
     """A scenario's final outcome."""
 
     outcome: ScenarioOutcome
     batch: int
     pinned: PinnedScenario
+    timing: Timing | None = None
+    """None when the scenario never reached a worker (its file could not be located)."""
 
 
 Event = Started | Retrying | Finished
@@ -96,7 +107,11 @@ class Executor:
         stop: threading.Event | None = None,
         max_tasks_per_worker: int = 200,
         clock: Callable[[], float] = time.monotonic,
+        wall_clock: Callable[[], float] = time.time,
+        workers: Sequence[Worker] = (),
     ) -> None:
+        """``workers`` may hand over processes started earlier (their imports then overlap with
+        the caller's preparation); any beyond ``parallel`` are stopped."""
         if parallel < 1:
             raise ValueError("parallel must be at least 1")
         self._execute = execute
@@ -107,11 +122,14 @@ class Executor:
         self._stop = stop or threading.Event()
         self._max_tasks = max_tasks_per_worker
         self._clock = clock
-        self._workers: list[Worker] = []
-        self._retired: list[Worker] = []
+        self._wall_clock = wall_clock
+        self._workers: list[Worker] = list(workers[:parallel])
+        self._retired: list[Worker] = list(workers[parallel:])
+        for surplus in self._retired:
+            surplus.request_stop()
         self._retries: collections.deque[_Item] = collections.deque()
         self._finished: list[Finished] = []
-        self._started_workers = 0
+        self._started_workers = len(workers)
         self._startup_failures = 0
         self._pinned: dict[str, PinnedScenario] = {}
 
@@ -153,6 +171,7 @@ class Executor:
             task = self._make_task(item.pinned, item.attempt)
             now = self._clock()
             worker.send(task, batch=item.batch, now=now, timeout=self._policy.timeout_seconds)
+            worker.sent_at = self._wall_clock()
             started = Started(
                 scenario_id=item.pinned.id, batch=item.batch, attempt=item.attempt, pid=worker.pid
             )
@@ -196,7 +215,7 @@ class Executor:
         worker.tasks_done += 1
         if outcome.verdict is Verdict.ERROR or worker.tasks_done >= self._max_tasks:
             self._retire(worker)  # an errored engine may be in a bad state: start afresh
-        self._conclude(task, batch, outcome, dispatcher)
+        self._conclude(task, batch, outcome, dispatcher, self._timing(worker))
 
     def _lost(self, worker: Worker, dispatcher: Dispatcher) -> None:
         task, batch = worker.task, worker.batch
@@ -220,7 +239,7 @@ class Executor:
             wall_seconds=self._clock() - worker.started,
             attempts=task.attempt,
         )
-        self._conclude(task, batch, outcome, dispatcher)
+        self._conclude(task, batch, outcome, dispatcher, self._timing(worker))
 
     def _timed_out(self, worker: Worker, dispatcher: Dispatcher) -> None:
         task, batch = worker.task, worker.batch
@@ -235,10 +254,18 @@ class Executor:
             wall_seconds=self._clock() - worker.started,
             attempts=task.attempt,
         )
-        self._conclude(task, batch, outcome, dispatcher)
+        self._conclude(task, batch, outcome, dispatcher, self._timing(worker))
+
+    def _timing(self, worker: Worker) -> Timing:
+        return Timing(started=worker.sent_at, finished=self._wall_clock(), pid=worker.pid)
 
     def _conclude(
-        self, task: ScenarioTask, batch: int, outcome: ScenarioOutcome, dispatcher: Dispatcher
+        self,
+        task: ScenarioTask,
+        batch: int,
+        outcome: ScenarioOutcome,
+        dispatcher: Dispatcher,
+        timing: Timing,
     ) -> None:
         pinned = self._pinned_of(task)
         if outcome.verdict.retriable and task.attempt <= self._policy.retries:
@@ -246,7 +273,7 @@ class Executor:
             self._retries.append(_Item(batch=batch, pinned=pinned, attempt=task.attempt + 1))
             return
         dispatcher.done(batch)
-        finished = Finished(outcome=outcome, batch=batch, pinned=pinned)
+        finished = Finished(outcome=outcome, batch=batch, pinned=pinned, timing=timing)
         self._finished.append(finished)
         self._on_event(finished)
 

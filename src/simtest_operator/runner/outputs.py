@@ -172,8 +172,16 @@ class OutputDir:
     def read_frozen(self) -> FrozenList:
         return FrozenList.from_json(self.read_json(self.frozen), where=str(self.frozen))
 
-    def write_result(self, pinned: PinnedScenario, batch: int, outcome: ScenarioOutcome) -> Path:
-        """Write a scenario's final ``result.json`` (outcome plus what was run)."""
+    def write_result(
+        self,
+        pinned: PinnedScenario,
+        batch: int,
+        outcome: ScenarioOutcome,
+        *,
+        timing: Mapping[str, object] | None = None,
+    ) -> Path:
+        """Write a scenario's final ``result.json`` (outcome plus what was run, and when: the
+        final attempt's start and end on its worker process, for timelines)."""
         folder = self.scenario_dir(pinned.id)
         path = folder / tasks.RESULT
         engine_document = self._engine_result(path)
@@ -185,6 +193,8 @@ class OutputDir:
             "sha256": pinned.sha256,
             "overrides": dict(pinned.overrides),
         }
+        if timing is not None:
+            document["timing"] = dict(timing)
         self.write_json(path, document)
         return path
 

@@ -53,6 +53,9 @@ class Worker:
     batch: int = 0
     deadline: float = 0.0
     started: float = 0.0
+    """Monotonic time the current task was sent (for its deadline)."""
+    sent_at: float = 0.0
+    """Epoch time the current task was sent (for timelines)."""
     tasks_done: int = 0
 
     @classmethod
