@@ -181,6 +181,7 @@ def plot(runs: dict[str, dict[str, Any]], rows: dict[str, dict[str, float]], png
             linewidth=0.3,
         )
     timeline.set_yticks(list(lanes.values()), [f"worker {pid}" for pid in lanes])
+    timeline.set_xlim(left=0)
     timeline.set_xlabel("seconds since simtest run started")
     timeline.set_title(f"{names[-1]}: scenarios per worker process")
     fig.tight_layout()
