@@ -16,6 +16,7 @@ from pathlib import Path
 
 import pytest
 
+from simtest_operator.errors import SimulationError
 from simtest_operator.runner import executing, fakes
 from simtest_operator.runner.tasks import ScenarioTask
 from simtest_operator.scenarios import ExecutionPolicy, PinnedScenario, StartPolicy, batching
@@ -154,3 +155,15 @@ def test_stop_event_kills_and_returns_unfinished(tmp_path: Path) -> None:
     pins_started = [e.pid for e in events if isinstance(e, executing.Started)]
     time.sleep(0.2)
     assert not any(alive(pid) for pid in pins_started), "no worker outlives the run"
+
+
+def test_workers_that_cannot_start_abort_the_run(tmp_path: Path) -> None:
+    from tests.runner import broken_engine
+
+    pins = write_scenarios(tmp_path / "scenarios", {"a": "pass"})
+    executor = executing.Executor(
+        broken_engine.execute, policy=ExecutionPolicy(), parallel=1,
+        make_task=factory(tmp_path, pins),
+    )  # fmt: skip
+    with pytest.raises(SimulationError, match="3 worker processes in a row died while starting"):
+        executor.run(batching.plan(pins, batch_size=10))

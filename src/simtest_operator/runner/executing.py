@@ -28,6 +28,8 @@ from simtest_operator.verdicts import ScenarioOutcome, Verdict
 
 POLL_SECONDS = 0.2
 """Longest wait between checks of the stop event and deadlines."""
+STARTUP_TIMEOUT = 120.0
+"""Seconds a new worker may take to import the engine and report ready."""
 MAX_STARTUP_FAILURES = 3
 """Workers that may die before becoming ready, in a row, before the run gives up."""
 
@@ -162,7 +164,7 @@ class Executor:
         while len(self._workers) < wanted:
             self._workers.append(Worker.start(self._execute))
             self._started_workers += 1
-        for worker in self._workers:
+        for worker in list(self._workers):
             if not worker.ready or worker.busy:
                 continue
             item = self._next_item(dispatcher)
@@ -170,8 +172,12 @@ class Executor:
                 return
             task = self._make_task(item.pinned, item.attempt)
             now = self._clock()
-            worker.send(task, batch=item.batch, now=now, timeout=self._policy.timeout_seconds)
             worker.sent_at = self._wall_clock()
+            try:
+                worker.send(task, batch=item.batch, now=now, timeout=self._policy.timeout_seconds)
+            except OSError:
+                self._lost(worker, dispatcher)
+                continue
             started = Started(
                 scenario_id=item.pinned.id, batch=item.batch, attempt=item.attempt, pid=worker.pid
             )
@@ -205,6 +211,8 @@ class Executor:
         for worker in list(self._workers):
             if worker.busy and now >= worker.deadline:
                 self._timed_out(worker, dispatcher)
+            elif not worker.ready and time.monotonic() - worker.created > STARTUP_TIMEOUT:
+                self._lost(worker, dispatcher)  # stuck while importing: counts as a failed start
 
     # --- outcomes -------------------------------------------------------------------------------
 

@@ -48,6 +48,8 @@ class Worker:
 
     process: BaseProcess
     conn: multiprocessing.connection.Connection
+    created: float = dataclasses.field(default_factory=time.monotonic)
+    """When the process was started (a worker must become ready within a limit)."""
     ready: bool = False
     task: ScenarioTask | None = None
     batch: int = 0
@@ -81,9 +83,10 @@ class Worker:
         return self.task is not None
 
     def send(self, task: ScenarioTask, *, batch: int, now: float, timeout: float) -> None:
-        """Hand ``task`` to the (ready, idle) worker and start its clock."""
-        self.conn.send(task)
+        """Hand ``task`` to the (ready, idle) worker and start its clock; OSError when the
+        worker is gone (the task then counts as in flight on a lost worker)."""
         self.task, self.batch, self.started, self.deadline = task, batch, now, now + timeout
+        self.conn.send(task)
 
     def receive(self) -> tuple[str, Any] | None:
         """The next message, or None when the worker is gone."""
