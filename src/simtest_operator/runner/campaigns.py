@@ -16,11 +16,12 @@ import os
 import resource
 import threading
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
+from simtest_operator import recording
 from simtest_operator.errors import ResultsError, ScenarioError, SourceError
-from simtest_operator.results import publishing
+from simtest_operator.results import details, publishing
 from simtest_operator.runner import executing, outputs, storing, summaries, tasks
 from simtest_operator.runner import preparing as prep
 from simtest_operator.runner.tasks import ExecuteFn
@@ -343,12 +344,20 @@ def _publish(
             now=now,
             report_path=out.report,
             junit_path=out.junit,
+            read_trajectories=read_recording,
             hostname=os.uname().nodename,
         )
     except (ResultsError, ScenarioError) as exc:
         warnings.append(f"report and JUnit not written: {exc}")
         return None, None
     return published.report, published.junit
+
+
+def read_recording(path: Path) -> Sequence[details.Trajectory]:
+    """Trajectories of every object of an omega-prime recording, for the report's developer
+    view (``recording`` and ``results`` do not know each other; the runner wires them)."""
+    names = recording.read_metadata(path).get("simtest.run", {})
+    return details.from_samples(recording.read_trajectories(path), names=names)
 
 
 def _children_cpu() -> float:
