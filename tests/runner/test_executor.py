@@ -5,7 +5,7 @@ over ``parallel`` processes and workers are reused; a hung scenario ends as Time
 and its worker process group (including a grandchild) is really killed; a crashing worker becomes
 Error and the run continues; only Error is retried (up to ``retries``, then final), Failed and
 Timeout never; the barrier policy never overlaps batches; the stop event kills in-flight work and
-returns the rest as unfinished.
+returns the rest as unfinished; workers that cannot even start abort the run after three tries.
 """
 
 from __future__ import annotations
