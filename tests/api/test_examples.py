@@ -10,9 +10,7 @@ import yaml
 from simtest_operator.api import v1alpha1
 
 REPO = Path(__file__).resolve().parents[2]
-EXAMPLES = sorted(
-    [*REPO.glob("scenarios/*-campaign.yaml"), *REPO.glob("deploy/examples/*.yaml")]
-)
+EXAMPLES = sorted([*REPO.glob("scenarios/*-campaign.yaml"), *REPO.glob("deploy/examples/*.yaml")])
 
 
 def test_examples_exist() -> None:

@@ -21,7 +21,8 @@ from simtest_operator.openscenario.distributions import (
     expand_distribution,
     is_distribution,
 )
-from simtest_operator.openscenario.loading import FileKind, file_kind, load_scenario
+from simtest_operator.openscenario.headers import FileKind
+from simtest_operator.openscenario.loading import file_kind, load_scenario
 
 __all__ = [
     "ConcreteRun",

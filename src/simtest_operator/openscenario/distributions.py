@@ -20,7 +20,7 @@ from collections.abc import Mapping
 from pathlib import Path
 
 from simtest_operator.errors import ScenarioError, UnsupportedFeatureError
-from simtest_operator.openscenario import loading, parameters, reading, xmlsafe
+from simtest_operator.openscenario import headers, loading, parameters, reading, xmlsafe
 from simtest_operator.openscenario.catalogs import Catalogs
 from simtest_operator.openscenario.xmlsafe import Element
 
@@ -46,7 +46,7 @@ class ConcreteRun:
 
 def is_distribution(path: Path) -> bool:
     """True when ``path`` is a ParameterValueDistribution file."""
-    return loading.file_kind(path) is loading.FileKind.DISTRIBUTION
+    return loading.file_kind(path) is headers.FileKind.DISTRIBUTION
 
 
 def expand_distribution(path: Path, *, seed: int | None = None) -> list[ConcreteRun]:
@@ -102,7 +102,7 @@ def _digest(assignment: Assignment) -> str:
 
 def _declared_names(scenario: Path) -> set[str]:
     root = xmlsafe.parse_file(scenario)
-    if loading.file_kind_of(root, file=str(scenario)) is not loading.FileKind.SCENARIO:
+    if loading.file_kind_of(root, file=str(scenario)) is not headers.FileKind.SCENARIO:
         raise ScenarioError("the distribution's ScenarioFile is not a scenario", file=str(scenario))
     block = reading.child(root, "ParameterDeclarations")
     decls = reading.all_children(block, "ParameterDeclaration") if block is not None else []

@@ -14,30 +14,26 @@ from __future__ import annotations
 import dataclasses
 import enum
 import io
-import re
 from collections.abc import Mapping
 from pathlib import Path
 
 from lxml import etree
 
 from simtest_operator.errors import ScenarioError
-
-MAX_BYTES = 20 * 1024 * 1024
-"""Largest file read (20 MB), as for full parsing."""
-
-_DECLARATION = re.compile(rb"<!\s*(DOCTYPE|ENTITY)", re.IGNORECASE)
+from simtest_operator.openscenario import xmlsafe
+from simtest_operator.openscenario.xmlsafe import MAX_BYTES
 
 
-class DocumentKind(enum.StrEnum):
-    """What follows the FileHeader."""
+class FileKind(enum.StrEnum):
+    """What an OpenSCENARIO file contains (what follows its FileHeader)."""
 
-    SCENARIO = "Scenario"
+    SCENARIO = "scenario"
     """A scenario definition (has a Storyboard): runnable."""
-    CATALOG = "Catalog"
+    CATALOG = "catalog"
     """A catalog of vehicles, controllers, maneuvers, ...: not runnable on its own."""
-    DISTRIBUTION = "ParameterValueDistribution"
+    DISTRIBUTION = "distribution"
     """A parameter variation of another scenario file: expands into several runs."""
-    UNKNOWN = "Unknown"
+    UNKNOWN = "unknown"
     """Something else (not OpenSCENARIO, or cut short)."""
 
 
@@ -45,7 +41,7 @@ class DocumentKind(enum.StrEnum):
 class FileHeader:
     """The header fields selection and reports use."""
 
-    kind: DocumentKind
+    kind: FileKind
     description: str = ""
     author: str = ""
     rev_major: int | None = None
@@ -58,19 +54,16 @@ class FileHeader:
 
 def read_header(path: Path, *, max_bytes: int = MAX_BYTES) -> FileHeader:
     """Read the header of the file at ``path``; ScenarioError when unreadable or unsafe."""
-    try:
-        with path.open("rb") as handle:
-            data = handle.read(max_bytes + 1)
-    except OSError as exc:
-        raise ScenarioError(f"cannot read file: {exc.strerror or exc}", file=str(path)) from exc
-    return parse_header(data, source=str(path), max_bytes=max_bytes)
+    return parse_header(
+        xmlsafe.read_bytes(path, max_bytes=max_bytes), source=str(path), max_bytes=max_bytes
+    )
 
 
 def parse_header(data: bytes, *, source: str, max_bytes: int = MAX_BYTES) -> FileHeader:
     """The header of the document ``data`` (named ``source`` in errors)."""
     if len(data) > max_bytes:
         raise ScenarioError(f"file is larger than the {max_bytes} byte limit", file=source)
-    _reject_declarations(data, source)
+    xmlsafe.reject_declarations(data, source)
     events = etree.iterparse(
         io.BytesIO(data),
         events=("start", "end"),
@@ -82,7 +75,7 @@ def parse_header(data: bytes, *, source: str, max_bytes: int = MAX_BYTES) -> Fil
         remove_pis=True,
     )
     header: etree._Element | None = None
-    kind = DocumentKind.UNKNOWN
+    kind = FileKind.UNKNOWN
     road_file = ""
     depth = 0
     try:
@@ -94,13 +87,13 @@ def parse_header(data: bytes, *, source: str, max_bytes: int = MAX_BYTES) -> Fil
                     raise ScenarioError(
                         f"root element is <{name}>, not <OpenSCENARIO>", file=source
                     )
-                if depth == 2 and kind is DocumentKind.UNKNOWN:
+                if depth == 2 and kind is FileKind.UNKNOWN:
                     kind = _kind_of(name)
                 if depth == 2 and name in _AFTER_ROAD:
                     break
                 if depth == 3 and name == "LogicFile":
                     road_file = element.get("filepath", "")
-                if depth == 2 and kind in (DocumentKind.CATALOG, DocumentKind.DISTRIBUTION):
+                if depth == 2 and kind in (FileKind.CATALOG, FileKind.DISTRIBUTION):
                     break
             else:
                 depth -= 1
@@ -119,17 +112,17 @@ _AFTER_ROAD = frozenset({"Entities", "Storyboard"})
 """Scenario sections after the RoadNetwork: reading stops there."""
 
 
-def _kind_of(name: str) -> DocumentKind:
+def _kind_of(name: str) -> FileKind:
     if name in ("Storyboard", "RoadNetwork", "Entities", "CatalogLocations"):
-        return DocumentKind.SCENARIO
+        return FileKind.SCENARIO
     if name == "Catalog":
-        return DocumentKind.CATALOG
+        return FileKind.CATALOG
     if name == "ParameterValueDistribution":
-        return DocumentKind.DISTRIBUTION
-    return DocumentKind.UNKNOWN
+        return FileKind.DISTRIBUTION
+    return FileKind.UNKNOWN
 
 
-def _header(element: etree._Element, kind: DocumentKind) -> FileHeader:
+def _header(element: etree._Element, kind: FileKind) -> FileHeader:
     properties: dict[str, str] = {}
     for child in element:
         if not isinstance(child.tag, str) or etree.QName(child).localname != "Properties":
@@ -154,20 +147,3 @@ def _int(text: str | None) -> int | None:
         return int(text) if text is not None else None
     except ValueError:
         return None
-
-
-def _reject_declarations(data: bytes, source: str) -> None:
-    text = data
-    if data.startswith((b"\xff\xfe", b"\xfe\xff")):
-        try:
-            text = data.decode("utf-16").encode("utf-8")
-        except UnicodeDecodeError as exc:
-            raise ScenarioError("undecodable UTF-16 document", file=source) from exc
-    match = _DECLARATION.search(text)
-    if match:
-        raise ScenarioError(
-            f"{match.group(1).decode('ascii').upper()} declarations are not allowed in scenario "
-            "files (entity expansion and external entities are a security risk)",
-            file=source,
-            line=text.count(b"\n", 0, match.start()) + 1,
-        )

@@ -8,26 +8,18 @@ elements. Everything below works on lxml elements; nothing above sees XML.
 from __future__ import annotations
 
 import dataclasses
-import enum
 from collections.abc import Mapping
 from pathlib import Path
 
 from simtest_operator.errors import ScenarioError
-from simtest_operator.openscenario import parameters, reading, xmlsafe
+from simtest_operator.openscenario import headers, parameters, reading, xmlsafe
 from simtest_operator.openscenario.catalogs import Catalogs
+from simtest_operator.openscenario.headers import FileKind
 from simtest_operator.openscenario.model import common as m
 from simtest_operator.openscenario.model import entities as e
 from simtest_operator.openscenario.model import scenarios as s
 from simtest_operator.openscenario.readers import entities, storyboards
 from simtest_operator.openscenario.xmlsafe import Element
-
-
-class FileKind(enum.StrEnum):
-    """What an OpenSCENARIO file contains."""
-
-    SCENARIO = "scenario"
-    CATALOG = "catalog"
-    DISTRIBUTION = "distribution"
 
 
 def file_kind_of(root: Element, *, file: str) -> FileKind:
@@ -44,8 +36,12 @@ def file_kind_of(root: Element, *, file: str) -> FileKind:
 
 
 def file_kind(path: Path) -> FileKind:
-    """Classify the .xosc file at ``path`` (scenario, catalog or parameter distribution)."""
-    return file_kind_of(xmlsafe.parse_file(path), file=str(path))
+    """Classify the .xosc file at ``path`` (scenario, catalog or parameter distribution) from
+    its first elements, without parsing the rest."""
+    kind = headers.read_header(path).kind
+    if kind is FileKind.UNKNOWN:
+        raise ScenarioError("not a scenario, catalog or parameter distribution", file=str(path))
+    return kind
 
 
 def load_scenario(path: Path, *, overrides: Mapping[str, str] | None = None) -> s.Scenario:

@@ -79,7 +79,7 @@ def parse_bytes(data: bytes, *, source: str, max_bytes: int = MAX_BYTES) -> Elem
         raise ScenarioError(
             f"document is larger than the {max_bytes // (1024 * 1024)} MB limit", file=source
         )
-    _reject_declarations(data, source)
+    reject_declarations(data, source)
     try:
         root = etree.fromstring(data, parser=_parser(), base_url=None)
     except etree.XMLSyntaxError as exc:
@@ -104,7 +104,8 @@ def parse_file(path: Path, *, max_bytes: int = MAX_BYTES) -> Element:
     return parse_bytes(read_bytes(path, max_bytes=max_bytes), source=str(path), max_bytes=max_bytes)
 
 
-def _reject_declarations(data: bytes, source: str) -> None:
+def reject_declarations(data: bytes, source: str) -> None:
+    """Refuse any DOCTYPE or ENTITY declaration, before a parser ever sees the document."""
     # Encodings other than UTF-8/ASCII are re-encoded so the scan cannot be dodged with UTF-16.
     text = data
     if data.startswith((b"\xff\xfe", b"\xfe\xff")):

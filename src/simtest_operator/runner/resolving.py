@@ -115,7 +115,7 @@ def _one(
         header = None
         collector.notes.append(f"{rel}: header unreadable, kept (it will end as Invalid): {exc}")
     if header is not None:
-        if header.kind is headers.DocumentKind.CATALOG:
+        if header.kind is headers.FileKind.CATALOG:
             collector.skipped["catalog files"] += 1
             return
         if not selection.selector.empty and not selecting.matches(
@@ -123,7 +123,7 @@ def _one(
         ):
             collector.skipped["not matching the selector"] += 1
             return
-        if header.kind is headers.DocumentKind.DISTRIBUTION:
+        if header.kind is headers.FileKind.DISTRIBUTION:
             _distribution(resolved, rel, number, collector, seed=seed, expand=expand)
             return
     collector.add(rel, number, uri=uri, path=path)

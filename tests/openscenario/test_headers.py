@@ -31,7 +31,7 @@ def test_scenario_header_and_road() -> None:
         "filepath='../xodr/straight.xodr'/></RoadNetwork><Entities/><Storyboard/></OpenSCENARIO>"
     ).encode()
     header = headers.parse_header(data, source="a.xosc")
-    assert header.kind is headers.DocumentKind.SCENARIO
+    assert header.kind is headers.FileKind.SCENARIO
     assert (header.description, header.author, header.rev_major, header.rev_minor) == (
         "Cut in", "me", 1, 3,
     )  # fmt: skip
@@ -42,13 +42,13 @@ def test_scenario_header_and_road() -> None:
 @pytest.mark.parametrize(
     ("body", "kind"),
     [
-        ("<Catalog name='c'/>", headers.DocumentKind.CATALOG),
-        ("<ParameterValueDistribution/>", headers.DocumentKind.DISTRIBUTION),
-        ("<Storyboard/>", headers.DocumentKind.SCENARIO),
-        ("", headers.DocumentKind.UNKNOWN),
+        ("<Catalog name='c'/>", headers.FileKind.CATALOG),
+        ("<ParameterValueDistribution/>", headers.FileKind.DISTRIBUTION),
+        ("<Storyboard/>", headers.FileKind.SCENARIO),
+        ("", headers.FileKind.UNKNOWN),
     ],
 )
-def test_kinds(body: str, kind: headers.DocumentKind) -> None:
+def test_kinds(body: str, kind: headers.FileKind) -> None:
     data = f'<OpenSCENARIO xmlns="urn:x">{HEAD}{body}</OpenSCENARIO>'.encode()
     assert headers.parse_header(data, source="k.xosc").kind is kind
 
