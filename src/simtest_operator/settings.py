@@ -33,6 +33,11 @@ class CacheSettings:
         return self.root / "nets"
 
     @property
+    def sources(self) -> Path:
+        """Fetched scenario sources (git clones, downloaded archives), keyed by what was fetched."""
+        return self.root / "sources"
+
+    @property
     def toolchain(self) -> Path:
         """Control-plane, kwok, helm and helmfile binaries plus Go module and build caches."""
         return self.root / "toolchain"

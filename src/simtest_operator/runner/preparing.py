@@ -72,7 +72,7 @@ def prepare(request: LocalRunRequest, *, now: datetime.datetime) -> Plan:
     out = outputs.OutputDir(request.output)
     fetch = FetchContext(
         base_dir=manifest_path.absolute().parent,
-        cache_dir=request.settings.cache.root / "sources",
+        cache_dir=request.settings.cache.sources,
         secrets=request.secrets,
     )
     selection = converting.selection(spec.scenarios)
