@@ -11,9 +11,10 @@ import click
 from simtest_operator import __version__
 from simtest_operator.cli import crds, devcluster, scenario
 from simtest_operator.cli import operator as operator_command
-from simtest_operator.cli import submit as submit_command
+from simtest_operator.cli import package as package_command
 from simtest_operator.cli import report as report_command
 from simtest_operator.cli import run as run_command
+from simtest_operator.cli import submit as submit_command
 
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
@@ -26,6 +27,7 @@ cli.add_command(crds.crds)
 cli.add_command(scenario.scenario)
 cli.add_command(devcluster.dev_cluster)
 cli.add_command(report_command.report)
+cli.add_command(package_command.package)
 cli.add_command(run_command.run)
 cli.add_command(operator_command.operator)
 cli.add_command(submit_command.submit)

@@ -1,0 +1,157 @@
+"""The image recipes in deploy/docker, checked without a container engine (none here: nothing is
+built, so these tests only read the files).
+
+Covers: every FROM resolves (through ARG defaults) to a pinned base (a version tag or a digest,
+never `latest` or a bare name); the final stage of each image switches to a numeric non-root user
+and has an entrypoint that exists (a console script of pyproject, or helmfile); COPY sources exist
+in the repository; no ADD of remote URLs and no curl-pipe-shell; the helmfile image builds helm and
+helmfile with deploy/devcluster/build.sh (versions from versions.env, no second pin); the
+constraints file pins every runtime dependency of pyproject.toml to a version its specifier accepts.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+import shlex
+import tomllib
+from pathlib import Path
+
+import pytest
+from packaging.requirements import Requirement
+from packaging.utils import canonicalize_name
+from packaging.version import Version
+
+REPO = Path(__file__).resolve().parents[2]
+DOCKER = REPO / "deploy" / "docker"
+IMAGES = {
+    "operator.Dockerfile": "simtest",
+    "runner.Dockerfile": "simtest-runner",
+    "helmfile.Dockerfile": "helmfile",
+}
+
+
+@dataclasses.dataclass(frozen=True, slots=True)
+class Instruction:
+    keyword: str
+    argument: str
+
+
+def instructions(path: Path) -> list[Instruction]:
+    """Dockerfile instructions with line continuations joined and comments dropped."""
+    joined: list[str] = []
+    pending = ""
+    for line in path.read_text(encoding="utf-8").splitlines():
+        stripped = line.strip()
+        if not stripped or stripped.startswith("#"):
+            continue
+        if stripped.endswith("\\"):
+            pending += stripped[:-1] + " "
+            continue
+        joined.append(pending + stripped)
+        pending = ""
+    assert not pending, f"{path.name}: dangling line continuation"
+    result = []
+    for line in joined:
+        keyword, _, argument = line.partition(" ")
+        result.append(Instruction(keyword.upper(), argument.strip()))
+    return result
+
+
+def stages(path: Path) -> list[list[Instruction]]:
+    """Instructions per stage (the first list holds the global ARGs)."""
+    found: list[list[Instruction]] = [[]]
+    for instruction in instructions(path):
+        if instruction.keyword == "FROM":
+            found.append([])
+        found[-1].append(instruction)
+    return found
+
+
+def global_args(path: Path) -> dict[str, str]:
+    args = {}
+    for instruction in stages(path)[0]:
+        assert instruction.keyword == "ARG", f"{path.name}: only ARG may precede FROM"
+        name, _, default = instruction.argument.partition("=")
+        args[name] = default
+    return args
+
+
+def _resolve(reference: str, args: dict[str, str]) -> str:
+    return re.sub(r"\$\{(\w+)\}|\$(\w+)", lambda m: args[m.group(1) or m.group(2)], reference)
+
+
+PINNED = re.compile(
+    r"^[\w.\-/]+(:[\w.\-]*\d[\w.\-]*)(@sha256:[0-9a-f]{64})?$|^[\w.\-/]+@sha256:[0-9a-f]{64}$"
+)
+
+
+@pytest.mark.parametrize("name", sorted(IMAGES))
+def test_bases_are_pinned(name: str) -> None:
+    path = DOCKER / name
+    args = global_args(path)
+    stage_names = set()
+    for stage in stages(path)[1:]:
+        base, _, alias = stage[0].argument.partition(" AS ")
+        reference = _resolve(base.strip(), args)
+        if reference not in stage_names:
+            assert PINNED.match(reference), f"{name}: base {reference!r} is not pinned"
+            assert ":latest" not in reference
+        if alias:
+            stage_names.add(alias.strip())
+
+
+@pytest.mark.parametrize("name", sorted(IMAGES))
+def test_final_stage_runs_as_non_root_with_its_entrypoint(name: str) -> None:
+    final = stages(DOCKER / name)[-1]
+    users = [i.argument for i in final if i.keyword == "USER"]
+    assert users, f"{name}: the final stage never sets USER"
+    user, _, group = users[-1].partition(":")
+    assert user.isdigit() and int(user) != 0, "numeric non-root UID (kubelet checks runAsNonRoot)"
+    assert not group or (group.isdigit() and int(group) != 0)
+    entrypoints = [i.argument for i in final if i.keyword == "ENTRYPOINT"]
+    assert entrypoints and entrypoints[-1].startswith("["), "exec-form ENTRYPOINT"
+    assert entrypoints[-1].strip("[]").split(",")[0].strip().strip('"') == IMAGES[name]
+    scripts = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]["scripts"]
+    if IMAGES[name] != "helmfile":
+        assert IMAGES[name] in scripts
+
+
+@pytest.mark.parametrize("name", sorted(IMAGES))
+def test_no_remote_fetches_and_sources_exist(name: str) -> None:
+    for instruction in instructions(DOCKER / name):
+        assert instruction.keyword != "ADD", "use COPY; ADD can fetch URLs and unpack archives"
+        if instruction.keyword == "RUN":
+            assert not re.search(r"(curl|wget)[^|]*\|\s*(ba)?sh", instruction.argument)
+        if instruction.keyword == "COPY" and "--from=" not in instruction.argument:
+            *sources, _ = shlex.split(instruction.argument)
+            for source in sources:
+                assert (REPO / source).exists(), f"{name}: COPY source {source} is missing"
+
+
+def test_helmfile_image_uses_the_one_build_recipe() -> None:
+    build = stages(DOCKER / "helmfile.Dockerfile")[1]
+    copies = [shlex.split(i.argument) for i in build if i.keyword == "COPY"]
+    assert ["deploy/devcluster/build.sh", "deploy/devcluster/versions.env", "/src/"] in copies
+    runs = " ".join(i.argument for i in build if i.keyword == "RUN")
+    assert "bash /src/build.sh --cache-dir /build helm helmfile" in runs
+    # No second place where versions could be pinned.
+    assert not [i for i in build if i.keyword == "ARG" and "VERSION" in i.argument]
+    assert "go install" not in runs
+
+
+def test_constraints_pin_every_runtime_dependency() -> None:
+    pins = {}
+    for line in (DOCKER / "constraints.txt").read_text().splitlines():
+        if line and not line.startswith("#"):
+            name, _, version = line.partition("==")
+            assert version, f"constraint {line!r} is not an exact pin"
+            pins[canonicalize_name(name)] = Version(version)
+    assert list(pins) == sorted(pins), "keep constraints.txt sorted"
+    dependencies = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]["dependencies"]
+    for dependency in map(Requirement, dependencies):
+        name = canonicalize_name(dependency.name)
+        assert name in pins, f"{dependency.name} is not pinned in deploy/docker/constraints.txt"
+        assert dependency.specifier.contains(pins[name], prereleases=True), (
+            f"{dependency.name}=={pins[name]} does not satisfy {dependency}"
+        )
