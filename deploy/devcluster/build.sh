@@ -204,8 +204,17 @@ build_helmfile() {
     new_wrapper "$w" local/helmfilebin
     (
         cd "$w"
+        # helmfile >= 1.4.5 carries `replace` lines (k8s.io/api etc.), which `go install` refuses
+        # and a dependent module ignores: copy them from helmfile's own go.mod into the wrapper.
+        local gomod r
+        gomod="$(go mod download -json "github.com/helmfile/helmfile@v$v" \
+            | sed -n 's/^[[:space:]]*"GoMod": "\(.*\)",*$/\1/p')"
+        [[ -f "$gomod" ]] || die "cannot download github.com/helmfile/helmfile@v$v"
+        while read -r r; do
+            [[ -n "$r" ]] && go mod edit -replace="$r"
+        done < <(sed -n '/^replace (/,/^)/{/=>/{s/[[:space:]]*\/\/.*//;s/^[[:space:]]*//;s/ => /=/;s/ v/@v/g;p}}' "$gomod")
         go_get "github.com/helmfile/helmfile@v$v"
-        "${GO_BUILD[@]}" -ldflags "-s -w -X go.szostok.io/version.version=v$v" \
+        "${GO_BUILD[@]}" -ldflags "-s -w -X go.szostok.io/version.version=v$v -X go.szostok.io/version.dirtyBuild=false" \
             -o "$w/out/helmfile" github.com/helmfile/helmfile
     )
     install_bins "$w/out" "$dir"

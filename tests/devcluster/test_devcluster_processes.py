@@ -1,13 +1,15 @@
 """Process bookkeeping: ``down`` must stop exactly the processes ``up`` started.
 
 Covers: a spawned process is alive and ``stop`` ends it; a record whose start time does not match
-(a reused pid) is never signalled; a process spawned with ``die_with_parent`` ends when its parent
-dies; the log gets the command line and the process output; ``free_ports`` gives distinct ports.
+(a reused pid) is never signalled; a (default, tied) process ends when its parent dies, while a
+detached one is not our child; the log gets the command line and the process output;
+``free_ports`` gives distinct ports.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import os
 import subprocess
 import sys
 import time
@@ -27,7 +29,7 @@ def test_spawn_and_stop(tmp_path: Path) -> None:
     record, proc = spawn("sleeper", ["sh", "-c", "echo hello; exec sleep 60"], log=tmp_path / "l")
     assert is_alive(record)
     deadline = time.monotonic() + 5
-    while "hello" not in log_tail(record.log) and time.monotonic() < deadline:
+    while not log_tail(record.log).endswith("\nhello") and time.monotonic() < deadline:
         time.sleep(0.05)
     assert "start: sh -c" in log_tail(record.log)
     assert log_tail(record.log).endswith("hello")
@@ -55,8 +57,7 @@ def test_die_with_parent(tmp_path: Path) -> None:
 import sys
 from pathlib import Path
 from simtest_operator.devcluster.processes import spawn
-record, _ = spawn("child", ["sleep", "60"], log=Path({str(tmp_path / "l")!r}),
-                  die_with_parent=True)
+record, _ = spawn("child", ["sleep", "60"], log=Path({str(tmp_path / "l")!r}))
 Path({str(pid_file)!r}).write_text(f"{{record.pid}} {{record.start_ticks}}")
 """
     subprocess.run([sys.executable, "-c", parent], check=True, timeout=30)
@@ -66,6 +67,18 @@ Path({str(pid_file)!r}).write_text(f"{{record.pid}} {{record.start_ticks}}")
     while is_alive(child) and time.monotonic() < deadline:
         time.sleep(0.05)
     assert not is_alive(child)
+
+
+def test_detached_process_is_not_our_child(tmp_path: Path) -> None:
+    record, proc = spawn("sleeper", ["sleep", "60"], log=tmp_path / "l", detach=True)
+    assert proc is None
+    try:
+        assert is_alive(record)
+        ppid = int(Path(f"/proc/{record.pid}/stat").read_text().rsplit(")", 1)[1].split()[1])
+        assert ppid != os.getpid()
+    finally:
+        assert stop(record) is True
+    assert not is_alive(record)
 
 
 def test_free_ports_are_distinct() -> None:

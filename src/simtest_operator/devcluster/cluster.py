@@ -46,7 +46,8 @@ class DevCluster:
     """One dev cluster, living in ``root`` (PKI, kubeconfig, logs, etcd data, state file).
 
     ``tied_to_this_process=True`` (test fixtures) makes the kernel stop the components when the
-    Python process that started them dies; the CLI leaves it off so the cluster outlives ``up``.
+    Python process that started them dies; otherwise (the CLI) they are detached and outlive
+    ``up``.
     """
 
     __slots__ = ("_procs", "layout", "tied", "toolchain")
@@ -188,8 +189,9 @@ class DevCluster:
         return pki
 
     def _spawn(self, state: ClusterState, name: str, argv: list[str]) -> ClusterState:
-        record, proc = spawn(name, argv, log=self.layout.log(name), die_with_parent=self.tied)
-        self._procs[record.pid] = proc
+        record, proc = spawn(name, argv, log=self.layout.log(name), detach=not self.tied)
+        if proc is not None:
+            self._procs[record.pid] = proc
         state = dataclasses.replace(state, processes=(*state.processes, record))
         state.save(self.layout.state)
         return state

@@ -1,4 +1,4 @@
-"""Local component processes: start detached with a log file, recognise, stop, read log tails.
+"""Local component processes: start with a log file, recognise, stop, read log tails.
 
 A started process is remembered as a :class:`ProcessRecord` (pid plus the kernel's start time of
 that pid), so a later ``down`` — possibly from another shell — stops exactly the processes this
@@ -8,15 +8,16 @@ cluster started and never a stranger that happens to reuse a pid. Linux only (re
 from __future__ import annotations
 
 import contextlib
-import ctypes
 import dataclasses
 import os
+import shutil
 import signal
 import socket
 import subprocess
 import time
 from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import Any
 
 from simtest_operator.errors import ClusterError
 
@@ -50,45 +51,47 @@ def is_alive(record: ProcessRecord) -> bool:
     return _start_ticks(record.pid) == record.start_ticks
 
 
-_PR_SET_PDEATHSIG = 1
-
-
-def _die_with_parent() -> None:
-    """In the child before exec: ask the kernel for SIGTERM when our parent goes away."""
-    libc = ctypes.CDLL(None, use_errno=True)
-    libc.prctl(_PR_SET_PDEATHSIG, signal.SIGTERM)
-
-
 def spawn(
     name: str,
     argv: Sequence[str],
     *,
     log: Path,
     env: Mapping[str, str] | None = None,
-    die_with_parent: bool = False,
-) -> tuple[ProcessRecord, subprocess.Popen[bytes]]:
-    """Start ``argv`` in its own session with stdout and stderr appended to ``log``.
+    detach: bool = False,
+) -> tuple[ProcessRecord, subprocess.Popen[bytes] | None]:
+    """Start ``argv`` in a new session with stdout and stderr appended to ``log``.
 
-    With ``die_with_parent`` the process gets SIGTERM when the starting process dies, so a killed
-    test run cannot leak a control plane; without it the process outlives a CLI call.
+    By default the process is our child and gets SIGTERM when we die (``PR_SET_PDEATHSIG``, set
+    by util-linux ``setpriv`` before it execs the command; without ``setpriv`` this safety net is
+    missing), so a killed test run cannot leak a control plane. With ``detach`` it is started
+    through a short-lived ``sh`` and re-parented to init: it outlives the CLI call that started
+    it, and no ``Popen`` object is left behind (the second element is then None).
     """
     log.parent.mkdir(parents=True, exist_ok=True)
     with log.open("ab") as out:
         out.write(f"\n=== {time.strftime('%Y-%m-%dT%H:%M:%S')} start: {' '.join(argv)}\n".encode())
         out.flush()
-        proc = subprocess.Popen(
-            list(argv),
-            stdin=subprocess.DEVNULL,
-            stdout=out,
-            stderr=subprocess.STDOUT,
-            start_new_session=True,  # survives the CLI that started it; no terminal signals
-            env=None if env is None else dict(env),
-            preexec_fn=_die_with_parent if die_with_parent else None,
-        )
-    ticks = _start_ticks(proc.pid)
-    record = ProcessRecord(
-        name=name, pid=proc.pid, start_ticks=ticks or -1, argv=tuple(argv), log=log
-    )
+        common: dict[str, Any] = {
+            "stdin": subprocess.DEVNULL,
+            "stderr": out,
+            "start_new_session": True,  # no terminal signals (Ctrl-C in the shell that ran `up`)
+            "env": None if env is None else dict(env),
+        }
+        if detach:
+            launcher = subprocess.run(
+                ["sh", "-c", 'exec "$@" >&2 & echo $!', "sh", *argv],
+                stdout=subprocess.PIPE,
+                check=True,
+                **common,
+            )
+            pid, proc = int(launcher.stdout), None
+        else:
+            setpriv = shutil.which("setpriv")
+            tie = [setpriv, "--pdeathsig", "TERM", "--"] if setpriv else []
+            proc = subprocess.Popen([*tie, *argv], stdout=out, **common)
+            pid = proc.pid
+    ticks = _start_ticks(pid)
+    record = ProcessRecord(name=name, pid=pid, start_ticks=ticks or -1, argv=tuple(argv), log=log)
     return record, proc
 
 
