@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import datetime
 import hashlib
+import itertools
 import json
 
 import pytest
@@ -218,5 +219,5 @@ def test_counter_only_status_writes_are_coalesced() -> None:
         if cluster.status().get("progress") != before:
             writes.append(cluster.now)
     assert cluster.status()["phase"] == "Succeeded"
-    gaps = [(b - a).total_seconds() for a, b in zip(writes, writes[1:], strict=False)]
+    gaps = [(b - a).total_seconds() for a, b in itertools.pairwise(writes)]
     assert all(gap >= 10.0 for gap in gaps[:-1]), gaps  # the final (phase) write is immediate
