@@ -25,6 +25,7 @@ from simtest_operator.settings import Settings
 REPO = Path(__file__).resolve().parents[2]
 OPERATOR_CHART = REPO / "charts" / "simtest-operator"
 ROS_CHART = REPO / "charts" / "k8s-ros"
+SIMULATOR_CHART = REPO / "charts" / "simtest-simulator"
 HELM_FIXTURES = frozenset({"helm", "helmfile", "kubectl"})
 COMPONENTS = {"helm": "helm", "helmfile": "helmfile", "kubectl": "kubernetes"}
 

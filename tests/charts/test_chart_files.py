@@ -17,9 +17,9 @@ import pytest
 import yaml
 
 from simtest_operator.packaging import syncing, valuesdoc
-from tests.charts.helmtools import OPERATOR_CHART, REPO, ROS_CHART
+from tests.charts.helmtools import OPERATOR_CHART, REPO, ROS_CHART, SIMULATOR_CHART
 
-CHARTS = [OPERATOR_CHART, ROS_CHART]
+CHARTS = [OPERATOR_CHART, ROS_CHART, SIMULATOR_CHART]
 
 
 def test_chart_crds_and_docs_are_in_sync() -> None:
@@ -49,13 +49,17 @@ def test_every_value_is_documented(chart: Path) -> None:
     assert all(row.description for row in rows)
 
 
+def _fixed(schema: dict[str, Any]) -> bool:
+    return "properties" in schema and schema.get("additionalProperties") is False
+
+
 def _schema_paths(schema: dict[str, Any], prefix: str = "") -> set[str]:
     """Keys a schema fixes (objects with ``properties`` and ``additionalProperties: false``)."""
     paths = set()
     for key, sub in schema.get("properties", {}).items():
         path = f"{prefix}.{key}" if prefix else key
         paths.add(path)
-        if "properties" in sub:
+        if _fixed(sub):
             paths |= _schema_paths(sub, path)
     return paths
 
@@ -67,15 +71,16 @@ def _value_paths(values: Any, schema: dict[str, Any], prefix: str = "") -> set[s
         path = f"{prefix}.{key}" if prefix else key
         paths.add(path)
         sub = schema.get("properties", {}).get(key, {})
-        if isinstance(value, dict) and "properties" in sub:
+        if isinstance(value, dict) and _fixed(sub):
             paths |= _value_paths(value, sub, path)
     return paths
 
 
 def _closed(schema: dict[str, Any], path: str = "<root>") -> list[str]:
-    """Objects with fixed properties that still accept unknown keys."""
+    """Objects with properties that do not say whether they accept unknown keys (an explicit
+    ``additionalProperties: true`` marks a deliberately open object, such as a Pod)."""
     open_objects = []
-    if "properties" in schema and schema.get("additionalProperties") is not False:
+    if "properties" in schema and "additionalProperties" not in schema:
         open_objects.append(path)
     for key, sub in schema.get("properties", {}).items():
         open_objects += _closed(sub, f"{path}.{key}")
