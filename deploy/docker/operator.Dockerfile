@@ -26,6 +26,7 @@ COPY --from=build /opt/simtest/venv /opt/simtest/venv
 COPY helm-templates /opt/simtest/helm-templates
 ENV PATH=/opt/simtest/venv/bin:$PATH \
     PYTHONUNBUFFERED=1 \
+    PYTHONDONTWRITEBYTECODE=1 \
     HOME=/tmp \
     SIMTEST_OPERATOR_TEMPLATES=/opt/simtest/helm-templates \
     SIMTEST_OPERATOR_CACHE=/tmp/simtest-operator-cache

@@ -27,6 +27,7 @@ LABEL org.opencontainers.image.title="simtest-runner" \
 COPY --from=build /opt/simtest/venv /opt/simtest/venv
 ENV PATH=/opt/simtest/venv/bin:$PATH \
     PYTHONUNBUFFERED=1 \
+    PYTHONDONTWRITEBYTECODE=1 \
     HOME=/tmp \
     SIMTEST_CACHE_DIR=/tmp/simtest-cache
 # Matches the runAsUser of the rendered simulator pod (restricted Pod Security profile); the pod
