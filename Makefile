@@ -28,3 +28,4 @@ lint: setup
 
 crds: setup
 	$(SIMTEST) crds
+	$(SIMTEST) package sync

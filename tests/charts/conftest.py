@@ -1,4 +1,4 @@
-"""Chart tests: real helm/helmfile/kubectl fixtures (see helmtools) and the golden-file switch."""
+"""Chart tests: real helm/helmfile/kubectl fixtures (see helmtools)."""
 
 from __future__ import annotations
 
@@ -11,9 +11,3 @@ __all__ = ["helm", "helmfile", "kubectl", "tools_home"]
 
 def pytest_collection_finish(session: pytest.Session) -> None:
     build_selected(session)
-
-
-@pytest.fixture
-def update_golden(request: pytest.FixtureRequest) -> bool:
-    """``--update-golden`` (registered by tests/render/conftest.py) rewrites the golden files."""
-    return bool(request.config.getoption("--update-golden", default=False))

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from tests.charts.conftest import pytest_collection_finish, update_golden
+from tests.charts.conftest import pytest_collection_finish
 from tests.charts.helmtools import helm, helmfile, kubectl, tools_home
 
 __all__ = [
@@ -11,5 +11,4 @@ __all__ = [
     "kubectl",
     "pytest_collection_finish",
     "tools_home",
-    "update_golden",
 ]
