@@ -2,35 +2,52 @@
 
 Each sub-command lives in its own module of this package, parses its options, calls one function
 of a lower layer and formats what it returns (helm's ``pkg/cmd`` -> ``pkg/action`` split).
+Sub-command modules are imported only when their command runs: ``simtest operator`` never pays
+for SUMO, and ``simtest run`` never for the Kubernetes client.
 """
 
 from __future__ import annotations
 
+import importlib
+
 import click
 
 from simtest_operator import __version__
-from simtest_operator.cli import crds, devcluster, scenario
-from simtest_operator.cli import operator as operator_command
-from simtest_operator.cli import package as package_command
-from simtest_operator.cli import report as report_command
-from simtest_operator.cli import run as run_command
-from simtest_operator.cli import submit as submit_command
+
+COMMANDS = {
+    "crds": "simtest_operator.cli.crds:crds",
+    "dev-cluster": "simtest_operator.cli.devcluster:dev_cluster",
+    "operator": "simtest_operator.cli.operator:operator",
+    "package": "simtest_operator.cli.package:package",
+    "report": "simtest_operator.cli.report:report",
+    "run": "simtest_operator.cli.run:run",
+    "scenario": "simtest_operator.cli.scenario:scenario",
+    "submit": "simtest_operator.cli.submit:submit",
+}
+"""Command name -> ``module:attribute`` of its click command."""
 
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+class LazyGroup(click.Group):
+    """A click group that imports a sub-command's module on first use."""
+
+    def list_commands(self, ctx: click.Context) -> list[str]:
+        return sorted({*COMMANDS, *super().list_commands(ctx)})
+
+    def get_command(self, ctx: click.Context, cmd_name: str) -> click.Command | None:
+        target = COMMANDS.get(cmd_name)
+        if target is None:
+            return super().get_command(ctx, cmd_name)
+        module_name, _, attribute = target.partition(":")
+        command = getattr(importlib.import_module(module_name), attribute)
+        if not isinstance(command, click.Command):
+            raise TypeError(f"{target} is not a click command")
+        return command
+
+
+@click.group(cls=LazyGroup, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(__version__, prog_name="simtest")
 def cli() -> None:
     """Scenario-based simulation testing for automated driving, on Kubernetes or locally."""
-
-
-cli.add_command(crds.crds)
-cli.add_command(scenario.scenario)
-cli.add_command(devcluster.dev_cluster)
-cli.add_command(report_command.report)
-cli.add_command(package_command.package)
-cli.add_command(run_command.run)
-cli.add_command(operator_command.operator)
-cli.add_command(submit_command.submit)
 
 
 def main() -> None:
