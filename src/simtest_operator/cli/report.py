@@ -1,32 +1,20 @@
 """``simtest report``: the HTML report (and optionally JUnit XML) of a run's output folder.
 
-Parses options, wires the recording reader into the results package (the two sit on the same
-layer and do not import each other) and prints what :func:`results.publishing.publish` returns.
+Parses options, hands the runner's recording reader to the results package (the two sit on the
+same layer and do not import each other) and prints what :func:`results.publishing.publish`
+returns.
 """
 
 from __future__ import annotations
 
 import datetime
 import socket
-from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import click
 
 from simtest_operator.errors import SimtestError
-
-if TYPE_CHECKING:
-    from simtest_operator.results import details
-
-
-def read_recording(path: Path) -> Sequence[details.Trajectory]:
-    """Trajectories of every object in an omega-prime recording, for the developer view."""
-    from simtest_operator import recording
-    from simtest_operator.results import details
-
-    names = recording.read_metadata(path).get("simtest.run", {})
-    return details.from_samples(recording.read_trajectories(path), names=names)
+from simtest_operator.runner.campaigns import read_recording
 
 
 @click.command()
