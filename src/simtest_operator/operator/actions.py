@@ -14,6 +14,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from simtest_operator.operator.records import ResultRecord
+from simtest_operator.render import EnvironmentRequest
 
 
 class Kind(enum.StrEnum):
@@ -29,10 +30,14 @@ class Kind(enum.StrEnum):
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
 class Create:
-    """Create an object (``AlreadyExistsError`` counts as done)."""
+    """Create an object (``AlreadyExists`` counts as done)."""
 
     kind: Kind
     body: Mapping[str, Any]
+    provision: EnvironmentRequest | None = None
+    """For a SimEnvironment: its pod's render request (owner uid still empty). The applier fills
+    in the uid the create returns and provisions the pod at once, saving a watch round trip per
+    scenario; if anything goes wrong the next planning step provisions it instead."""
 
     @property
     def name(self) -> str:

@@ -10,14 +10,14 @@ and the loop plans again from fresh state. Events are rate limited per object.
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import dataclasses
 import datetime
 import logging
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
+from typing import Any
 
-from simtest_operator.errors import ClusterError
-from simtest_operator.operator import bodies, environments, names
+from simtest_operator.errors import ClusterError, RenderError
+from simtest_operator.operator import bodies, environments, names, observed
 from simtest_operator.operator.actions import (
     Action,
     Create,
@@ -31,6 +31,7 @@ from simtest_operator.operator.actions import (
 from simtest_operator.operator.client import AlreadyExistsError, ApiError, Client, ConflictError
 from simtest_operator.operator.expectations import Expectation, Want
 from simtest_operator.operator.metrics import Metrics
+from simtest_operator.render import EnvironmentRequest, RenderedEnvironment
 
 log = logging.getLogger(__name__)
 
@@ -62,6 +63,8 @@ class Applier:
     metrics: Metrics
     event_interval: float
     parallel: int = 16
+    render: Callable[[EnvironmentRequest], RenderedEnvironment] | None = None
+    """Renders pods of environments created in the same step (see ``Create.provision``)."""
     _last_event: dict[tuple[Kind, str], datetime.datetime] = dataclasses.field(default_factory=dict)
 
     async def apply(self, plan: Plan, *, now: datetime.datetime) -> Applied:
@@ -96,11 +99,17 @@ class Applier:
 
     async def _one(self, action: Action, applied: Applied, *, now: datetime.datetime) -> None:
         if isinstance(action, Create):
-            with contextlib.suppress(AlreadyExistsError):
-                await self.client.create(action.kind, self.namespace, action.body)
+            try:
+                created: dict[str, Any] | None = await self.client.create(
+                    action.kind, self.namespace, action.body
+                )
+            except AlreadyExistsError:
+                created = None
             applied.expectations.append(
                 Expectation(kind=action.kind, name=action.name, want=Want.PRESENT)
             )
+            if created is not None and action.provision is not None and self.render is not None:
+                await self._provision_new(created, action.provision, applied, now=now)
         elif isinstance(action, Provision):
             await self._provision(action, applied, now=now)
         elif isinstance(action, PatchStatus):
@@ -134,6 +143,32 @@ class Applier:
             )
         else:
             await self._emit(action, now=now)
+
+    async def _provision_new(
+        self,
+        created: Mapping[str, Any],
+        request: EnvironmentRequest,
+        applied: Applied,
+        *,
+        now: datetime.datetime,
+    ) -> None:
+        assert self.render is not None
+        env = observed.environment_view(created)
+        owner = dataclasses.replace(request.owner, uid=env.uid)
+        try:
+            rendered = self.render(dataclasses.replace(request, owner=owner))
+        except RenderError:
+            return  # the next planning step records the render failure
+        provision = Provision(
+            environment=env.name,
+            pod=rendered.pod,
+            status=environments.provisioned_status(
+                env, pod=env.name, rendered_hash=rendered.content_hash, now=now
+            ),
+            scenario_ids=env.scenario_ids,
+            attempt=env.attempt,
+        )
+        await self._provision(provision, applied, now=now)
 
     async def _provision(
         self, action: Provision, applied: Applied, *, now: datetime.datetime

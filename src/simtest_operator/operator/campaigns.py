@@ -386,23 +386,22 @@ class _Step:
             batch = self.batches.get(unit.batch_index)
             if batch is None:
                 continue  # created above; its environments start once it is visible
-            self.actions.append(
-                Create(
-                    kind=Kind.ENVIRONMENT,
-                    body=bodies.environment(
-                        campaign=self.campaign.name,
-                        namespace=self.campaign.namespace,
-                        batch_name=batch.name,
-                        batch_uid=batch.uid,
-                        name=names.environment(
-                            self.campaign.name, unit.batch_index, unit.first, unit.attempt
-                        ),
-                        attempt=unit.attempt,
-                        isolation=execution.isolation.value,
-                        scenarios=[self.frozen[p] for p in unit.positions],
-                    ),
-                )
+            body = bodies.environment(
+                campaign=self.campaign.name,
+                namespace=self.campaign.namespace,
+                batch_name=batch.name,
+                batch_uid=batch.uid,
+                name=names.environment(
+                    self.campaign.name, unit.batch_index, unit.first, unit.attempt
+                ),
+                attempt=unit.attempt,
+                isolation=execution.isolation.value,
+                scenarios=[self.frozen[p] for p in unit.positions],
             )
+            request = requests.environment_request(
+                self.spec, observed.environment_view(body), config=self.config
+            )
+            self.actions.append(Create(kind=Kind.ENVIRONMENT, body=body, provision=request))
 
     def _lookahead(self, states: Sequence[ScenarioState]) -> set[int]:
         """Create the next batch object once every scenario of the newest one has started, so

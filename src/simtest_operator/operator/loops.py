@@ -80,6 +80,7 @@ class CampaignLoop:
             metrics=shared.metrics,
             event_interval=shared.config.event_interval,
             parallel=shared.config.api_workers,
+            render=shared.render,
         )
 
     def _uid(self) -> str:
