@@ -1,26 +1,35 @@
 """``simtest scenario run|check``: run one scenario, or every scenario under a directory.
 
-Thin wiring: options -> :mod:`simtest_operator.runner.execution` -> formatted output.
+Thin wiring: options -> :mod:`simtest_operator.runner.execution` -> formatted output. ``check``
+expands ParameterValueDistribution files into their concrete runs and skips catalogs.
 """
 
 from __future__ import annotations
 
 import os
+from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 import click
 from rich.console import Console
 from rich.table import Table
 
 from simtest_operator.errors import ScenarioError
-from simtest_operator.openscenario import FileKind, file_kind
+from simtest_operator.evaluation import reference as references
+from simtest_operator.openscenario import FileKind, expand_distribution, file_kind
 from simtest_operator.runner import execution
 from simtest_operator.settings import Settings
 from simtest_operator.sim import SutConfig, Takeover
+from simtest_operator.verdicts import Verdict
 
-
-def _sut(takeover: str) -> SutConfig:
-    return SutConfig(takeover=Takeover(takeover))
+_TAKEOVER = click.option(
+    "--takeover",
+    type=click.Choice([t.value for t in Takeover]),
+    default=Takeover.ON_CONTROLLER.value,
+    show_default=True,
+    help="When the SUT driver model takes the ego over.",
+)
 
 
 @click.group("scenario")
@@ -38,13 +47,7 @@ def scenario() -> None:
     help="Directory for recording.mcap, run.log and result.json.",
 )
 @click.option("--no-record", is_flag=True, help="Do not write the omega-prime recording.")
-@click.option(
-    "--takeover",
-    type=click.Choice([t.value for t in Takeover]),
-    default=Takeover.ON_CONTROLLER.value,
-    show_default=True,
-    help="When the SUT driver model takes the ego over.",
-)
+@_TAKEOVER
 def run(file: Path, out: Path | None, no_record: bool, takeover: str) -> None:
     """Run FILE and print its verdict, reason and metrics."""
     settings = Settings.from_env()
@@ -52,7 +55,7 @@ def run(file: Path, out: Path | None, no_record: bool, takeover: str) -> None:
         execution.RunRequest(
             scenario=file,
             nets_dir=settings.cache.nets,
-            sut=_sut(takeover),
+            sut=SutConfig(takeover=Takeover(takeover)),
             simulation=settings.simulation,
             output_dir=out,
             record=not no_record,
@@ -70,16 +73,56 @@ def run(file: Path, out: Path | None, no_record: bool, takeover: str) -> None:
     raise SystemExit(0 if outcome.verdict.counts_as_ran else 1)
 
 
-def _scenario_files(directory: Path) -> list[Path]:
-    files = []
+def _requests(directory: Path, settings: Settings, sut: SutConfig) -> list[execution.RunRequest]:
+    requests = []
     for path in sorted(directory.rglob("*.xosc")):
+        overrides_list: list[tuple[str, Path, Mapping[str, str]]]
+        scenario_id = path.relative_to(directory).as_posix()
         try:
-            if file_kind(path) is FileKind.CATALOG:
-                continue
+            kind = file_kind(path)
         except ScenarioError:
-            pass  # unreadable files are still listed; their run says why
-        files.append(path)
-    return files
+            kind = FileKind.SCENARIO  # unreadable: its run says why
+        if kind is FileKind.CATALOG:
+            continue
+        if kind is FileKind.DISTRIBUTION:
+            try:
+                runs = expand_distribution(path, seed=settings.simulation.seed)
+            except ScenarioError:
+                runs = []
+            if runs:
+                prefix = scenario_id.rsplit("/", 1)[0] + "/" if "/" in scenario_id else ""
+                overrides_list = [(prefix + r.id, r.scenario, r.overrides) for r in runs]
+            else:
+                overrides_list = [(scenario_id, path, {})]
+        else:
+            overrides_list = [(scenario_id, path, {})]
+        for run_id, scenario_path, overrides in overrides_list:
+            requests.append(
+                execution.RunRequest(
+                    scenario=scenario_path,
+                    scenario_id=run_id,
+                    overrides=dict(overrides),
+                    nets_dir=settings.cache.nets,
+                    sut=sut,
+                    simulation=settings.simulation,
+                    record=False,
+                )
+            )
+    return requests
+
+
+def _comparison(
+    reference: Mapping[str, Any], request: execution.RunRequest, report: execution.RunReport
+) -> references.Comparison | None:
+    if request.overrides or not report.outcome.verdict.counts_as_ran:
+        return None
+    key = references.find(reference, request.scenario)
+    if key is None:
+        return None
+    end = report.outcome.simulated_seconds if report.storyboard_complete else None
+    return references.compare(
+        key, reference[key], samples=report.samples, end_time=end, intended=report.intended
+    )
 
 
 @scenario.command("check")
@@ -97,48 +140,51 @@ def _scenario_files(directory: Path) -> list[Path]:
     default=None,
     help="esmini-reference.json to compare end times and paths with.",
 )
-@click.option(
-    "--takeover",
-    type=click.Choice([t.value for t in Takeover]),
-    default=Takeover.ON_CONTROLLER.value,
-    show_default=True,
-    help="When the SUT driver model takes the ego over.",
-)
+@_TAKEOVER
 def check(directory: Path, jobs: int | None, reference: Path | None, takeover: str) -> None:
     """Run every scenario under DIRECTORY in parallel and print a table."""
     settings = Settings.from_env()
-    files = _scenario_files(directory)
-    requests = [
-        execution.RunRequest(
-            scenario=path,
-            scenario_id=str(path.relative_to(directory)),
-            nets_dir=settings.cache.nets,
-            sut=_sut(takeover),
-            simulation=settings.simulation,
-            record=False,
-        )
-        for path in files
-    ]
-    reports: list[execution.RunReport | None] = [None] * len(requests)
+    requests = _requests(directory, settings, SutConfig(takeover=Takeover(takeover)))
+    ref = references.load(reference) if reference is not None else None
+    reports: dict[int, execution.RunReport] = {}
     for index, report in execution.run_many(requests, jobs=jobs or os.cpu_count() or 1):
         reports[index] = report
     table = Table(title=f"scenarios under {directory}")
-    for column in ("file", "verdict", "reason", "simulated s", "wall s"):
+    columns = ["file", "verdict", "reason", "simulated s", "wall s"]
+    if ref is not None:
+        columns += ["end Δ s", "median err m", "max err m", "match", "intended differences"]
+    for column in columns:
         table.add_column(column, overflow="fold")
-    ran = invalid = errors = 0
-    for maybe in reports:
-        assert maybe is not None
-        outcome = maybe.outcome
-        ran += outcome.verdict.counts_as_ran
-        invalid += outcome.verdict.value == "Invalid"
-        errors += outcome.verdict.value == "Error"
-        table.add_row(
+    counts = dict.fromkeys(Verdict, 0)
+    compared = matched = 0
+    for index, request in enumerate(requests):
+        outcome = reports[index].outcome
+        counts[outcome.verdict] += 1
+        row = [
             outcome.scenario_id,
             outcome.verdict.value,
             outcome.reason,
             f"{outcome.simulated_seconds:.2f}",
             f"{outcome.wall_seconds:.2f}",
-        )
-    console = Console(width=max(Console().width, 160))
-    console.print(table)
-    click.echo(f"{ran} ran, {invalid} invalid, {errors} errors")
+        ]
+        if ref is not None:
+            comparison = _comparison(ref, request, reports[index])
+            if comparison is None:
+                row += ["", "", "", "", ""]
+            else:
+                compared += 1
+                matched += comparison.match
+                end = comparison.end_difference
+                row += [
+                    f"{end:+.2f}" if end is not None else "no end",
+                    f"{comparison.worst_median:.2f}",
+                    f"{max((e.maximum for e in comparison.entities), default=0.0):.2f}",
+                    "yes" if comparison.match else "no",
+                    "; ".join(comparison.intended),
+                ]
+        table.add_row(*row)
+    Console(width=max(Console().width, 200 if ref is not None else 160)).print(table)
+    if ref is not None:
+        click.echo(f"{matched} of {compared} compared scenarios match the reference")
+    ran = sum(counts[v] for v in Verdict if v.counts_as_ran)
+    click.echo(f"{ran} ran, {counts[Verdict.INVALID]} invalid, {counts[Verdict.ERROR]} errors")

@@ -62,6 +62,8 @@ class RunReport:
     samples: Mapping[str, tuple[Sample, ...]] = dataclasses.field(default_factory=dict)
     """1 Hz samples per entity (t, x, y, heading, speed)."""
     ego: str | None = None
+    intended: tuple[str, ...] = ()
+    """Deliberate differences from a reference player (SUT-driven ego, controllers)."""
     net_from_cache: bool = False
     startup_seconds: float = 0.0
     """Wall time to load the scenario, map and network and start the backend."""

@@ -17,7 +17,7 @@ from collections.abc import Callable, Sequence
 
 from simtest_operator.errors import ScenarioError
 from simtest_operator.openscenario import model
-from simtest_operator.sim import positions, routing
+from simtest_operator.sim import positions, routes, routing
 from simtest_operator.sim.actors import Actor, Domain, Mode
 from simtest_operator.sim.following import DistanceRun, SynchronizeRun
 from simtest_operator.sim.lateral import LaneChangeRun, LaneOffsetRun
@@ -124,7 +124,10 @@ class Dispatcher:
             route = body.route
             if isinstance(route, model.Unsupported):
                 raise positions.unsupported(route)
-            self._route(actor, [wp.position for wp in route.waypoints])
+            self._route(actor, [wp.position for wp in route.waypoints[:1]])
+            if world.roads is not None:
+                leg_roads = {leg.road_id for leg in routes.legs(world, route)}
+                actor.route_roads = actor.route_roads | leg_roads
             return Done(actor)
         if isinstance(body, model.AcquirePositionAction):
             self._route(actor, [body.position])

@@ -58,6 +58,7 @@ class Simulation:
         "_steps",
         "_storyboard",
         "_sut",
+        "_sut_engaged",
         "ego",
         "world",
     )
@@ -94,6 +95,7 @@ class Simulation:
         )
         self._steps = 0
         self._external_ids: dict[str, int] = {}
+        self._sut_engaged = False
 
     # --- public -------------------------------------------------------------------------------
 
@@ -110,6 +112,20 @@ class Simulation:
     def ignored(self) -> tuple[str, ...]:
         """Elements accepted but not simulated, from the file and met during the run."""
         return tuple(dict.fromkeys((*self._scenario.ignored_kinds, *self.world.ignored)))
+
+    @property
+    def intended_differences(self) -> tuple[str, ...]:
+        """Ways this run deliberately differs from a reference player (for comparisons)."""
+        labels = []
+        if self._sut_engaged:
+            labels.append(f"{self.ego} driven by the SUT model")
+        for obj in self._scenario.entities:
+            controller = obj.controller
+            if obj.name != self.ego and isinstance(controller, model.Controller):
+                labels.append(f"controller {controller.name} of {obj.name} not imitated")
+        if self._backend_config.sumo_config is not None:
+            labels.append("SUMO background traffic")
+        return tuple(labels)
 
     def off_road(self, state: EntityState) -> bool:
         """Whether an entity is off the drivable road (for the online evaluation)."""
@@ -193,6 +209,7 @@ class Simulation:
             actor.driver = None
         elif actor.driver is None:
             actor.driver = DriverModel(self._sut, set_speed=actor.speed)
+            self._sut_engaged = True
 
     def _advance(self, actor: Actor, dt: float) -> None:
         world = self.world

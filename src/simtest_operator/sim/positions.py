@@ -108,23 +108,24 @@ def resolve(world: World, position: model.Position) -> Placement:
         )
     if isinstance(position, model.RoadPosition):
         _require_roads(world, position)
-        return _road_placement(
+        return road_placement(
             world, position.road_id, position.s, position.t, None, position.orientation
         )
     if isinstance(position, model.RelativeRoadPosition):
         _require_roads(world, position)
         ref = world.actor(position.entity_ref)
         road_id, s, t, direction = road_coordinates(world, ref)
-        return _road_placement(
+        return road_placement(
             world, road_id, s + position.ds, t + position.dt, direction, position.orientation
         )
     if isinstance(position, model.RelativeLanePosition):
         _require_roads(world, position)
         return _relative_lane(world, position)
     if isinstance(position, model.RoutePosition):
-        raise UnsupportedFeatureError(
-            "RoutePosition is not supported yet", element="RoutePosition", line=position.line
-        )
+        _require_roads(world, position)
+        from simtest_operator.sim import routes
+
+        return routes.resolve(world, position)
     raise UnsupportedFeatureError(f"position {type(position).__name__} is not supported")
 
 
@@ -169,7 +170,7 @@ def lane_placement(
     )
 
 
-def _road_placement(
+def road_placement(
     world: World,
     road_id: str,
     s: float,
