@@ -70,7 +70,7 @@ class Harness:
             self.board.update(self.now)
             for run in self.runs:
                 run.tick()
-            self.board.settle()
+            self.board.settle(self.now)
 
     def names(self) -> list[str]:
         return [name for _, name, _ in self.started]
@@ -167,10 +167,10 @@ def test_act_stop_trigger_and_storyboard_stop() -> None:
         ),
         durations={"long": 100},
     )
-    h.step(3)
-    assert h.runs[0].stopped and not h.board.complete
-    h.step()
-    assert h.board.complete
+    h.step(2)
+    assert not h.runs[0].stopped and not h.board.complete
+    h.step()  # the act stops at t=3 and the stop trigger sees its stopTransition in that step
+    assert h.runs[0].stopped and h.board.complete
 
 
 def test_completes_without_stop_trigger_only_when_stories_end() -> None:

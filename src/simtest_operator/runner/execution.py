@@ -188,6 +188,7 @@ def run_scenario(request: RunRequest) -> RunReport:
         collisions=evaluator.collisions,
         samples={name: tuple(values) for name, values in samples.data.items()},
         ego=simulation.ego,
+        intended=simulation.intended_differences,
         net_from_cache=opened.net_from_cache,
         startup_seconds=startup,
     )

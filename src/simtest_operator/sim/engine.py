@@ -164,15 +164,16 @@ class Simulation:
         world = self.world
         dt = world.dt
         world.refresh()
-        self._steps += 1
-        world.time = round(self._steps * dt, 9)
-        # As in the reference player, the clock moves first: triggers see the new time with the
-        # poses of the previous step, then actions and motion take the world to the new time.
+        # Triggers see the world as it is (time and poses of the previous step); then actions and
+        # motion take it one step further.
         self._storyboard.update(world.time)
         for actor in world.actors.values():
             if actor.placed:
                 self._advance(actor, dt)
-        self._storyboard.settle()
+        self._steps += 1
+        world.time = round(self._steps * dt, 9)
+        world.refresh()
+        self._storyboard.settle(world.time)
         world.refresh()
         return self._sync()
 

@@ -8,9 +8,11 @@ start triggers) and starts or stops elements; after the engine advanced the runn
 :meth:`Storyboard.settle` propagates completions upwards (action -> event -> maneuver -> maneuver
 group -> act -> story -> storyboard).
 
-Transitions are events, not states: one that happens during step k is visible to
-StoryboardElementStateConditions evaluated in step k+1 (and only then), so chains of
-"start when X ends" advance one step per link, as in esmini (checked against its output).
+Transitions are events, not states: one that happens during step k is visible to the
+StoryboardElementStateConditions evaluated after it in step k and in step k+1, then it is gone.
+So an event waiting for its act's startTransition starts in the same step as the act, and an
+event waiting for another's endTransition starts in the step after it ended -- the timing the
+reference player (esmini) shows on the development corpus.
 
 Event priorities apply within the event's maneuver: ``override`` (1.0 ``overwrite``) stops the
 other running events, ``skip`` does not start while another event runs, ``parallel`` just starts.
@@ -91,7 +93,9 @@ class Node:
         self.source = source
         self.children = tuple(children)
         self.phase = Phase.STANDBY
-        self.start = TriggerState(start)
+        # An empty <StartTrigger/> starts at once, as if it were absent (esmini does the same);
+        # an empty stop trigger never fires.
+        self.start = TriggerState(start if start is not None and start.condition_groups else None)
         self.stop = TriggerState(stop) if stop is not None else None
         self.executions = 0
         self.max_executions = max(1, max_executions)
@@ -205,14 +209,9 @@ class Storyboard:
 
     def update(self, now: float) -> None:
         """Evaluate triggers at ``now`` and start/stop elements accordingly."""
-        self._visible = self._pending
+        self._visible = set(self._pending)
         self._pending = set()
         if self._complete:
-            return
-        if self._stop_defined and self._stop.evaluate(now, self._raw)[0]:
-            for story in self._stories:
-                self._halt(story)
-            self._complete = True
             return
         for story in self._stories:
             if story.phase is not Phase.RUNNING:
@@ -278,6 +277,7 @@ class Storyboard:
     def _transition(self, node: Node, transition: Transition) -> None:
         key = (node.kind, node.name, transition)
         self._pending.add(key)
+        self._visible.add(key)
 
     def _begin(self, node: Node) -> None:
         node.phase = Phase.RUNNING
@@ -310,10 +310,19 @@ class Storyboard:
 
     # --- completion ---------------------------------------------------------------------------
 
-    def settle(self) -> None:
-        """Propagate completions after the engine advanced the running actions."""
+    def settle(self, now: float) -> None:
+        """Propagate completions after the engine advanced the running actions to ``now``, then
+        evaluate the storyboard stop trigger on that new state (so the run ends at the time the
+        trigger fires, not one step later)."""
         if self._complete:
             return
+        self._settle_stories()
+        if self._stop_defined and self._stop.evaluate(now, self._raw)[0]:
+            for story in self._stories:
+                self._halt(story)
+            self._complete = True
+
+    def _settle_stories(self) -> None:
         for story in self._stories:
             if story.phase is not Phase.RUNNING:
                 continue
