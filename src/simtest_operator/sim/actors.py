@@ -43,6 +43,7 @@ class Actor:
         "driver",
         "end_of_road_time",
         "heading",
+        "heading_offset",
         "id",
         "kind",
         "lane_id",
@@ -88,6 +89,9 @@ class Actor:
         """Lateral offset (m) from the centre of ``lane_id``, positive towards +t."""
         self.direction = 1
         """+1 when moving towards increasing s on ``road_id``, else -1."""
+        self.heading_offset = 0.0
+        """Heading relative to the lane's travel direction, kept while following the lane (an
+        entity placed at an angle keeps that angle, as in esmini)."""
         self.placed = False
         """False until a Teleport (or the first pose) puts the actor into the world."""
         self.odometer = 0.0

@@ -56,6 +56,15 @@ class Dispatcher:
             del mine[domain]
         return mine
 
+    def active(self) -> list[Run]:
+        """Every registered, unfinished run (each once)."""
+        seen: dict[int, Run] = {}
+        for mine in self._active.values():
+            for run in mine.values():
+                if not run.finished:
+                    seen[id(run)] = run
+        return list(seen.values())
+
     def start(self, action: model.Action, actors: tuple[str, ...]) -> Sequence[Run]:
         """Storyboard callback: start ``action`` for each actor (global: once)."""
         body = action.body
@@ -164,7 +173,9 @@ class Dispatcher:
         )
 
     def _register(self, actor: Actor, run: Run) -> Run:
-        if run.finished or not run.domains:
+        """Cancel what ran in ``run``'s domains (even if ``run`` already finished, as a step
+        speed change does) and register ``run`` while it keeps going."""
+        if not run.domains:
             return run
         mine = self._active.setdefault(actor.name, {})
         for domain in run.domains:
@@ -173,8 +184,9 @@ class Dispatcher:
                 old.cancel()
                 for d in [d for d, r in mine.items() if r is old]:
                     del mine[d]
-        for domain in run.domains:
-            mine[domain] = run
+        if not run.finished:
+            for domain in run.domains:
+                mine[domain] = run
         return run
 
     def teleport(self, actor: Actor, placement: positions.Placement) -> None:

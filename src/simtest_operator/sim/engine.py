@@ -170,6 +170,8 @@ class Simulation:
         for actor in world.actors.values():
             if actor.placed:
                 self._advance(actor, dt)
+        for run in self._dispatcher.active():
+            run.after_motion(world)
         self._steps += 1
         world.time = round(self._steps * dt, 9)
         world.refresh()

@@ -89,7 +89,15 @@ class DistanceRun(Run):
             self.finished = abs(actor.speed - self._ref.speed) < GAP_TOLERANCE
 
     def step(self, world: World, dt: float) -> None:
+        if self._action.constraints is None:
+            assert self.actor is not None
+            self.actor.speed = self._ref.speed  # placed exactly after everyone moved
+            return
         self._apply(world, dt)
+
+    def after_motion(self, world: World) -> None:
+        if self._action.constraints is None and not self.finished:
+            self._apply(world, 0.0)
 
 
 class SynchronizeRun(Run):

@@ -48,7 +48,9 @@ def move(world: World, actor: Actor, dt: float, *, before: tuple[str | None, int
             prefer_roads=actor.route_roads,
         )
         walked = 1 if distance >= 0 else -1
-        actor.stuck = location.remaining > 1e-9
+        actor.stuck = location.remaining > 1e-9 or (actor.stuck and distance == 0.0)
+        if actor.stuck:
+            actor.speed = 0.0  # the lane ended: the entity stops there, as in esmini
         actor.road_id, actor.s, actor.lane_id = location.road_id, location.s, location.lane_id
         actor.direction = location.direction * walked
         tilt = math.atan2(actor.direction * lateral_rate, abs(actor.speed)) if actor.speed else 0.0

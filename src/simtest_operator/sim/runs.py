@@ -40,6 +40,9 @@ class Run:
         """Advance this action by ``dt`` (default: nothing to do, already finished)."""
         self.finished = True
 
+    def after_motion(self, world: World) -> None:
+        """Hook after every actor moved this step (for actions tied rigidly to another)."""
+
 
 class Done(Run):
     """An action that completed when it started (teleport, parameter set, ...)."""

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from simtest_operator.openscenario import model
 from simtest_operator.sim.actors import Actor
-from simtest_operator.sim.runs import LONGITUDINAL, Run, shape_fraction
+from simtest_operator.sim.runs import LONGITUDINAL, Run, peak_rate_factor, shape_fraction
 from simtest_operator.sim.world import World
 
 DEFAULT_ACCELERATION = 5.0
@@ -30,17 +30,33 @@ def target_speed(
     return ref + target.value
 
 
-def transition_duration(dynamics: model.TransitionDynamics, v0: float, v1: float) -> float:
-    """Seconds a speed transition from v0 to v1 takes under ``dynamics``."""
+def transition_duration(
+    dynamics: model.TransitionDynamics,
+    v0: float,
+    v1: float,
+    performance: model.Performance | None = None,
+) -> float:
+    """Seconds a speed transition from v0 to v1 takes under ``dynamics``.
+
+    Like the reference player, a transition never asks more than the vehicle's performance
+    allows: its peak acceleration (deceleration) is capped at ``maxAcceleration``
+    (``maxDeceleration``), which stretches the duration when needed.
+    """
     if dynamics.shape is model.DynamicsShape.STEP:
         return 0.0
     value = abs(dynamics.value)
     if dynamics.dimension is model.DynamicsDimension.TIME:
-        return value
-    if dynamics.dimension is model.DynamicsDimension.DISTANCE:
+        duration = value
+    elif dynamics.dimension is model.DynamicsDimension.DISTANCE:
         mean = abs(v0 + v1) / 2.0
-        return value / mean if mean > 1e-6 else 0.0
-    return abs(v1 - v0) / value if value > 1e-9 else 0.0
+        duration = value / mean if mean > 1e-6 else 0.0
+    else:
+        duration = abs(v1 - v0) / value if value > 1e-9 else 0.0
+    if performance is not None:
+        limit = performance.max_acceleration if v1 > v0 else performance.max_deceleration
+        if limit > 0:
+            duration = max(duration, peak_rate_factor(dynamics.shape) * abs(v1 - v0) / limit)
+    return duration
 
 
 class SpeedRun(Run):
@@ -54,7 +70,7 @@ class SpeedRun(Run):
         self._v0 = actor.speed
         self._elapsed = 0.0
         self._duration = transition_duration(
-            action.dynamics, self._v0, target_speed(world, action.target)
+            action.dynamics, self._v0, target_speed(world, action.target), actor.obj.performance
         )
         if self._duration <= 0.0:
             actor.speed = target_speed(world, action.target)

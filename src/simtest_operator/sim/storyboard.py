@@ -157,6 +157,7 @@ class Storyboard:
     __slots__ = (
         "_by_name",
         "_complete",
+        "_fired",
         "_pending",
         "_raw",
         "_start_action",
@@ -175,6 +176,7 @@ class Storyboard:
         self._stop = TriggerState(storyboard.stop_trigger)
         self._stop_defined = storyboard.stop_trigger is not None
         self._complete = False
+        self._fired: list[tuple[Node, Node, Node, frozenset[str]]] = []
         self._visible: set[tuple[Kind, str, Transition]] = set()
         self._pending: set[tuple[Kind, str, Transition]] = set()
         self._by_name: dict[tuple[Kind, str], list[Node]] = {}
@@ -218,6 +220,7 @@ class Storyboard:
                 continue
             for act in story.children:
                 self._update_act(now, act)
+        self._start_fired()
 
     def _update_act(self, now: float, act: Node) -> None:
         if act.phase is Phase.STANDBY:
@@ -243,7 +246,15 @@ class Storyboard:
             if event.phase is not Phase.STANDBY:
                 continue
             fired, who = event.start.evaluate(now, self._raw)
-            if not fired:
+            if fired:
+                self._fired.append((group, maneuver, event, who))
+
+    def _start_fired(self) -> None:
+        """Start the events whose triggers fired this update, after all were evaluated (so one
+        event's actions cannot hide another's trigger in the same step)."""
+        fired, self._fired = self._fired, []
+        for group, maneuver, event, who in fired:
+            if event.phase is not Phase.STANDBY:
                 continue
             source = event.source
             assert isinstance(source, model.Event)

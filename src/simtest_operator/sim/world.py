@@ -18,9 +18,6 @@ from simtest_operator.sim.actors import Actor, Mode
 from simtest_operator.sim.lanecache import LaneCache
 from simtest_operator.snapshots import EntityState
 
-ROAD_SNAP_ANGLE = math.radians(60.0)
-"""Entities placed within this angle of a lane's axis (either way) follow the lane."""
-
 
 class World:
     """Everything that changes during a run, plus the static road network."""
@@ -88,16 +85,14 @@ class World:
         return self.roads.to_road(x, y, heading=heading)
 
     def attach(self, actor: Actor) -> None:
-        """Put ``actor`` into ROAD mode on the lane under it if it is on a lane and roughly
-        aligned with it; otherwise FREE mode."""
+        """Put ``actor`` into ROAD mode on the lane under it (whatever its heading, like esmini:
+        it then moves along the lane in the direction its heading points to, keeping its angle);
+        FREE mode off the road or without a road network."""
         coord = self.road_coord(actor.x, actor.y, actor.heading)
         if coord is None or not coord.on_road or coord.lane_id == 0:
             actor.mode = Mode.FREE
             return
         diff = math.remainder(actor.heading - coord.heading_of_road, 2.0 * math.pi)
-        if min(abs(diff), math.pi - abs(diff)) > ROAD_SNAP_ANGLE:
-            actor.mode = Mode.FREE
-            return
         self.set_lane(
             actor,
             coord.road_id,
@@ -115,7 +110,9 @@ class World:
     def set_lane(
         self, actor: Actor, road_id: str, lane_id: int, s: float, offset: float, *, direction: int
     ) -> None:
-        """Put ``actor`` on a lane (ROAD mode) without moving its pose."""
+        """Put ``actor`` on a lane (ROAD mode) without moving it; its current heading becomes
+        its heading relative to the lane."""
+        assert self._lanes is not None
         actor.mode = Mode.ROAD
         actor.road_id = road_id
         actor.lane_id = lane_id
@@ -123,6 +120,9 @@ class World:
         actor.offset = offset
         actor.direction = direction
         actor.stuck = False
+        lane_heading = self._lanes.pose(road_id, s, lane_id, offset)[3]
+        base = lane_heading if direction > 0 else lane_heading + math.pi
+        actor.heading_offset = math.remainder(actor.heading - base, 2.0 * math.pi)
 
     def lane_t(self, road_id: str, s: float, lane_id: int) -> float:
         """t of a lane's centre at s (0 for the centre lane or a lane that does not exist)."""
@@ -146,7 +146,7 @@ class World:
         x, y, z, heading = self._lanes.pose(actor.road_id, actor.s, actor.lane_id, actor.offset)
         actor.x, actor.y, actor.z = x, y, z
         base = heading if actor.direction > 0 else heading + math.pi
-        actor.heading = math.remainder(base + lateral_angle, 2.0 * math.pi)
+        actor.heading = math.remainder(base + actor.heading_offset + lateral_angle, 2.0 * math.pi)
 
     def neighbour_lane(
         self, road_id: str, s: float, lane_id: int, steps: int, direction: int
