@@ -121,7 +121,12 @@ def _comparison(
         return None
     end = report.outcome.simulated_seconds if report.storyboard_complete else None
     return references.compare(
-        key, reference[key], samples=report.samples, end_time=end, intended=report.intended
+        key,
+        reference[key],
+        samples=report.samples,
+        end_time=end,
+        intended=report.intended,
+        time_limit=request.criteria.time_limit,
     )
 
 

@@ -94,12 +94,26 @@ def compare(
     samples: Mapping[str, Sequence[Sample]],
     end_time: float | None,
     intended: Sequence[str] = (),
+    time_limit: float | None = None,
 ) -> Comparison:
-    """Compare one run's 1 Hz samples and end time with a reference entry."""
+    """Compare one run's 1 Hz samples and end time with a reference entry.
+
+    ``end_time`` None means our storyboard did not end within ``time_limit``; if the reference
+    did not end by then either, the end times count as equal (and that is labelled).
+    """
     ref_end = entry.get("end_time")
     end_difference = (
         end_time - float(ref_end) if end_time is not None and ref_end is not None else None
     )
+    labels = list(intended)
+    if (
+        end_time is None
+        and ref_end is not None
+        and time_limit is not None
+        and (float(ref_end) >= time_limit)
+    ):
+        end_difference = 0.0
+        labels.append(f"neither ended within {time_limit:g} s")
     errors: list[EntityError] = []
     missing: list[str] = []
     for name, ref_samples in (entry.get("samples_1hz") or {}).items():
@@ -125,5 +139,5 @@ def compare(
         end_difference=end_difference,
         entities=tuple(errors),
         missing=tuple(missing),
-        intended=tuple(intended),
+        intended=tuple(labels),
     )

@@ -121,8 +121,11 @@ class Simulation:
             labels.append(f"{self.ego} driven by the SUT model")
         for obj in self._scenario.entities:
             controller = obj.controller
-            if obj.name != self.ego and isinstance(controller, model.Controller):
+            replaced = obj.name == self.ego and self._sut_engaged
+            if isinstance(controller, model.Controller) and not replaced:
                 labels.append(f"controller {controller.name} of {obj.name} not imitated")
+            if obj.trailer is not None:
+                labels.append(f"trailer of {obj.name} not simulated")
         if self._backend_config.sumo_config is not None:
             labels.append("SUMO background traffic")
         return tuple(labels)
