@@ -1,0 +1,78 @@
+"""The system under test: the IDM/ACC/AEB driver model in isolation (free road towards the set
+speed, following, AEB latching below the TTC threshold and releasing), and end to end: two SUT
+configurations give different verdicts on the same hard-braking-lead scenario; with takeover
+``never`` the ego stays scripted."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from simtest_operator.runner import execution
+from simtest_operator.sim import BackendChoice, SutConfig, Takeover
+from simtest_operator.sim.sut import DriverModel, Leader
+from simtest_operator.verdicts import Verdict
+
+DATA = Path(__file__).parent / "data"
+
+
+def test_free_road_accelerates_towards_set_speed_and_holds_it() -> None:
+    model = DriverModel(SutConfig(), set_speed=30.0)
+    assert model.command(speed=10.0, leader=None).acceleration == pytest.approx(
+        2.0 * (1 - (1 / 3) ** 4)
+    )
+    assert model.command(speed=30.0, leader=None).acceleration == pytest.approx(0.0)
+
+
+def test_following_brakes_for_a_close_slow_leader_only_with_acc() -> None:
+    close = Leader(gap=10.0, speed=10.0)
+    assert (
+        DriverModel(SutConfig(), set_speed=25.0).command(speed=25.0, leader=close).acceleration
+        < -3.0
+    )
+    cruise = DriverModel(SutConfig(acc=False, aeb=False), set_speed=25.0)
+    assert cruise.command(speed=25.0, leader=close).acceleration == pytest.approx(0.0)
+
+
+def test_aeb_latches_below_threshold_and_releases() -> None:
+    model = DriverModel(
+        SutConfig(acc=False, aeb_ttc_threshold=1.5, aeb_deceleration=9.0), set_speed=20.0
+    )
+    assert not model.command(speed=20.0, leader=Leader(gap=40.0, speed=10.0)).aeb_active
+    braking = model.command(speed=20.0, leader=Leader(gap=12.0, speed=10.0))
+    assert braking.aeb_active and braking.acceleration == pytest.approx(-9.0)
+    # still closing, TTC above threshold again: stays latched until no longer closing
+    assert model.command(speed=15.0, leader=Leader(gap=12.0, speed=10.0)).aeb_active
+    assert not model.command(speed=9.0, leader=Leader(gap=12.0, speed=10.0)).aeb_active
+
+
+def run(sut: SutConfig, tmp_path: Path) -> execution.RunReport:
+    return execution.run_scenario(
+        execution.RunRequest(
+            scenario=DATA / "hard_braking_lead.xosc",
+            nets_dir=tmp_path,
+            sut=sut,
+            record=False,
+            backend=BackendChoice.MEMORY,
+        )
+    )
+
+
+def test_two_sut_configurations_give_different_verdicts(tmp_path: Path) -> None:
+    without_aeb = run(SutConfig(acc=False, aeb=False), tmp_path)
+    with_aeb = run(
+        SutConfig(acc=False, aeb=True, aeb_ttc_threshold=2.5, aeb_deceleration=9.0), tmp_path
+    )
+    assert without_aeb.outcome.verdict is Verdict.FAILED
+    assert without_aeb.outcome.reason.startswith("Ego collided with Lead")
+    assert with_aeb.outcome.verdict is Verdict.PASSED
+    assert with_aeb.outcome.metrics["maxDecel"] == pytest.approx(9.0)
+    assert "Ego driven by the SUT model" in with_aeb.intended
+
+
+def test_takeover_never_keeps_the_ego_scripted(tmp_path: Path) -> None:
+    scripted = run(SutConfig(takeover=Takeover.NEVER, aeb=True), tmp_path)
+    assert scripted.outcome.verdict is Verdict.FAILED
+    assert scripted.outcome.metrics["maxDecel"] == pytest.approx(0.0)
+    assert "Ego driven by the SUT model" not in scripted.intended
