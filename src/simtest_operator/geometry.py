@@ -135,31 +135,45 @@ def in_path(ego: EntityState, other: EntityState, *, margin: float = 0.0) -> boo
     return min_o < max_e + margin and max_o > min_e - margin
 
 
+def gap_ahead(ego: EntityState, other: EntityState) -> float | None:
+    """Free-space gap from ``ego``'s front to ``other`` when ``other`` is ahead in ``ego``'s
+    driving corridor (0 when touching), else None. One pass over both boxes' corners."""
+    cos_h, sin_h = math.cos(ego.heading), math.sin(ego.heading)
+    ego_corners, other_corners = box_corners(ego), box_corners(other)
+    ego_lat = [-px * sin_h + py * cos_h for px, py in ego_corners]
+    other_lat = [-px * sin_h + py * cos_h for px, py in other_corners]
+    if not (min(other_lat) < max(ego_lat) and max(other_lat) > min(ego_lat)):
+        return None
+    ego_lon = [px * cos_h + py * sin_h for px, py in ego_corners]
+    other_lon = [px * cos_h + py * sin_h for px, py in other_corners]
+    ahead = (other.x - ego.x) * cos_h + (other.y - ego.y) * sin_h
+    gap = min(other_lon) - max(ego_lon)
+    if gap <= 0.0 and ahead <= 0.0:
+        return None
+    if max(other_lon) <= min(ego_lon):
+        return None
+    return max(gap, 0.0)
+
+
 def time_to_collision(ego: EntityState, other: EntityState) -> float:
     """Classic in-path TTC of ``ego`` to ``other``: free-space gap ahead / closing speed.
 
     ``other`` counts only when it is ahead and inside ``ego``'s driving corridor; otherwise, or when
     the gap is not closing, the TTC is infinite.
     """
-    if not in_path(ego, other):
-        return INFINITE
-    gap = longitudinal_gap(ego, other, freespace=True)
-    if gap <= 0.0 and longitudinal_gap(ego, other, freespace=False) <= 0.0:
+    gap = gap_ahead(ego, other)
+    if gap is None:
         return INFINITE
     ax, ay = math.cos(ego.heading), math.sin(ego.heading)
     evx, evy = ego.velocity()
     ovx, ovy = other.velocity()
     closing = (evx - ovx) * ax + (evy - ovy) * ay
-    if closing <= 0.0:
-        return INFINITE
-    return max(gap, 0.0) / closing
+    return gap / closing if closing > 0.0 else INFINITE
 
 
 def time_headway(ego: EntityState, other: EntityState) -> float:
     """In-path time headway of ``ego`` behind ``other``: free-space gap / ego speed."""
-    if ego.speed <= 0.0 or not in_path(ego, other):
+    gap = gap_ahead(ego, other)
+    if gap is None or ego.speed <= 0.0:
         return INFINITE
-    gap = longitudinal_gap(ego, other, freespace=True)
-    if gap <= 0.0 and longitudinal_gap(ego, other, freespace=False) <= 0.0:
-        return INFINITE
-    return max(gap, 0.0) / ego.speed
+    return gap / ego.speed

@@ -14,7 +14,7 @@ from collections.abc import Callable
 
 from simtest_operator import geometry
 from simtest_operator.evaluation.criteria import Criteria
-from simtest_operator.snapshots import EntityState, WorldSnapshot
+from simtest_operator.snapshots import BoundingBox, EntityState, WorldSnapshot
 
 OffRoadCheck = Callable[[EntityState], bool]
 """True when the entity's reference point is off the drivable road."""
@@ -38,10 +38,9 @@ class Collision:
     time: float
 
 
-def _radius(state: EntityState) -> float:
-    """Radius around the reference point that contains the whole box."""
-    box = state.box
-    return math.hypot(abs(box.center_x) + box.length / 2.0, abs(box.center_y) + box.width / 2.0)
+def _centre_radius(state: EntityState) -> float:
+    """Radius around the box centre that contains the whole box."""
+    return math.hypot(state.box.length, state.box.width) / 2.0
 
 
 class OnlineEvaluator:
@@ -57,6 +56,7 @@ class OnlineEvaluator:
         "_min_thw",
         "_min_ttc",
         "_off_road",
+        "_radii",
         "_steps",
         "_violations",
     )
@@ -75,6 +75,14 @@ class OnlineEvaluator:
         self._min_distance = math.inf
         self._max_decel = 0.0
         self._steps = 0
+        self._radii: dict[str, tuple[BoundingBox, float]] = {}
+
+    def _radius_of(self, state: EntityState) -> float:
+        cached = self._radii.get(state.name)
+        if cached is None or cached[0] is not state.box:
+            cached = (state.box, _centre_radius(state))
+            self._radii[state.name] = cached
+        return cached[1]
 
     @property
     def criteria(self) -> Criteria:
@@ -94,40 +102,59 @@ class OnlineEvaluator:
         """Update metrics and violations with one snapshot."""
         self._steps += 1
         entities = snapshot.entities
-        radii = [_radius(state) for state in entities]
-        self._check_collisions(snapshot.time, entities, radii)
+        radii = [self._radius_of(state) for state in entities]
+        centres = [state.box_center() for state in entities]
+        self._check_collisions(snapshot.time, entities, radii, centres)
         ego = snapshot.entity(self._ego) if self._ego is not None else None
         if ego is None:
             return
-        ego_radius = _radius(ego)
+        ego_radius = self._radius_of(ego)
         cos_h, sin_h = math.cos(ego.heading), math.sin(ego.heading)
         ego_x, ego_y, _ = ego.box_center()
         half_width = ego.box.width / 2.0
-        for other, radius in zip(entities, radii, strict=True):
+        for other, radius, centre in zip(entities, radii, centres, strict=True):
             if other is ego:
                 continue
-            centre_gap = geometry.reference_distance(ego, other) - ego_radius - radius
+            other_x, other_y, _ = centre
+            centre_gap = math.hypot(other_x - ego_x, other_y - ego_y) - ego_radius - radius
             if centre_gap < self._min_distance:
                 self._min_distance = min(self._min_distance, geometry.box_distance(ego, other))
             # Cheap bounding-circle test in the ego frame before the exact in-path geometry.
-            other_x, other_y, _ = other.box_center()
             ahead = (other_x - ego_x) * cos_h + (other_y - ego_y) * sin_h
             across = -(other_x - ego_x) * sin_h + (other_y - ego_y) * cos_h
             if ahead + radius <= 0.0 or abs(across) >= half_width + radius:
                 continue
-            self._min_ttc = min(self._min_ttc, geometry.time_to_collision(ego, other))
-            self._min_thw = min(self._min_thw, geometry.time_headway(ego, other))
+            gap = geometry.gap_ahead(ego, other)
+            if gap is None:
+                continue
+            if ego.speed > 0.0:
+                self._min_thw = min(self._min_thw, gap / ego.speed)
+            evx, evy = ego.velocity()
+            ovx, ovy = other.velocity()
+            closing = (evx - ovx) * cos_h + (evy - ovy) * sin_h
+            if closing > 0.0:
+                self._min_ttc = min(self._min_ttc, gap / closing)
         self._max_decel = max(self._max_decel, -ego.acceleration)
         self._check_thresholds(snapshot.time, ego)
 
     def _check_collisions(
-        self, time: float, entities: tuple[EntityState, ...], radii: list[float]
+        self,
+        time: float,
+        entities: tuple[EntityState, ...],
+        radii: list[float],
+        centres: list[tuple[float, float, float]],
     ) -> None:
-        for i, first in enumerate(entities):
-            for j in range(i + 1, len(entities)):
-                second = entities[j]
-                if geometry.reference_distance(first, second) > radii[i] + radii[j]:
-                    continue
+        count = len(entities)
+        for i in range(count):
+            xi, yi, _ = centres[i]
+            ri = radii[i]
+            for j in range(i + 1, count):
+                xj, yj, _ = centres[j]
+                reach = ri + radii[j]
+                dx, dy = xj - xi, yj - yi
+                if dx * dx + dy * dy > reach * reach:
+                    continue  # bounding circles apart: no contact possible
+                first, second = entities[i], entities[j]
                 pair = (first.name, second.name)
                 if pair in self._collided or not geometry.boxes_overlap(first, second):
                     continue

@@ -19,6 +19,8 @@ SPACING = 1.0
 """Sample spacing (m) along a lane."""
 CHUNK = 50.0
 """Chunk length (m): how much of a lane is sampled at once."""
+_RECENT = 8
+"""Chunks remembered per lane for the fast lookup."""
 
 _Samples = tuple[
     float, float, tuple[float, ...], tuple[tuple[float, float, float, float, float, float], ...]
@@ -29,12 +31,15 @@ _Samples = tuple[
 class LaneCache:
     """Interpolated lane poses for one road network."""
 
-    __slots__ = ("_chunks", "_roads", "_sections")
+    __slots__ = ("_chunks", "_last", "_roads", "_sections")
 
     def __init__(self, roads: RoadNetwork) -> None:
         self._roads = roads
         self._chunks: dict[tuple[str, int, int, int], _Samples | None] = {}
         self._sections: dict[str, list[float]] = {}
+        self._last: dict[tuple[str, int], list[_Samples]] = {}
+        """Recently used chunks per (road, lane), newest first: actors stay in a chunk for many
+        steps, and several actors may share a lane."""
 
     def _section(self, road_id: str, s: float) -> tuple[int, float, float]:
         starts = self._sections.get(road_id)
@@ -78,9 +83,17 @@ class LaneCache:
     def _interpolate(
         self, road_id: str, s: float, lane_id: int
     ) -> tuple[float, float, float, float, float, float] | None:
-        chunk = self._chunk(road_id, s, lane_id)
-        if chunk is None:
-            return None
+        recent = self._last.setdefault((road_id, lane_id), [])
+        for chunk in recent:
+            if chunk[2][0] <= s < chunk[2][-1]:
+                break
+        else:
+            found = self._chunk(road_id, s, lane_id)
+            if found is None:
+                return None
+            chunk = found
+            recent.insert(0, chunk)
+            del recent[_RECENT:]
         lo, step, s_values, rows = chunk
         i = int((s - lo) / step) if step > 0 else 0
         i = max(0, min(i, len(rows) - 2))

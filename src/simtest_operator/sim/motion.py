@@ -75,7 +75,7 @@ def update_timers(world: World, actor: Actor, dt: float) -> None:
     actor.end_of_road_time = actor.end_of_road_time + dt if actor.stuck else 0.0
     if world.roads is None:
         return
-    on_road = actor.mode is Mode.ROAD and not actor.stuck
-    if not on_road:
-        on_road = world.roads.is_on_road(actor.x, actor.y)
+    # Lane-following actors are on the road by construction (also when stuck at a road's end);
+    # only free and path-following actors need the (costlier) projection.
+    on_road = actor.mode is Mode.ROAD or world.roads.is_on_road(actor.x, actor.y)
     actor.offroad_time = 0.0 if on_road else actor.offroad_time + dt
