@@ -20,7 +20,7 @@ from simtest_operator.openscenario import model
 from simtest_operator.sim import positions, routes, routing
 from simtest_operator.sim.actors import Actor, Domain, Mode
 from simtest_operator.sim.following import DistanceRun, SynchronizeRun
-from simtest_operator.sim.lateral import LaneChangeRun, LaneOffsetRun
+from simtest_operator.sim.lateral import LaneChangeRun, LaneOffsetRun, LateralDistanceRun
 from simtest_operator.sim.runs import Done, Run
 from simtest_operator.sim.speeds import SpeedProfileRun, SpeedRun, target_speed
 from simtest_operator.sim.trajectories import PathRun
@@ -160,6 +160,8 @@ class Dispatcher:
             return LaneChangeRun(world, actor, body)
         if isinstance(body, model.LaneOffsetAction):
             return LaneOffsetRun(world, actor, body)
+        if isinstance(body, model.LateralDistanceAction):
+            return LateralDistanceRun(world, actor, body)
         if isinstance(body, model.FollowTrajectoryAction):
             return PathRun(world, actor, body)
         if isinstance(body, model.LongitudinalDistanceAction):

@@ -143,3 +143,62 @@ class LaneOffsetRun(Run):
             return
         fraction = shape_fraction(self._action.shape, self._elapsed / self._duration)
         actor.offset = self._offset0 + (target - self._offset0) * fraction
+
+
+class LateralDistanceRun(Run):
+    """A running LateralDistanceAction: hold a lateral distance to another entity.
+
+    Measured across the road (difference of t, free space subtracting the half widths); the
+    requested side is kept (``any``: the side the actor is on now). Without constraints the actor
+    snaps to the distance; with them its lateral speed (and acceleration) are limited.
+    """
+
+    __slots__ = ("_action", "_lateral_speed", "_ref", "_side")
+
+    def __init__(self, world: World, actor: Actor, action: model.LateralDistanceAction) -> None:
+        super().__init__(actor, LATERAL)
+        _require_lane(actor, "LateralDistanceAction")
+        self._action = action
+        self._ref = world.actor(action.entity_ref)
+        self._lateral_speed = 0.0
+        if action.displacement is model.LateralDisplacement.LEFT:
+            self._side = 1.0
+        elif action.displacement is model.LateralDisplacement.RIGHT:
+            self._side = -1.0
+        else:
+            here = self._t(world, actor) - self._t(world, self._ref)
+            self._side = 1.0 if here * actor.direction >= 0 else -1.0
+        self.step(world, 0.0)
+
+    @staticmethod
+    def _t(world: World, actor: Actor) -> float:
+        if actor.road_id is None:
+            return 0.0
+        return world.lane_t(actor.road_id, actor.s, actor.lane_id) + actor.offset
+
+    def step(self, world: World, dt: float) -> None:
+        actor, action = self.actor, self._action
+        assert actor is not None
+        if actor.mode is not Mode.ROAD or actor.road_id is None:
+            self.cancel()
+            return
+        distance = action.distance or 0.0
+        if action.freespace:
+            distance += (actor.box.width + self._ref.box.width) / 2.0
+        target_t = self._t(world, self._ref) + self._side * actor.direction * distance
+        target = target_t - world.lane_t(actor.road_id, actor.s, actor.lane_id)
+        limits = action.constraints
+        if limits is None or dt <= 0.0:
+            if limits is None:
+                actor.offset = target
+        else:
+            wanted = (target - actor.offset) / dt
+            if limits.max_speed is not None:
+                wanted = max(-limits.max_speed, min(limits.max_speed, wanted))
+            if limits.max_acceleration is not None:
+                step = limits.max_acceleration * dt
+                wanted = max(self._lateral_speed - step, min(self._lateral_speed + step, wanted))
+            self._lateral_speed = wanted
+            actor.offset += wanted * dt
+        if not action.continuous and abs(actor.offset - target) < 0.05:
+            self.finished = True

@@ -181,10 +181,18 @@ class Storyboard:
         self._pending: set[tuple[Kind, str, Transition]] = set()
         self._by_name: dict[tuple[Kind, str], list[Node]] = {}
         for story in self._stories:
-            for node in story.walk():
-                self._by_name.setdefault((node.kind, node.name), []).append(node)
+            self._index(story, ())
             story.phase = Phase.RUNNING
             self._pending.add((Kind.STORY, story.name, Transition.START_TRANSITION))
+
+    def _index(self, node: Node, parents: tuple[str, ...]) -> None:
+        """Register ``node`` by its name and by every ``Parent::...::Name`` suffix of its path
+        (esmini's way to tell apart elements with the same name)."""
+        path = (*parents, node.name)
+        for k in range(len(path)):
+            self._by_name.setdefault((node.kind, "::".join(path[k:])), []).append(node)
+        for child in node.children:
+            self._index(child, path)
 
     @property
     def complete(self) -> bool:
