@@ -58,7 +58,8 @@ class Actor:
         "placed",
         "road_id",
         "roll",
-        "route_roads",
+        "route",
+        "route_index",
         "s",
         "speed",
         "standstill_time",
@@ -103,8 +104,10 @@ class Actor:
         previous step so the actor drives its speed along the lane, not along the reference line."""
         self.stuck = False
         """True while the lane it follows has ended (no successor)."""
-        self.route_roads: frozenset[str] = frozenset()
-        """Roads of an assigned route, preferred at forks."""
+        self.route: tuple[str, ...] = ()
+        """Roads of an assigned route in order; the next ones are preferred at forks."""
+        self.route_index = 0
+        """Position of the actor's current road in ``route``."""
         self.driver: DriverModel | None = None
         """Set while the system-under-test driver model controls this actor."""
 

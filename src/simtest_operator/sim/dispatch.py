@@ -135,8 +135,12 @@ class Dispatcher:
                 raise positions.unsupported(route)
             self._route(actor, [wp.position for wp in route.waypoints[:1]])
             if world.roads is not None:
-                leg_roads = {leg.road_id for leg in routes.legs(world, route)}
-                actor.route_roads = actor.route_roads | leg_roads
+                leg_roads = [leg.road_id for leg in routes.legs(world, route)]
+                approach = list(actor.route)
+                if approach and leg_roads and approach[-1] == leg_roads[0]:
+                    approach.pop()
+                actor.route = tuple(approach + leg_roads)
+                actor.route_index = 0
             return Done(actor)
         if isinstance(body, model.AcquirePositionAction):
             self._route(actor, [body.position])
@@ -242,7 +246,8 @@ class Dispatcher:
             roads_on_route = routing.plan_through(roads, (actor.road_id, actor.direction), goals)
         else:
             roads_on_route = goals
-        actor.route_roads = frozenset(roads_on_route)
+        actor.route = tuple(roads_on_route)
+        actor.route_index = 0
 
     def _ignore(self, what: str) -> None:
         if what not in self._world.ignored:

@@ -14,6 +14,8 @@ import math
 from simtest_operator.sim.actors import Actor, Mode
 from simtest_operator.sim.world import World
 
+_LOOKAHEAD = 4
+"""Route roads considered ahead of the current one (a junction is road, connector, road)."""
 STANDSTILL_SPEED = 1e-3
 """Speed (m/s) below which an actor counts as standing still."""
 
@@ -45,16 +47,26 @@ def move(world: World, actor: Actor, dt: float, *, before: tuple[str | None, int
             actor.s,
             actor.lane_id,
             stretched * actor.direction,
-            prefer_roads=actor.route_roads,
+            prefer_roads=actor.route[actor.route_index + 1 : actor.route_index + _LOOKAHEAD],
         )
         walked = 1 if distance >= 0 else -1
         actor.stuck = location.remaining > 1e-9 or (actor.stuck and distance == 0.0)
         if actor.stuck:
             actor.speed = 0.0  # the lane ended: the entity stops there, as in esmini
         actor.road_id, actor.s, actor.lane_id = location.road_id, location.s, location.lane_id
-        actor.direction = location.direction * walked
+        if stretched != 0.0:  # a zero walk reports direction +1 whatever the travel direction
+            direction = location.direction * walked
+            if direction != actor.direction:
+                # t flips relative to travel: keep the offset on the same side of the vehicle
+                actor.offset = -actor.offset
+            actor.direction = direction
         tilt = math.atan2(actor.direction * lateral_rate, abs(actor.speed)) if actor.speed else 0.0
         road_kept = location.road_id == road_before
+        if not road_kept and actor.route:
+            ahead = actor.route[actor.route_index : actor.route_index + _LOOKAHEAD]
+            if location.road_id in ahead:
+                actor.route_index += ahead.index(location.road_id)
+                _pick_route_lane(world, actor)
         world.pose_on_road(actor, tilt)
         actor.lateral_speed = lateral_rate
         moved = math.hypot(actor.x - x0, actor.y - y0)
@@ -79,3 +91,29 @@ def update_timers(world: World, actor: Actor, dt: float) -> None:
     # only free and path-following actors need the (costlier) projection.
     on_road = actor.mode is Mode.ROAD or world.roads.is_on_road(actor.x, actor.y)
     actor.offroad_time = 0.0 if on_road else actor.offroad_time + dt
+
+
+def _pick_route_lane(world: World, actor: Actor) -> None:
+    """Entering a road where the lane graph splits (one lane feeding two), take the lane whose
+    successors continue the route, as the reference player does."""
+    roads = world.roads
+    if roads is None or actor.road_id is None:
+        return
+    following = actor.route[actor.route_index + 1 : actor.route_index + _LOOKAHEAD]
+    if not following:
+        return
+
+    def continues(lane_id: int) -> bool:
+        return any(
+            entry.road_id in following for entry in roads.successors(actor.road_id or "", lane_id)
+        )
+
+    if continues(actor.lane_id):
+        return
+    candidates = [
+        lane_id
+        for lane_id in roads.lane_ids(actor.road_id, actor.s)
+        if lane_id * actor.lane_id > 0 and continues(lane_id)
+    ]
+    if candidates:
+        actor.lane_id = min(candidates, key=lambda lane_id: abs(lane_id - actor.lane_id))

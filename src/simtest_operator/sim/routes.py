@@ -53,12 +53,14 @@ def legs(world: World, route: model.Route) -> list[Leg]:
     road_id, s, direction = _anchor(world, route.waypoints[0].position)
     result: list[Leg] = []
     for waypoint in route.waypoints[1:]:
-        goal_road, goal_s, _ = _anchor(world, waypoint.position)
+        goal_road, goal_s, goal_direction = _anchor(world, waypoint.position)
         if goal_road == road_id and (goal_s - s) * direction >= 0.0:
             result.append(Leg(road_id=road_id, direction=direction, s_from=s, s_to=goal_s))
             s = goal_s
             continue
-        path = routing.plan(roads, (road_id, direction), goal_road)
+        path = routing.plan(roads, (road_id, direction), goal_road, goal_direction)
+        if path is None:
+            path = routing.plan(roads, (road_id, direction), goal_road)
         if path is None:
             raise ScenarioError(
                 f"no road path from road {road_id} to road {goal_road}",
