@@ -187,21 +187,24 @@ class Conditions:
 
     def _headway(self, actor: Actor, condition: model.TimeHeadwayCondition) -> float:
         other = self._world.actor(condition.entity_ref)
+        kind, system = _distance_kind(condition)
         distance = measures.between(
             self._world,
             actor,
             other,
-            kind=condition.relative_distance_type,
+            kind=kind,
             freespace=condition.freespace,
-            system=condition.coordinate_system,
+            system=system,
         )
+        if distance < 0.0:
+            return math.nan  # the reference is behind: no headway, the condition does not hold
         if actor.speed <= 0.0:
-            return math.inf if distance > 0 else -math.inf
+            return math.inf  # a standing entity never closes the gap
         return distance / actor.speed
 
     def _ttc(self, actor: Actor, condition: model.TimeToCollisionCondition) -> float:
         world = self._world
-        kind = condition.relative_distance_type
+        kind, system = _distance_kind(condition)
         me = world.state(actor.name)
         if condition.entity_ref is not None:
             other_actor = world.actor(condition.entity_ref)
@@ -211,7 +214,7 @@ class Conditions:
                 other_actor,
                 kind=kind,
                 freespace=condition.freespace,
-                system=condition.coordinate_system,
+                system=system,
             )
             other = world.state(other_actor.name)
         elif condition.position is not None:
@@ -234,3 +237,15 @@ class Conditions:
 
 def _lateral(direction: model.DirectionalDimension | None) -> bool:
     return direction is model.DirectionalDimension.LATERAL
+
+
+def _distance_kind(
+    condition: model.TimeHeadwayCondition | model.TimeToCollisionCondition,
+) -> tuple[model.RelativeDistanceType, model.CoordinateSystem]:
+    """What distance a headway/TTC condition means. OpenSCENARIO 1.0's ``alongRoute`` decides
+    when present: along the road if true, the straight (Euclidean) distance if false."""
+    if condition.along_route is True:
+        return model.RelativeDistanceType.LONGITUDINAL, model.CoordinateSystem.ROAD
+    if condition.along_route is False:
+        return model.RelativeDistanceType.EUCLIDEAN, model.CoordinateSystem.ENTITY
+    return condition.relative_distance_type, condition.coordinate_system
