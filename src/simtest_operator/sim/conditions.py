@@ -67,11 +67,14 @@ def _compare_typed(current: model.ParameterValue, rule: model.Rule, text: str) -
 class Conditions:
     """Evaluates condition bodies against the world and the storyboard state."""
 
-    __slots__ = ("_state_query", "_world")
+    __slots__ = ("_signed_longitudinal", "_state_query", "_world")
 
-    def __init__(self, world: World, state_query: StateQuery) -> None:
+    def __init__(
+        self, world: World, state_query: StateQuery, *, signed_longitudinal: bool = False
+    ) -> None:
         self._world = world
         self._state_query = state_query
+        self._signed_longitudinal = signed_longitudinal
 
     def __call__(self, body: model.ByEntity | model.ByValue) -> Truth:
         if isinstance(body, model.ByValue):
@@ -154,17 +157,22 @@ class Conditions:
             return compare(value, condition.rule, condition.value)
         if isinstance(condition, model.RelativeDistanceCondition):
             other = world.actor(condition.entity_ref)
-            value = abs(
-                measures.between(
-                    world,
-                    actor,
-                    other,
-                    kind=condition.relative_distance_type,
-                    freespace=condition.freespace,
-                    system=condition.coordinate_system,
-                )
+            value = measures.between(
+                world,
+                actor,
+                other,
+                kind=condition.relative_distance_type,
+                freespace=condition.freespace,
+                system=condition.coordinate_system,
             )
-            return compare(value, condition.rule, condition.value)
+            longitudinal = (
+                condition.relative_distance_type is model.RelativeDistanceType.LONGITUDINAL
+            )
+            if longitudinal and self._signed_longitudinal:
+                # OpenSCENARIO 1.0 files, as esmini reads them: a reference behind is at a negative
+                # distance, so "greater than 10 m" waits until it is 10 m ahead (1.1+: absolute).
+                return compare(value, condition.rule, condition.value)
+            return compare(abs(value), condition.rule, condition.value)
         if isinstance(condition, model.TimeHeadwayCondition):
             return compare(self._headway(actor, condition), condition.rule, condition.value)
         if isinstance(condition, model.TimeToCollisionCondition):

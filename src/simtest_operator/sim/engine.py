@@ -87,7 +87,12 @@ class Simulation:
             variables={v.name: v.value for v in scenario.variables},
         )
         self._dispatcher = Dispatcher(self.world, ego=self.ego, switch=self._switch_driver)
-        self._conditions = Conditions(self.world, self._state_query)
+        header = scenario.header
+        self._conditions = Conditions(
+            self.world,
+            self._state_query,
+            signed_longitudinal=(header.rev_major, header.rev_minor) == (1, 0),
+        )
         self._storyboard = Storyboard(
             scenario.storyboard,
             raw=self._conditions,
