@@ -39,13 +39,15 @@ _SUT_LONGITUDINAL = (
 class Dispatcher:
     """Starts actions on actors and keeps the per-actor, per-domain registry of runs."""
 
-    __slots__ = ("_active", "_ego", "_switch", "_world")
+    __slots__ = ("_active", "_ego", "_switch", "_world", "assigned")
 
     def __init__(self, world: World, *, ego: str | None, switch: ControllerSwitch) -> None:
         self._world = world
         self._ego = ego
         self._switch = switch
         self._active: dict[str, dict[Domain, Run]] = {}
+        self.assigned: dict[tuple[str, str], None] = {}
+        """(entity, controller) pairs assigned during the run, in order (an ordered set)."""
 
     def runs(self, actor: Actor) -> dict[Domain, Run]:
         """The actor's active runs by domain (finished ones pruned)."""
@@ -127,6 +129,7 @@ class Dispatcher:
             controller = body.controller
             if isinstance(controller, model.Unsupported):
                 raise positions.unsupported(controller)
+            self.assigned.setdefault((actor.name, controller.name), None)
             self._activate(actor, body.activate_longitudinal, body.activate_lateral)
             return Done(actor)
         if isinstance(body, model.AssignRouteAction):

@@ -131,6 +131,11 @@ class Simulation:
                 labels.append(f"controller {controller.name} of {obj.name} not imitated")
             if obj.trailer is not None:
                 labels.append(f"trailer of {obj.name} not simulated")
+        for entity, name in self._dispatcher.assigned:
+            label = f"controller {name} of {entity} not imitated"
+            replaced = entity == self.ego and self._sut_engaged
+            if not replaced and label not in labels:
+                labels.append(label)
         if self._backend_config.sumo_config is not None:
             labels.append("SUMO background traffic")
         return tuple(labels)
