@@ -9,7 +9,10 @@ from __future__ import annotations
 
 from typing import Any
 
+import pytest
+
 from simtest_operator.api import converting, v1alpha1
+from simtest_operator.api.v1alpha1 import environment
 from simtest_operator.evaluation import DEFAULT_TIME_LIMIT
 from simtest_operator.scenarios import (
     ConfigMapSource,
@@ -110,3 +113,13 @@ def test_sut_simulation_and_pins() -> None:
     wire = converting.pinned_to_wire(pinned)
     assert wire.to_wire() == pinned.to_json()
     assert converting.pinned_from_wire(wire) == pinned
+
+
+@pytest.mark.parametrize(
+    ("wire", "domain"),
+    [("OnController", "onController"), ("AfterInit", "afterInit"), ("Never", "never")],
+)
+def test_sut_takeover_and_ego_reach_the_driver_model(wire: str, domain: str) -> None:
+    spec = environment.SutConfig.model_validate({"ego": "Hero", "takeover": wire})
+    sut = converting.sut(spec)
+    assert (sut.ego, sut.takeover.value) == ("Hero", domain)

@@ -13,7 +13,7 @@ from simtest_operator.evaluation import DEFAULT_TIME_LIMIT, Criteria
 from simtest_operator.scenarios import batching, globbing, specs
 from simtest_operator.scenarios.pinned import PinnedScenario
 from simtest_operator.settings import SimulationSettings
-from simtest_operator.sim.sut import SutConfig
+from simtest_operator.sim.sut import SutConfig, Takeover
 
 
 def selection(spec: sources.ScenarioSelection) -> specs.Selection:
@@ -98,6 +98,8 @@ def sut(spec: environment.SutConfig) -> SutConfig:
     return SutConfig(
         name=spec.name,
         version=spec.version,
+        ego=spec.ego,
+        takeover=Takeover(spec.takeover.value[0].lower() + spec.takeover.value[1:]),
         desired_speed=model.desired_speed,
         time_headway=model.time_headway,
         min_gap=model.min_gap,

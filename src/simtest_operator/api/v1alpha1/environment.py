@@ -55,6 +55,17 @@ class DriverModel(ApiModel):
     """Emergency braking."""
 
 
+class Takeover(enum.StrEnum):
+    """When the driver model takes the ego over from the storyboard."""
+
+    ON_CONTROLLER = "OnController"
+    """When the scenario activates the ego's controller (OpenSCENARIO semantics)."""
+    AFTER_INIT = "AfterInit"
+    """Right after the Init actions, for scenarios that script the ego without a controller."""
+    NEVER = "Never"
+    """The ego stays scripted; the SUT settings have no effect (reproduces a reference player)."""
+
+
 class SutConfig(ApiModel):
     """The system under test: identity for the results and the driver-model parameters."""
 
@@ -64,6 +75,11 @@ class SutConfig(ApiModel):
     """Version of the SUT, stored with every result so two SUT versions can be compared."""
     image: Annotated[str, StringConstraints(max_length=512)] | None = None
     """Container image of an external SUT component, rendered into the environment's values."""
+    ego: Annotated[str, StringConstraints(min_length=1, max_length=256)] | None = None
+    """Scenario entity that is the system under test; unset picks ``Ego``/``ego``/``hero``,
+    else the first vehicle."""
+    takeover: Takeover = Takeover.ON_CONTROLLER
+    """When the driver model takes the ego over from the storyboard."""
     driver_model: DriverModel = Field(default_factory=DriverModel)
     """Parameters of the stand-in driver model that drives the ego."""
     config: dict[str, str] = Field(default_factory=dict)
