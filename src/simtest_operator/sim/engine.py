@@ -25,6 +25,7 @@ from simtest_operator.sim.conditions import Conditions
 from simtest_operator.sim.dispatch import Dispatcher
 from simtest_operator.sim.storyboard import Storyboard
 from simtest_operator.sim.sut import DriverModel, SutConfig, Takeover
+from simtest_operator.sim.trajectories import PathRun
 from simtest_operator.sim.world import World
 from simtest_operator.snapshots import BoundingBox, EntityKind, EntityState, WorldSnapshot
 
@@ -231,6 +232,7 @@ class Simulation:
         world = self.world
         speed_before = actor.speed
         before = (actor.road_id, actor.lane_id, actor.offset)
+        start = (actor.x, actor.y)
         runs = self._dispatcher.runs(actor)
         longitudinal = runs.get(Domain.LONGITUDINAL)
         lateral = runs.get(Domain.LATERAL)
@@ -245,9 +247,14 @@ class Simulation:
             lateral.step(world, dt)
         elif lateral is None and driver is not None and actor.mode is Mode.ROAD:
             actor.offset = driver.lateral_offset(actor.offset, dt)
+        # A trajectory placed the actor for the end of this step (also when it just ended and
+        # the actor rejoined its lane): it must not move a second time.
+        placed = actor.mode is Mode.PATH or (
+            isinstance(lateral, PathRun) and lateral.finished and not lateral.stopped
+        )
         if actor.mode is Mode.PATH and Domain.LATERAL not in self._dispatcher.runs(actor):
             world.attach(actor)
-        motion.move(world, actor, dt, before=before)
+        motion.move(world, actor, dt, before=before, start=start, placed=placed)
         actor.acceleration = (actor.speed - speed_before) / dt if dt > 0 else 0.0
 
     def _sync(self) -> WorldSnapshot:

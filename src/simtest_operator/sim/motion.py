@@ -27,12 +27,23 @@ def lateral_position(world: World, actor: Actor) -> float:
     return world.lane_t(actor.road_id, actor.s, actor.lane_id) + actor.offset
 
 
-def move(world: World, actor: Actor, dt: float, *, before: tuple[str | None, int, float]) -> None:
+def move(
+    world: World,
+    actor: Actor,
+    dt: float,
+    *,
+    before: tuple[str | None, int, float],
+    start: tuple[float, float],
+    placed: bool = False,
+) -> None:
     """Advance ``actor`` by ``dt`` (speed and offset already updated for this step);
-    ``before`` is its (road, lane, offset) at the start of the step."""
-    x0, y0 = actor.x, actor.y
+    ``before`` is its (road, lane, offset) and ``start`` its (x, y) at the start of the step;
+    ``placed`` says a trajectory already put it where it is at the end of the step."""
+    x0, y0 = start
     road_before, lane_before, offset_before = before
-    if actor.mode is Mode.ROAD and actor.road_id is not None and world.roads is not None:
+    if placed:
+        actor.lateral_speed = 0.0
+    elif actor.mode is Mode.ROAD and actor.road_id is not None and world.roads is not None:
         lateral_rate = 0.0
         if road_before == actor.road_id and dt > 0:
             if lane_before == actor.lane_id:

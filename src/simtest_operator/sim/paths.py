@@ -1,8 +1,13 @@
-"""Paths: trajectory shapes (polyline, clothoid, clothoid spline, NURBS) sampled into polylines.
+"""Paths: a trajectory sampled into a polyline with headings, lengths and optional times.
 
-A :class:`Path` is a sequence of points with heading, cumulative length and optional times; the
-trajectory follower interpolates it by distance or by time. Shapes are sampled once, when the
-FollowTrajectoryAction starts, because their positions may be relative to entities at that moment.
+The trajectory follower interpolates a :class:`Path` by distance (untimed following) or by time
+(timed following). :mod:`~simtest_operator.sim.shapes` turns trajectory shapes into paths.
+
+Timed following has two flavours, as in the reference player. In ``position`` mode the entity is
+exactly where the path says at every instant: constant speed between consecutive samples. In
+``follow`` mode the entity drives there: its speed changes linearly in time between samples, and
+the speeds at the samples are chosen so that every sample is still reached at its time (see
+:meth:`Path.following`).
 """
 
 from __future__ import annotations
@@ -10,28 +15,24 @@ from __future__ import annotations
 import bisect
 import dataclasses
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 
 from simtest_operator.errors import ScenarioError
-from simtest_operator.openscenario import model
-from simtest_operator.sim import positions
-from simtest_operator.sim.positions import Placement
-
-SAMPLE_STEP = 0.5
-"""Sampling distance (m) along curved shapes."""
-
-Resolver = Callable[[model.Position], Placement]
 
 
 @dataclasses.dataclass(frozen=True, slots=True)
 class Path:
-    """A sampled path: parallel sequences, ``lengths`` strictly increasing from 0."""
+    """A sampled path: parallel sequences, ``lengths`` non-decreasing from 0 (a repeated point
+    with a later time is a stop on the path)."""
 
     xs: tuple[float, ...]
     ys: tuple[float, ...]
     headings: tuple[float, ...]
     lengths: tuple[float, ...]
     times: tuple[float, ...] | None
+    speeds: tuple[float, ...] | None = None
+    """Speed at each sample in ``follow`` mode (linear in time in between); None: constant
+    speed between samples."""
 
     @property
     def length(self) -> float:
@@ -49,157 +50,101 @@ class Path:
         h0, h1 = self.headings[i - 1], self.headings[i]
         return x, y, h0 + f * math.remainder(h1 - h0, 2.0 * math.pi)
 
+    def _span(self, t: float) -> int:
+        """Index i of the sample interval [i-1, i] (of positive duration) containing time t."""
+        assert self.times is not None
+        times = self.times
+        i = min(max(1, bisect.bisect_right(times, t)), len(times) - 1)
+        while i > 1 and times[i] - times[i - 1] <= 0:
+            i -= 1
+        return i
+
+    def speed_at_time(self, t: float) -> float:
+        """Path speed (distance per path time) at path time ``t``."""
+        assert self.times is not None
+        i = self._span(t)
+        t0, t1 = self.times[i - 1], self.times[i]
+        span = t1 - t0
+        if span <= 0:
+            return 0.0
+        if self.speeds is not None:
+            f = min(max((t - t0) / span, 0.0), 1.0)
+            return self.speeds[i - 1] + f * (self.speeds[i] - self.speeds[i - 1])
+        return (self.lengths[i] - self.lengths[i - 1]) / span
+
     def distance_at_time(self, t: float) -> float:
-        """Distance along the path reached at path time ``t`` (linear between samples)."""
+        """Distance along the path reached at path time ``t``."""
         assert self.times is not None
         times = self.times
         if t <= times[0]:
             return 0.0
         if t >= times[-1]:
             return self.length
-        i = max(1, bisect.bisect_right(times, t))
-        span = times[i] - times[i - 1]
-        f = (t - times[i - 1]) / span if span > 0 else 1.0
-        return self.lengths[i - 1] + f * (self.lengths[i] - self.lengths[i - 1])
+        i = self._span(t)
+        t0, t1 = times[i - 1], times[i]
+        d0, d1 = self.lengths[i - 1], self.lengths[i]
+        span = t1 - t0
+        tau = min(max(t - t0, 0.0), span)
+        if span <= 0:
+            return d1
+        if self.speeds is None:
+            return d0 + tau / span * (d1 - d0)
+        v0, v1 = self.speeds[i - 1], self.speeds[i]
+        return min(d0 + v0 * tau + (v1 - v0) * tau * tau / (2.0 * span), d1)
+
+    def following(self) -> Path:
+        """This path driven in ``follow`` mode: the speed starts at the first interval's mean
+        and changes linearly in time so that each sample is reached at its time (the speed at
+        the next sample is twice the interval's mean minus the speed at its start, never
+        below zero)."""
+        if self.times is None or len(self.times) < 2:
+            return self
+        times, lengths = self.times, self.lengths
+        speeds: list[float] = []
+        for i in range(1, len(times)):
+            span = times[i] - times[i - 1]
+            mean = (lengths[i] - lengths[i - 1]) / span if span > 0 else 0.0
+            if not speeds:
+                speeds.append(mean)
+            speeds.append(max(2.0 * mean - speeds[-1], 0.0) if span > 0 else speeds[-1])
+        return dataclasses.replace(self, speeds=tuple(speeds))
 
 
-def _build(
+def build(
     points: Sequence[tuple[float, float]],
     times: Sequence[float | None],
     headings: Sequence[float] | None = None,
 ) -> Path:
+    """A path through ``points``; headings default to the direction of the incoming segment
+    (the first point: of the outgoing one). Repeated points are dropped unless they carry a
+    later time (a stop)."""
     xs, ys, hs, ls, ts = [points[0][0]], [points[0][1]], [0.0], [0.0], [times[0]]
     for k in range(1, len(points)):
         x, y = points[k]
         step = math.hypot(x - xs[-1], y - ys[-1])
         if step < 1e-6:
-            continue
+            previous, now = ts[-1], times[k]
+            if previous is None or now is None or now <= previous:
+                continue
+            step = 0.0
         xs.append(x)
         ys.append(y)
         ls.append(ls[-1] + step)
         ts.append(times[k])
-        hs.append(headings[k] if headings is not None else math.atan2(y - ys[-2], x - xs[-2]))
+        if headings is not None:
+            hs.append(headings[k])
+        elif step > 0.0:
+            hs.append(math.atan2(y - ys[-2], x - xs[-2]))
+        else:
+            hs.append(hs[-1])
     if headings is not None:
         hs[0] = headings[0]
     elif len(xs) > 1:
         hs[0] = hs[1]
-    if len(xs) < 2:
+    if len(xs) < 2 or ls[-1] <= 0.0:
         raise ScenarioError("trajectory has fewer than two distinct points", element="Trajectory")
     known = [t for t in ts if t is not None]
     path_times = None
     if len(known) == len(ts):
-        path_times = tuple(t for t in ts if t is not None)
+        path_times = tuple(known)
     return Path(tuple(xs), tuple(ys), tuple(hs), tuple(ls), path_times)
-
-
-def sample(shape: model.Shape, resolve: Resolver, start: Placement) -> Path:
-    """Sample ``shape``; ``start`` is the following entity's pose at the action start."""
-    if isinstance(shape, model.Unsupported):
-        raise positions.unsupported(shape)
-    if isinstance(shape, model.Polyline):
-        placed = [resolve(vertex.position) for vertex in shape.vertices]
-        return _build([(p.x, p.y) for p in placed], [v.time for v in shape.vertices])
-    if isinstance(shape, model.Clothoid):
-        origin = resolve(shape.position) if shape.position is not None else start
-        return _clothoids(
-            origin,
-            [(shape.curvature, shape.curvature_prime, shape.length, 0.0)],
-            [shape.start_time],
-            shape.stop_time,
-        )
-    if isinstance(shape, model.ClothoidSpline):
-        first = shape.segments[0].position_start if shape.segments else None
-        origin = resolve(first) if first is not None else start
-        pieces = [
-            (
-                seg.curvature_start,
-                (seg.curvature_end - seg.curvature_start) / seg.length if seg.length > 0 else 0.0,
-                seg.length,
-                seg.h_offset,
-            )
-            for seg in shape.segments
-        ]
-        return _clothoids(
-            origin, pieces, [seg.time_start for seg in shape.segments], shape.time_end
-        )
-    return _nurbs(shape, resolve)
-
-
-def _clothoids(
-    origin: Placement,
-    pieces: Sequence[tuple[float, float, float, float]],
-    start_times: Sequence[float | None],
-    end_time: float | None,
-) -> Path:
-    x, y, h = origin.x, origin.y, origin.heading
-    points, headings, distances = [(x, y)], [h], [0.0]
-    total = 0.0
-    piece_starts: list[float] = []
-    for curvature, rate, length, h_offset in pieces:
-        piece_starts.append(total)
-        h += h_offset
-        n = max(1, math.ceil(length / SAMPLE_STEP))
-        ds = length / n
-        for k in range(n):
-            s_mid = (k + 0.5) * ds
-            h_mid = h + curvature * s_mid + rate * s_mid * s_mid / 2.0
-            x += ds * math.cos(h_mid)
-            y += ds * math.sin(h_mid)
-            s_end = (k + 1) * ds
-            points.append((x, y))
-            headings.append(h + curvature * s_end + rate * s_end * s_end / 2.0)
-            total += ds
-            distances.append(total)
-        h += curvature * length + rate * length * length / 2.0
-    times: list[float | None] = [None] * len(points)
-    if start_times and start_times[0] is not None and end_time is not None:
-        # Time runs uniformly along the whole curve between the first start and the end time.
-        t0 = start_times[0]
-        times = [t0 + (end_time - t0) * d / total if total > 0 else t0 for d in distances]
-    return _build(points, times, headings)
-
-
-def _nurbs(shape: model.Nurbs, resolve: Resolver) -> Path:
-    placed = [resolve(cp.position) for cp in shape.control_points]
-    weights = [cp.weight if cp.weight is not None else 1.0 for cp in shape.control_points]
-    cp_times = [cp.time for cp in shape.control_points]
-    with_times = all(t is not None for t in cp_times)
-    order, knots = shape.order, shape.knots
-    n = len(placed)
-    if order < 1 or len(knots) != n + order:
-        raise ScenarioError(
-            "NURBS knot vector length must be control points + order",
-            element="Nurbs",
-            line=shape.line,
-        )
-    lo, hi = knots[order - 1], knots[n]
-    samples = max(20, n * 20)
-    points, times = [], []
-    for k in range(samples + 1):
-        u = lo + (hi - lo) * k / samples
-        basis = [_basis(i, order, u, knots, hi) * weights[i] for i in range(n)]
-        total = sum(basis) or 1.0
-        points.append(
-            (
-                sum(b * p.x for b, p in zip(basis, placed, strict=True)) / total,
-                sum(b * p.y for b, p in zip(basis, placed, strict=True)) / total,
-            )
-        )
-        if with_times:
-            times.append(sum(b * (t or 0.0) for b, t in zip(basis, cp_times, strict=True)) / total)
-    return _build(points, times if with_times else [None] * len(points))
-
-
-def _basis(i: int, order: int, u: float, knots: Sequence[float], end: float) -> float:
-    """Cox-de Boor B-spline basis N_{i,order}(u); the last span is closed at ``end``."""
-    if order == 1:
-        inside = knots[i] <= u < knots[i + 1] or (u == end and knots[i] < u == knots[i + 1])
-        return 1.0 if inside else 0.0
-    value = 0.0
-    left = knots[i + order - 1] - knots[i]
-    if left > 0:
-        value += (u - knots[i]) / left * _basis(i, order - 1, u, knots, end)
-    right = knots[i + order] - knots[i + 1]
-    if right > 0:
-        value += (knots[i + order] - u) / right * _basis(i + 1, order - 1, u, knots, end)
-    return value

@@ -1,0 +1,52 @@
+"""Scenarios of the development corpus whose paths and end time match the reference player
+(esmini 3.6) with the ego scripted: each behaviour fixed against the reference keeps a scenario
+here that exercises it (clothoid and clothoid-spline trajectories with jumps, offsets and
+per-segment timing; NURBS timing; follow-mode timed polylines with a stop)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from simtest_operator.evaluation import reference as references
+from simtest_operator.runner import execution
+from simtest_operator.sim import BackendChoice, SutConfig, Takeover
+
+CORPUS = Path(__file__).resolve().parents[3] / "shared" / "scenarios-dev"
+RESOURCES = CORPUS / "esmini" / "resources"
+
+
+def compare(relative: str, tmp_path: Path) -> references.Comparison:
+    scenario = RESOURCES / relative
+    report = execution.run_scenario(
+        execution.RunRequest(
+            scenario=scenario,
+            nets_dir=tmp_path,
+            record=False,
+            backend=BackendChoice.MEMORY,
+            sut=SutConfig(takeover=Takeover.NEVER),
+        )
+    )
+    ref = references.load(CORPUS / "esmini-reference.json")
+    key = references.find(ref, scenario)
+    assert key is not None
+    end = report.outcome.simulated_seconds if report.storyboard_complete else None
+    return references.compare(
+        key, ref[key], samples=report.samples, end_time=end, intended=report.intended
+    )
+
+
+@pytest.mark.parametrize(
+    "relative",
+    [
+        "xosc/lane-change_clothoid_based_trajectory.xosc",
+        "xosc/lane-change_clothoid_spline_based_trajectory.xosc",
+        "xosc/trajectory-test.xosc",
+        "xosc/bicycle_fall_over.xosc",
+    ],
+)
+def test_matches_the_reference_player(relative: str, tmp_path: Path) -> None:
+    comparison = compare(relative, tmp_path)
+    assert not comparison.intended
+    assert comparison.match, comparison
