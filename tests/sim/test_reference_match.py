@@ -1,7 +1,8 @@
 """Scenarios of the development corpus whose paths and end time match the reference player
 (esmini 3.6) with the ego scripted: each behaviour fixed against the reference keeps a scenario
 here that exercises it (clothoid and clothoid-spline trajectories with jumps, offsets and
-per-segment timing; NURBS timing; follow-mode timed polylines with a stop)."""
+per-segment timing; NURBS timing; follow-mode timed polylines with a stop; reversing along a
+trajectory and road-position headings in a parking lot)."""
 
 from __future__ import annotations
 
@@ -44,6 +45,7 @@ def compare(relative: str, tmp_path: Path) -> references.Comparison:
         "xosc/lane-change_clothoid_spline_based_trajectory.xosc",
         "xosc/trajectory-test.xosc",
         "xosc/bicycle_fall_over.xosc",
+        "xosc/parking_demo.xosc",
     ],
 )
 def test_matches_the_reference_player(relative: str, tmp_path: Path) -> None:

@@ -108,8 +108,9 @@ def resolve(world: World, position: model.Position) -> Placement:
         )
     if isinstance(position, model.RoadPosition):
         _require_roads(world, position)
+        # A road position faces along the reference line (s), whatever lane it lies in.
         return road_placement(
-            world, position.road_id, position.s, position.t, None, position.orientation
+            world, position.road_id, position.s, position.t, 1, position.orientation
         )
     if isinstance(position, model.RelativeRoadPosition):
         _require_roads(world, position)

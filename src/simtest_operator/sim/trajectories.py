@@ -20,7 +20,7 @@ from simtest_operator.sim.world import World
 class PathRun(Run):
     """A running FollowTrajectoryAction."""
 
-    __slots__ = ("_distance", "_path", "_t0", "_timing")
+    __slots__ = ("_distance", "_path", "_reverse", "_t0", "_timing")
 
     def __init__(self, world: World, actor: Actor, action: model.FollowTrajectoryAction) -> None:
         trajectory = action.trajectory
@@ -33,11 +33,16 @@ class PathRun(Run):
             self._path = self._path.following()
         super().__init__(actor, BOTH if self._timing is not None else LATERAL)
         self._t0 = world.time
+        # Untimed and started while reversing: the entity backs along the path, facing against
+        # it (esmini's rule; a parking car backs out along a trajectory drawn the way it moves).
+        self._reverse = self._timing is None and actor.speed < 0.0
         self._distance = min(max(action.initial_distance_offset or 0.0, 0.0), self._path.length)
         self._place(actor, self._distance)
 
     def _place(self, actor: Actor, distance: float) -> None:
         actor.x, actor.y, actor.heading = self._path.at_distance(distance)
+        if self._reverse:
+            actor.heading = math.remainder(actor.heading + math.pi, 2.0 * math.pi)
         actor.mode = Mode.PATH
         actor.placed = True
 
@@ -62,14 +67,15 @@ class PathRun(Run):
                 target = path.distance_at_time(path_time)
                 actor.speed = (target - self._distance) / dt if dt > 0 else 0.0
         else:
-            target = self._distance + actor.speed * dt
+            target = self._distance + (-actor.speed if self._reverse else actor.speed) * dt
             done = target >= path.length
         self._distance = min(max(target, 0.0), path.length)
         self._place(actor, self._distance)
         if done:
             self.finished = True
             world.attach(actor)
-            _carry_on(world, actor, target - path.length)
+            rest = target - path.length
+            _carry_on(world, actor, -rest if self._reverse else rest)
 
     def cancel(self) -> None:
         was_running = not self.finished
@@ -79,8 +85,9 @@ class PathRun(Run):
 
 
 def _carry_on(world: World, actor: Actor, distance: float) -> None:
-    """Move an actor that just left its path by the rest of this step's ``distance``."""
-    if distance <= 1e-9:
+    """Move an actor that just left its path by the rest of this step's ``distance`` (along
+    its heading; negative: backwards)."""
+    if abs(distance) <= 1e-9:
         return
     roads = world.roads
     if actor.mode is Mode.ROAD and roads is not None and actor.road_id is not None:
