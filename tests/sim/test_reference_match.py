@@ -2,7 +2,8 @@
 (esmini 3.6) with the ego scripted: each behaviour fixed against the reference keeps a scenario
 here that exercises it (clothoid and clothoid-spline trajectories with jumps, offsets and
 per-segment timing; NURBS timing; follow-mode timed polylines with a stop; reversing along a
-trajectory and road-position headings in a parking lot)."""
+trajectory and road-position headings in a parking lot; jerk-limited follow-mode speed
+profiles)."""
 
 from __future__ import annotations
 
@@ -46,6 +47,7 @@ def compare(relative: str, tmp_path: Path) -> references.Comparison:
         "xosc/trajectory-test.xosc",
         "xosc/bicycle_fall_over.xosc",
         "xosc/parking_demo.xosc",
+        "xosc/speed-profile.xosc",
     ],
 )
 def test_matches_the_reference_player(relative: str, tmp_path: Path) -> None:

@@ -10,13 +10,17 @@ relative target is re-read each step, so the transition bends towards a moving t
 
 from __future__ import annotations
 
+import math
+
 from simtest_operator.openscenario import model
+from simtest_operator.sim import profiles
 from simtest_operator.sim.actors import Actor
 from simtest_operator.sim.runs import LONGITUDINAL, Run, peak_rate_factor, shape_fraction
 from simtest_operator.sim.world import World
 
 DEFAULT_ACCELERATION = 5.0
-"""Acceleration (m/s^2) for speed-profile entries that give no time and no constraint."""
+"""Acceleration (m/s^2) for speed-profile entries that give no time, without constraints or
+vehicle performance."""
 
 
 def target_speed(
@@ -94,50 +98,63 @@ class SpeedRun(Run):
 
 
 class SpeedProfileRun(Run):
-    """A running SpeedProfileAction: linear segments through the profile's speeds."""
+    """A running SpeedProfileAction: the entries planned into speed segments at the start
+    (:mod:`~simtest_operator.sim.profiles`), then the speed read off them each step."""
 
-    __slots__ = ("_action", "_elapsed", "_index", "_segment", "_v0")
+    __slots__ = ("_segments",)
 
     def __init__(self, world: World, actor: Actor, action: model.SpeedProfileAction) -> None:
         super().__init__(actor, LONGITUDINAL)
-        self._action = action
-        self._index = 0
-        self._elapsed = 0.0
-        self._v0 = actor.speed
-        self._segment = self._duration(world)
-
-    def _target(self, world: World) -> float:
-        entry = self._action.entries[self._index]
-        if self._action.entity_ref is not None:
-            return world.actor(self._action.entity_ref).speed + entry.speed
-        return entry.speed
-
-    def _duration(self, world: World) -> float:
-        entry = self._action.entries[self._index]
-        if entry.time is not None:
-            return max(entry.time, 0.0)
-        assert self.actor is not None
-        dv = self._target(world) - self.actor.speed
-        limits = self._action.constraints
-        performance = self.actor.obj.performance
-        rate = None
-        if limits is not None:
-            rate = limits.max_acceleration if dv > 0 else limits.max_deceleration
-        if rate is None and performance is not None:
-            rate = performance.max_acceleration if dv > 0 else performance.max_deceleration
-        return abs(dv) / (rate or DEFAULT_ACCELERATION)
+        offset = world.actor(action.entity_ref).speed if action.entity_ref is not None else 0.0
+        self._segments = profiles.plan(
+            [(entry.time, entry.speed + offset) for entry in action.entries],
+            start=world.time,
+            speed=actor.speed,
+            acceleration=actor.acceleration,
+            follow=action.following_mode is model.FollowingMode.FOLLOW,
+            limits=_limits(action.constraints, actor.obj.performance),
+        )
 
     def step(self, world: World, dt: float) -> None:
         assert self.actor is not None
-        self._elapsed += dt
-        while self._elapsed >= self._segment:
-            self.actor.speed = self._target(world)
-            self._index += 1
-            if self._index >= len(self._action.entries):
-                self.finished = True
-                return
-            self._elapsed -= self._segment
-            self._v0 = self.actor.speed
-            self._segment = self._duration(world)
-        fraction = self._elapsed / self._segment if self._segment > 0 else 1.0
-        self.actor.speed = self._v0 + (self._target(world) - self._v0) * fraction
+        time = world.time + dt
+        last = self._segments[-1]
+        if time >= last.t - profiles.EPSILON:
+            self.actor.speed = last.v
+            self.finished = True
+            return
+        self.actor.speed = profiles.speed_at(self._segments, time)
+
+
+def _limits(
+    constraints: model.DynamicConstraints | None, performance: model.Performance | None
+) -> profiles.Limits:
+    """Speed-profile limits: the action's constraints, else the vehicle's performance."""
+
+    def pick(mine: float | None, theirs: float | None, default: float) -> float:
+        value = mine if mine is not None else theirs
+        return value if value is not None and value > 0 else default
+
+    given = constraints or model.DynamicConstraints()
+    return profiles.Limits(
+        acceleration=pick(
+            given.max_acceleration,
+            performance.max_acceleration if performance else None,
+            DEFAULT_ACCELERATION,
+        ),
+        deceleration=pick(
+            given.max_deceleration,
+            performance.max_deceleration if performance else None,
+            DEFAULT_ACCELERATION,
+        ),
+        acceleration_rate=pick(
+            given.max_acceleration_rate,
+            performance.max_acceleration_rate if performance else None,
+            math.inf,
+        ),
+        deceleration_rate=pick(
+            given.max_deceleration_rate,
+            performance.max_deceleration_rate if performance else None,
+            math.inf,
+        ),
+    )
