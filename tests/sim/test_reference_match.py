@@ -3,7 +3,7 @@
 here that exercises it (clothoid and clothoid-spline trajectories with jumps, offsets and
 per-segment timing; NURBS timing; follow-mode timed polylines with a stop; reversing along a
 trajectory and road-position headings in a parking lot; jerk-limited follow-mode speed
-profiles)."""
+profiles; spring-model distance keeping with jerk limits)."""
 
 from __future__ import annotations
 
@@ -48,6 +48,7 @@ def compare(relative: str, tmp_path: Path) -> references.Comparison:
         "xosc/bicycle_fall_over.xosc",
         "xosc/parking_demo.xosc",
         "xosc/speed-profile.xosc",
+        "xosc/long_dist_action_with_jerk.xosc",
     ],
 )
 def test_matches_the_reference_player(relative: str, tmp_path: Path) -> None:

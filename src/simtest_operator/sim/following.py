@@ -1,10 +1,10 @@
 """Longitudinal actions that depend on another entity: LongitudinalDistanceAction and
 SynchronizeAction.
 
-Distance keeping without dynamic constraints is rigid, as in the reference player: the actor is
-put at the requested gap along its lane and takes the reference's speed. With constraints it
-steers its speed towards the gap with a proportional law clamped to the allowed acceleration,
-deceleration and speed.
+Distance keeping without acceleration limits is rigid, as in the reference player: the actor is
+put at the requested gap along its lane and takes the reference's speed. With limits it follows
+the reference player's critically damped spring towards the gap, its acceleration clamped to the
+limits and changed no faster than the allowed rates (jerk).
 
 Synchronize re-plans every step: given the time the master needs to reach its target at its
 current speed, the actor picks the acceleration of a cubic position profile that arrives at its
@@ -22,10 +22,10 @@ from simtest_operator.sim.actors import Actor, Mode
 from simtest_operator.sim.runs import LONGITUDINAL, Run
 from simtest_operator.sim.world import World
 
-GAP_GAIN = 0.5
-"""Proportional gain (1/s) from gap error to speed correction."""
-GAP_TOLERANCE = 0.5
-"""Gap error (m) and speed difference (m/s) below which a non-continuous action is done."""
+SPRING = 0.4
+"""Spring constant per m/s^2 of allowed acceleration (1/s^2 per m/s^2) of the gap model."""
+GAP_TOLERANCE = 0.1
+"""Gap error (m) below which a non-continuous distance action is done."""
 MASTER_TOLERANCE = 1.0
 """Default distance (m) at which the synchronize master counts as arrived."""
 
@@ -33,7 +33,7 @@ MASTER_TOLERANCE = 1.0
 class DistanceRun(Run):
     """A running LongitudinalDistanceAction."""
 
-    __slots__ = ("_action", "_ref")
+    __slots__ = ("_acceleration", "_action", "_ahead", "_ref")
 
     def __init__(
         self, world: World, actor: Actor, action: model.LongitudinalDistanceAction
@@ -41,7 +41,26 @@ class DistanceRun(Run):
         super().__init__(actor, LONGITUDINAL)
         self._action = action
         self._ref = world.actor(action.entity_ref)
+        self._acceleration = 0.0
+        displacement = action.displacement
+        if displacement is model.LongitudinalDisplacement.ANY:
+            # keep the side the actor is on now (esmini)
+            self._ahead = self._gap(world) >= 0.0
+        else:
+            self._ahead = displacement is model.LongitudinalDisplacement.TRAILING
         self._apply(world, 0.0)
+
+    def _gap(self, world: World) -> float:
+        """Longitudinal distance to the reference, positive when it is ahead."""
+        assert self.actor is not None
+        action = self._action
+        return measures.longitudinal(
+            world,
+            self.actor,
+            self._ref,
+            freespace=action.freespace,
+            system=action.coordinate_system,
+        )
 
     def _desired(self) -> float:
         action = self._action
@@ -52,15 +71,13 @@ class DistanceRun(Run):
     def _apply(self, world: World, dt: float) -> None:
         actor, action = self.actor, self._action
         assert actor is not None
-        ahead = action.displacement is not model.LongitudinalDisplacement.LEADING
-        gap = measures.longitudinal(
-            world, actor, self._ref, freespace=action.freespace, system=action.coordinate_system
-        )
+        ahead = self._ahead
+        gap = self._gap(world)
         if not ahead:
             gap = -gap
         error = gap - self._desired()
         limits = action.constraints
-        if limits is None:
+        if limits is None or (limits.max_acceleration is None and limits.max_deceleration is None):
             if actor.mode is Mode.ROAD and world.roads is not None and actor.road_id is not None:
                 location = world.roads.advance(
                     actor.road_id,
@@ -77,27 +94,49 @@ class DistanceRun(Run):
             actor.speed = self._ref.speed
             self.finished = not action.continuous
             return
-        wanted = self._ref.speed + GAP_GAIN * error * (1 if ahead else -1)
+        # Critically damped spring towards the gap (esmini's model): stiffer when the actor
+        # may brake harder, acceleration and jerk limited.
+        max_acc = _limit(limits.max_acceleration)
+        max_dec = _limit(limits.max_deceleration)
+        excess = error if ahead else -error  # > 0: the reference is further ahead than wanted
+        stiffness = (max_acc if excess < 0.0 else max_dec) * SPRING
+        closing = actor.speed - self._ref.speed
+        wanted = excess * stiffness - closing * 2.0 * math.sqrt(stiffness)
+        wanted = min(max(wanted, -max_dec), max_acc)
+        # The rates limit building up braking or acceleration, not releasing it (as esmini).
+        if wanted < min(self._acceleration, 0.0):
+            wanted = max(wanted, self._acceleration - _limit(limits.max_deceleration_rate) * dt)
+        elif wanted > max(self._acceleration, 0.0):
+            wanted = min(wanted, self._acceleration + _limit(limits.max_acceleration_rate) * dt)
+        self._acceleration = wanted
+        speed = actor.speed + wanted * dt
         if limits.max_speed is not None:
-            wanted = min(wanted, limits.max_speed)
-        if dt > 0:
-            up = limits.max_acceleration if limits.max_acceleration is not None else math.inf
-            down = limits.max_deceleration if limits.max_deceleration is not None else math.inf
-            wanted = min(max(wanted, actor.speed - down * dt), actor.speed + up * dt)
-        actor.speed = max(wanted, 0.0)
+            speed = min(max(speed, -limits.max_speed), limits.max_speed)
+        actor.speed = speed
         if not action.continuous and abs(error) < GAP_TOLERANCE:
-            self.finished = abs(actor.speed - self._ref.speed) < GAP_TOLERANCE
+            self.finished = True
+
+    @property
+    def _rigid(self) -> bool:
+        limits = self._action.constraints
+        return limits is None or (
+            limits.max_acceleration is None and limits.max_deceleration is None
+        )
 
     def step(self, world: World, dt: float) -> None:
-        if self._action.constraints is None:
+        if self._rigid:
             assert self.actor is not None
             self.actor.speed = self._ref.speed  # placed exactly after everyone moved
             return
         self._apply(world, dt)
 
     def after_motion(self, world: World) -> None:
-        if self._action.constraints is None and not self.finished:
+        if self._rigid and not self.finished:
             self._apply(world, 0.0)
+
+
+def _limit(value: float | None) -> float:
+    return value if value is not None and value > 0 else math.inf
 
 
 class SynchronizeRun(Run):
