@@ -12,8 +12,12 @@ setup:
 toolchain:
 	bash deploy/devcluster/build.sh
 
+# simtest run exits 1 when a scenario fails; the smoke campaign has one deliberately failing
+# cut-in, so 0 and 1 both mean the run worked (2 means errors or invalid input).
 run: setup
-	$(SIMTEST) run scenarios/smoke-campaign.yaml --output out/smoke
+	$(SIMTEST) run scenarios/smoke-campaign.yaml --output out/smoke; rc=$$?; \
+	if [ $$rc -le 1 ]; then echo "open out/smoke/report.html for the report"; fi; \
+	[ $$rc -le 1 ]
 
 # pytest's exit code 5 (no tests collected) is a failure here, not a pass.
 test: setup toolchain
