@@ -3,7 +3,8 @@
 here that exercises it (clothoid and clothoid-spline trajectories with jumps, offsets and
 per-segment timing; NURBS timing; follow-mode timed polylines with a stop; reversing along a
 trajectory and road-position headings in a parking lot; jerk-limited follow-mode speed
-profiles; spring-model distance keeping with jerk limits)."""
+profiles; spring-model distance keeping with jerk limits; lane changes on a circle with a headway
+trigger)."""
 
 from __future__ import annotations
 
@@ -49,6 +50,7 @@ def compare(relative: str, tmp_path: Path) -> references.Comparison:
         "xosc/parking_demo.xosc",
         "xosc/speed-profile.xosc",
         "xosc/long_dist_action_with_jerk.xosc",
+        "xosc/light_state.xosc",
     ],
 )
 def test_matches_the_reference_player(relative: str, tmp_path: Path) -> None:

@@ -1,5 +1,6 @@
 """A small world for focused action tests: the straight 1 km road of ``data/straight.xodr``
-(two lanes each way, 3.5 m wide), cars on it, and a dispatcher that starts actions and steps
+(two lanes each way, 3.5 m wide) or the 300 m left arc of radius 50 m of ``data/arc.xodr`` (one
+lane each way), cars on it, and a dispatcher that starts actions and steps
 them like the engine does (runs, then motion)."""
 
 from __future__ import annotations
@@ -32,8 +33,8 @@ def car(name: str) -> model.ScenarioObject:
 class Bench:
     """World + dispatcher on the straight road; :meth:`step` advances like the engine."""
 
-    def __init__(self, *names: str, road: bool = True) -> None:
-        roads = RoadNetwork.from_file(DATA / "straight.xodr") if road else None
+    def __init__(self, *names: str, road: str | None = "straight.xodr") -> None:
+        roads = RoadNetwork.from_file(DATA / road) if road is not None else None
         actors = [Actor(car(name), index) for index, name in enumerate(names)]
         self.world = World(roads=roads, actors=actors, dt=DT, seed=1, parameters={}, variables={})
         self.dispatcher = Dispatcher(self.world, ego=None, switch=lambda actor, on: None)

@@ -63,7 +63,6 @@ class Actor:
         "s",
         "speed",
         "standstill_time",
-        "stretch",
         "stuck",
         "x",
         "y",
@@ -99,9 +98,6 @@ class Actor:
         self.standstill_time = 0.0
         self.offroad_time = 0.0
         self.end_of_road_time = 0.0
-        self.stretch = 1.0
-        """Reference-line metres per metre driven in the lane (>1 inside curves), learnt from the
-        previous step so the actor drives its speed along the lane, not along the reference line."""
         self.stuck = False
         """True while the lane it follows has ended (no successor)."""
         self.route: tuple[str, ...] = ()

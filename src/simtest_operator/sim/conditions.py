@@ -256,10 +256,11 @@ def _distance_kind(
     condition: model.TimeHeadwayCondition | model.TimeToCollisionCondition,
 ) -> tuple[model.RelativeDistanceType, model.CoordinateSystem]:
     """What distance a headway/TTC condition means: its relative distance type in its coordinate
-    system (default: longitudinal in the entity frame). OpenSCENARIO 1.0's ``alongRoute="false"``
-    is measured along the road (signed difference of s; entity frame off a common road): against
-    esmini that is the one measure that reproduces both vehicles side by side on an oval
-    (velodrome: no headway) and vehicles far apart on a circle (light_state: a long one)."""
+    system (default: longitudinal in the entity frame). The deprecated ``alongRoute="false"``
+    means the straight (Euclidean) distance, a headway existing only while the reference is
+    ahead: against esmini that reproduces both vehicles side by side on an oval (velodrome: no
+    headway) and the chord across a circle (light_state: the lane change starts when the
+    straight distance, not the distance along the road, drops under the threshold)."""
     if condition.along_route is False:
-        return model.RelativeDistanceType.LONGITUDINAL, model.CoordinateSystem.ROAD
+        return model.RelativeDistanceType.EUCLIDEAN, model.CoordinateSystem.ENTITY
     return condition.relative_distance_type, condition.coordinate_system

@@ -22,10 +22,10 @@ CHUNK = 50.0
 _RECENT = 8
 """Chunks remembered per lane for the fast lookup."""
 
-_Samples = tuple[
-    float, float, tuple[float, ...], tuple[tuple[float, float, float, float, float, float], ...]
-]
-"""(start s, step, s list, per-sample (x, y, z, lane heading, reference heading, lane t))."""
+_Row = tuple[float, float, float, float, float, float, float]
+"""(x, y, z, lane heading, reference heading, lane t, reference curvature)."""
+_Samples = tuple[float, float, tuple[float, ...], tuple[_Row, ...]]
+"""(start s, step, s list, per-sample rows)."""
 
 
 class LaneCache:
@@ -76,13 +76,13 @@ class LaneCache:
         except ScenarioError:
             self._chunks[key] = None
             return None
-        samples: _Samples = (lo, step, tuple(s_values), tuple(rows))
+        # Curvature of the reference line from its heading change between samples.
+        full: list[_Row] = [(*row, _curvature(rows, s_values, i)) for i, row in enumerate(rows)]
+        samples: _Samples = (lo, step, tuple(s_values), tuple(full))
         self._chunks[key] = samples
         return samples
 
-    def _interpolate(
-        self, road_id: str, s: float, lane_id: int
-    ) -> tuple[float, float, float, float, float, float] | None:
+    def _interpolate(self, road_id: str, s: float, lane_id: int) -> _Row | None:
         recent = self._last.setdefault((road_id, lane_id), [])
         for chunk in recent:
             if chunk[2][0] <= s < chunk[2][-1]:
@@ -108,6 +108,7 @@ class LaneCache:
             a[3] + f * math.remainder(b[3] - a[3], 2.0 * math.pi),
             a[4] + f * math.remainder(b[4] - a[4], 2.0 * math.pi),
             a[5] + f * (b[5] - a[5]),
+            a[6] + f * (b[6] - a[6]),
         )
 
     def pose(
@@ -118,7 +119,7 @@ class LaneCache:
         if row is None:
             exact = self._roads.lane_pose(road_id, s, lane_id, offset)
             return exact.x, exact.y, exact.z, exact.heading
-        x, y, z, heading, ref_heading, _ = row
+        x, y, z, heading, ref_heading, _, _ = row
         return x - offset * math.sin(ref_heading), y + offset * math.cos(ref_heading), z, heading
 
     def lane_t(self, road_id: str, s: float, lane_id: int) -> float:
@@ -128,3 +129,23 @@ class LaneCache:
             bounds = self._roads.lane_bounds(road_id, s, lane_id)
             return bounds.t_center if bounds is not None else 0.0
         return row[5]
+
+    def stretch(self, road_id: str, s: float, lane_id: int, offset: float) -> float:
+        """Reference-line metres per metre driven at the lane centre + ``offset``: R / (R - t)
+        on a reference line of radius R (more inside a curve, less outside), as the reference
+        player scales motion along s."""
+        row = self._interpolate(road_id, s, lane_id)
+        if row is None:
+            return 1.0
+        shrink = 1.0 - row[6] * (row[5] + offset)
+        return 1.0 / min(max(shrink, 0.5), 2.0)
+
+
+def _curvature(
+    rows: list[tuple[float, float, float, float, float, float]], s_values: list[float], i: int
+) -> float:
+    lo, hi = max(i - 1, 0), min(i + 1, len(rows) - 1)
+    span = s_values[hi] - s_values[lo]
+    if span <= 0:
+        return 0.0
+    return math.remainder(rows[hi][4] - rows[lo][4], 2.0 * math.pi) / span

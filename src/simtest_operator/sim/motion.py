@@ -52,7 +52,7 @@ def move(
                 t_before = world.lane_t(actor.road_id, actor.s, lane_before) + offset_before
                 lateral_rate = (lateral_position(world, actor) - t_before) / dt
         distance = actor.speed * dt
-        stretched = distance * actor.stretch
+        stretched = distance * world.stretch(actor)
         location = world.roads.advance(
             actor.road_id,
             actor.s,
@@ -80,9 +80,6 @@ def move(
                 _pick_route_lane(world, actor)
         world.pose_on_road(actor, tilt)
         actor.lateral_speed = lateral_rate
-        moved = math.hypot(actor.x - x0, actor.y - y0)
-        if road_kept and abs(lateral_rate) < 0.01 and moved > 1e-6 and distance > 0:
-            actor.stretch = min(max(stretched / moved, 0.5), 2.0)
     elif actor.mode is Mode.FREE:
         actor.x += actor.speed * math.cos(actor.heading) * dt
         actor.y += actor.speed * math.sin(actor.heading) * dt

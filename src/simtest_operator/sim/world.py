@@ -129,6 +129,11 @@ class World:
         assert self._lanes is not None
         return self._lanes.lane_t(road_id, s, lane_id)
 
+    def stretch(self, actor: Actor) -> float:
+        """Reference-line metres per metre an actor drives at its lateral position."""
+        assert self._lanes is not None and actor.road_id is not None
+        return self._lanes.stretch(actor.road_id, actor.s, actor.lane_id, actor.offset)
+
     def current_lane(self, actor: Actor) -> int:
         """The lane containing the actor's reference point (its logical lane while changing)."""
         if actor.mode is not Mode.ROAD or actor.road_id is None or self.roads is None:

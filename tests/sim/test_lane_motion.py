@@ -1,0 +1,44 @@
+"""Driving along lanes on a curve: an actor covers its speed along its own lateral position
+(outside the reference line of a left arc less s per metre, inside more), also while it changes
+lanes, where the scale follows the changing lateral position step by step."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from simtest_operator.openscenario import model
+from tests.sim.worlds import DT, Bench, lane, speed, teleport
+
+RADIUS = 50.0  # data/arc.xodr: curvature 0.02, lanes 3.5 m wide
+
+
+def test_outer_lane_covers_its_speed_along_the_lane() -> None:
+    bench = Bench("Car", road="arc.xodr")
+    bench.start("Car", teleport(lane(-1, 10.0)))
+    bench.start("Car", speed(10.0))
+    bench.step(round(2.0 / DT))
+    car = bench.actor("Car")
+    lane_radius = RADIUS + 1.75
+    assert car.s - 10.0 == pytest.approx(20.0 * RADIUS / lane_radius, rel=1e-3)
+
+
+def test_lane_change_on_a_curve_costs_no_distance_along_the_way() -> None:
+    bench = Bench("Car", road="arc.xodr")
+    bench.start("Car", teleport(lane(-1, 10.0)))
+    bench.start("Car", speed(10.0))
+    change = model.LaneChangeAction(
+        dynamics=model.TransitionDynamics(
+            shape=model.DynamicsShape.LINEAR, dimension=model.DynamicsDimension.TIME, value=2.0
+        ),
+        target=model.AbsoluteTargetLane(lane_id=1),
+    )
+    bench.start("Car", change)
+    bench.step(round(2.0 / DT))
+    car = bench.actor("Car")
+    assert car.lane_id == 1
+    # ds/dτ = v / (1 - κ t) with t going linearly from -1.75 to 1.75 m: the mean of 1/(1 - κ t)
+    half, kappa = 1.75, 1.0 / RADIUS
+    mean = math.log((1 + kappa * half) / (1 - kappa * half)) / (2 * kappa * half)
+    assert car.s - 10.0 == pytest.approx(20.0 * mean, abs=0.02)
