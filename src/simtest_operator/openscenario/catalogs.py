@@ -12,9 +12,10 @@ import dataclasses
 from collections.abc import Mapping
 from pathlib import Path
 
+from simtest_operator import xmlsafe
 from simtest_operator.errors import ScenarioError
-from simtest_operator.openscenario import parameters, reading, xmlsafe
-from simtest_operator.openscenario.xmlsafe import Element
+from simtest_operator.openscenario import parameters, reading
+from simtest_operator.xmlsafe import Element
 
 LOCATION_KINDS: Mapping[str, str] = {
     "VehicleCatalog": "Vehicle",

@@ -19,10 +19,11 @@ import types
 from collections.abc import Mapping
 from pathlib import Path
 
+from simtest_operator import xmlsafe
 from simtest_operator.errors import ScenarioError, UnsupportedFeatureError
-from simtest_operator.openscenario import headers, loading, parameters, reading, xmlsafe
+from simtest_operator.openscenario import headers, loading, parameters, reading
 from simtest_operator.openscenario.catalogs import Catalogs
-from simtest_operator.openscenario.xmlsafe import Element
+from simtest_operator.xmlsafe import Element
 
 MAX_RUNS = 100_000
 """Refuse distributions that expand into more runs than this."""

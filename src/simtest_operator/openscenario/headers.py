@@ -19,9 +19,9 @@ from pathlib import Path
 
 from lxml import etree
 
+from simtest_operator import xmlsafe
 from simtest_operator.errors import ScenarioError
-from simtest_operator.openscenario import xmlsafe
-from simtest_operator.openscenario.xmlsafe import MAX_BYTES
+from simtest_operator.xmlsafe import MAX_BYTES
 
 
 class FileKind(enum.StrEnum):

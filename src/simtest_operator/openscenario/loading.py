@@ -11,15 +11,16 @@ import dataclasses
 from collections.abc import Mapping
 from pathlib import Path
 
+from simtest_operator import xmlsafe
 from simtest_operator.errors import ScenarioError
-from simtest_operator.openscenario import headers, parameters, reading, xmlsafe
+from simtest_operator.openscenario import headers, parameters, reading
 from simtest_operator.openscenario.catalogs import Catalogs
 from simtest_operator.openscenario.headers import FileKind
 from simtest_operator.openscenario.model import common as m
 from simtest_operator.openscenario.model import entities as e
 from simtest_operator.openscenario.model import scenarios as s
 from simtest_operator.openscenario.readers import entities, storyboards
-from simtest_operator.openscenario.xmlsafe import Element
+from simtest_operator.xmlsafe import Element
 
 
 def file_kind_of(root: Element, *, file: str) -> FileKind:

@@ -20,7 +20,7 @@ from simtest_operator.openscenario.model.common import (
     ParameterValue,
     Unsupported,
 )
-from simtest_operator.openscenario.xmlsafe import Element
+from simtest_operator.xmlsafe import Element
 
 if TYPE_CHECKING:
     from simtest_operator.openscenario.catalogs import Catalogs

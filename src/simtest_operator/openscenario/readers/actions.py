@@ -7,7 +7,7 @@ from simtest_operator.openscenario.model import actions as a
 from simtest_operator.openscenario.model import common as m
 from simtest_operator.openscenario.model import controls as ctl
 from simtest_operator.openscenario.readers import controllers, positions, trajectories
-from simtest_operator.openscenario.xmlsafe import Element
+from simtest_operator.xmlsafe import Element
 
 _PRIVATE_UNSUPPORTED = {
     "TrailerAction": "trailers are not simulated",

@@ -6,7 +6,7 @@ from simtest_operator.openscenario import reading
 from simtest_operator.openscenario.model import common as m
 from simtest_operator.openscenario.model import conditions as c
 from simtest_operator.openscenario.readers import positions
-from simtest_operator.openscenario.xmlsafe import Element
+from simtest_operator.xmlsafe import Element
 
 _DISTANCE_ALIASES = {"cartesianDistance": m.RelativeDistanceType.EUCLIDEAN}
 _UNSUPPORTED_ENTITY = {

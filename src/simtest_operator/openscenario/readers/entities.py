@@ -5,8 +5,8 @@ from __future__ import annotations
 from simtest_operator.openscenario import reading
 from simtest_operator.openscenario.model import entities as e
 from simtest_operator.openscenario.readers import controllers
-from simtest_operator.openscenario.xmlsafe import Element
 from simtest_operator.snapshots import BoundingBox, EntityKind
+from simtest_operator.xmlsafe import Element
 
 _KINDS = {
     "Vehicle": (EntityKind.VEHICLE, "vehicleCategory"),

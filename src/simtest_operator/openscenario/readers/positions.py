@@ -5,7 +5,7 @@ from __future__ import annotations
 from simtest_operator.openscenario import reading
 from simtest_operator.openscenario.model import common as m
 from simtest_operator.openscenario.model import positions as p
-from simtest_operator.openscenario.xmlsafe import Element
+from simtest_operator.xmlsafe import Element
 
 
 def orientation(el: Element | None, ctx: reading.Context) -> m.Orientation | None:

@@ -6,7 +6,7 @@ from simtest_operator.openscenario import reading
 from simtest_operator.openscenario.model import actions as a
 from simtest_operator.openscenario.model import scenarios as s
 from simtest_operator.openscenario.readers import actions, conditions
-from simtest_operator.openscenario.xmlsafe import Element
+from simtest_operator.xmlsafe import Element
 
 _PRIORITY_ALIASES = {"overwrite": s.Priority.OVERRIDE}
 

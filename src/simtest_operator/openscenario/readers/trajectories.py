@@ -7,7 +7,7 @@ from simtest_operator.openscenario.model import common as m
 from simtest_operator.openscenario.model import positions as p
 from simtest_operator.openscenario.model import trajectories as t
 from simtest_operator.openscenario.readers import positions
-from simtest_operator.openscenario.xmlsafe import Element
+from simtest_operator.xmlsafe import Element
 
 
 def trajectory_or_ref(el: Element, ctx: reading.Context) -> t.Trajectory | m.Unsupported:

@@ -1,8 +1,8 @@
-"""Safe parsing of untrusted OpenSCENARIO XML.
+"""Safe parsing of untrusted XML: OpenSCENARIO scenarios and catalogs, OpenDRIVE roads.
 
-Scenario files come from users, git repositories and HTTP sources, so the parser must not expand
+These files come from users, git repositories and HTTP sources, so the parser must not expand
 entities (billion laughs), fetch anything (external entities, DTDs over the network) or build huge
-trees. OpenSCENARIO never needs a DOCTYPE, so any DOCTYPE or ENTITY declaration is rejected outright
+trees. Neither format needs a DOCTYPE, so any DOCTYPE or ENTITY declaration is rejected outright
 rather than parsed carefully. Source line numbers stay available as ``element.sourceline``.
 """
 
@@ -18,7 +18,8 @@ from lxml import etree
 from simtest_operator.errors import ScenarioError
 
 MAX_BYTES = 20 * 1024 * 1024
-"""Largest accepted file (20 MB); real scenarios and catalogs are well below 1 MB."""
+"""Default size limit (20 MB); real scenarios and catalogs are well below 1 MB, road networks
+pass their own larger limit."""
 
 
 class Element(Protocol):
@@ -70,7 +71,9 @@ def read_bytes(path: Path, *, max_bytes: int = MAX_BYTES) -> bytes:
     return data
 
 
-def parse_bytes(data: bytes, *, source: str, max_bytes: int = MAX_BYTES) -> Element:
+def parse_bytes(
+    data: bytes, *, source: str, max_bytes: int = MAX_BYTES, what: str = "scenario"
+) -> Element:
     """Parse ``data`` (named ``source`` in errors) and return the root element.
 
     Raises ScenarioError for oversize input, DOCTYPE/ENTITY declarations and malformed XML.
@@ -79,18 +82,18 @@ def parse_bytes(data: bytes, *, source: str, max_bytes: int = MAX_BYTES) -> Elem
         raise ScenarioError(
             f"document is larger than the {max_bytes // (1024 * 1024)} MB limit", file=source
         )
-    reject_declarations(data, source)
+    reject_declarations(data, source, what=what)
     try:
         root = etree.fromstring(data, parser=_parser(), base_url=None)
     except etree.XMLSyntaxError as exc:
         raise ScenarioError(f"malformed XML: {exc.msg}", file=source, line=exc.lineno) from exc
     tree = root.getroottree()
     if tree.docinfo.doctype or tree.docinfo.internalDTD is not None:
-        raise ScenarioError("DOCTYPE declarations are not allowed in scenario files", file=source)
+        raise ScenarioError(f"DOCTYPE declarations are not allowed in {what} files", file=source)
     for node in root.iter():
         if isinstance(node, etree._Entity):
             raise ScenarioError(
-                "entity references are not allowed in scenario files",
+                f"entity references are not allowed in {what} files",
                 file=source,
                 line=node.sourceline,
             )
@@ -99,12 +102,13 @@ def parse_bytes(data: bytes, *, source: str, max_bytes: int = MAX_BYTES) -> Elem
     return result
 
 
-def parse_file(path: Path, *, max_bytes: int = MAX_BYTES) -> Element:
+def parse_file(path: Path, *, max_bytes: int = MAX_BYTES, what: str = "scenario") -> Element:
     """Read and safely parse the XML file at ``path``; return its root element."""
-    return parse_bytes(read_bytes(path, max_bytes=max_bytes), source=str(path), max_bytes=max_bytes)
+    data = read_bytes(path, max_bytes=max_bytes)
+    return parse_bytes(data, source=str(path), max_bytes=max_bytes, what=what)
 
 
-def reject_declarations(data: bytes, source: str) -> None:
+def reject_declarations(data: bytes, source: str, *, what: str = "scenario") -> None:
     """Refuse any DOCTYPE or ENTITY declaration, before a parser ever sees the document."""
     # Encodings other than UTF-8/ASCII are re-encoded so the scan cannot be dodged with UTF-16.
     text = data
@@ -118,7 +122,7 @@ def reject_declarations(data: bytes, source: str) -> None:
         line = text.count(b"\n", 0, match.start()) + 1
         kind = match.group(1).decode("ascii").upper()
         raise ScenarioError(
-            f"{kind} declarations are not allowed in scenario files (entity expansion and "
+            f"{kind} declarations are not allowed in {what} files (entity expansion and "
             "external entities are a security risk)",
             file=source,
             line=line,

@@ -11,8 +11,9 @@ from pathlib import Path
 
 import pytest
 
+from simtest_operator import xmlsafe
 from simtest_operator.errors import ScenarioError
-from simtest_operator.openscenario import load_scenario, xmlsafe
+from simtest_operator.openscenario import load_scenario
 
 BILLION_LAUGHS = b"""<?xml version="1.0"?>
 <!DOCTYPE lolz [
