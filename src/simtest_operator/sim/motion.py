@@ -41,6 +41,7 @@ def move(
     ``placed`` says a trajectory already put it where it is at the end of the step."""
     x0, y0 = start
     road_before, lane_before, offset_before = before
+    was_stuck = actor.stuck
     if placed:
         actor.lateral_speed = 0.0
     elif actor.mode is Mode.ROAD and actor.road_id is not None and world.roads is not None:
@@ -61,9 +62,11 @@ def move(
             prefer_roads=actor.route[actor.route_index + 1 : actor.route_index + _LOOKAHEAD],
         )
         walked = 1 if distance >= 0 else -1
-        actor.stuck = location.remaining > 1e-9 or (actor.stuck and distance == 0.0)
-        if actor.stuck:
-            actor.speed = 0.0  # the lane ended: the entity stops there, as in esmini
+        actor.stuck = location.remaining > 1e-9 or (was_stuck and distance == 0.0)
+        if actor.stuck and was_stuck:
+            # The lane ended: the entity stands there, as in esmini, which drops the speed one
+            # step after the end was reached (a teleport right at the end keeps the speed).
+            actor.speed = 0.0
         actor.road_id, actor.s, actor.lane_id = location.road_id, location.s, location.lane_id
         if stretched != 0.0:  # a zero walk reports direction +1 whatever the travel direction
             direction = location.direction * walked
@@ -85,14 +88,15 @@ def move(
         actor.y += actor.speed * math.sin(actor.heading) * dt
         actor.lateral_speed = 0.0
     actor.odometer += math.hypot(actor.x - x0, actor.y - y0)
-    update_timers(world, actor, dt)
+    update_timers(world, actor, dt, was_stuck=was_stuck)
 
 
-def update_timers(world: World, actor: Actor, dt: float) -> None:
+def update_timers(world: World, actor: Actor, dt: float, *, was_stuck: bool) -> None:
     actor.standstill_time = (
         actor.standstill_time + dt if abs(actor.speed) < STANDSTILL_SPEED else 0.0
     )
-    actor.end_of_road_time = actor.end_of_road_time + dt if actor.stuck else 0.0
+    # Time at the end of the road counts from the moment it was reached (end of this step).
+    actor.end_of_road_time = actor.end_of_road_time + dt if actor.stuck and was_stuck else 0.0
     if world.roads is None:
         return
     # Lane-following actors are on the road by construction (also when stuck at a road's end);
