@@ -46,6 +46,7 @@ class Actor:
         "heading_offset",
         "id",
         "kind",
+        "lane_changing",
         "lane_id",
         "lateral_speed",
         "mode",
@@ -104,6 +105,9 @@ class Actor:
         """Roads of an assigned route in order; the next ones are preferred at forks."""
         self.route_index = 0
         """Position of the actor's current road in ``route``."""
+        self.lane_changing = False
+        """Set by a lane change for the coming motion step: its lateral motion is part of the
+        distance driven (esmini), not added to it."""
         self.driver: DriverModel | None = None
         """Set while the system-under-test driver model controls this actor."""
 

@@ -99,6 +99,7 @@ class LaneChangeRun(Run):
         target = self._relative_target(world, actor.road_id)
         fraction = shape_fraction(self._shape, self._elapsed / self._duration)
         actor.offset = self._offset0 + (target - self._offset0) * fraction
+        actor.lane_changing = True
 
 
 class LaneOffsetRun(Run):

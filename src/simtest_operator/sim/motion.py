@@ -53,6 +53,12 @@ def move(
                 t_before = world.lane_t(actor.road_id, actor.s, lane_before) + offset_before
                 lateral_rate = (lateral_position(world, actor) - t_before) / dt
         distance = actor.speed * dt
+        if actor.lane_changing and lateral_rate != 0.0:
+            # A lane change steers: the speed is along the path, so the lateral part of this
+            # step's travel is taken from the longitudinal one (esmini's lane change).
+            lateral = min(abs(lateral_rate) * dt, abs(distance))
+            distance = math.copysign(math.sqrt(distance * distance - lateral * lateral), distance)
+        actor.lane_changing = False
         stretched = distance * world.stretch(actor)
         location = world.roads.advance(
             actor.road_id,
@@ -74,7 +80,8 @@ def move(
                 # t flips relative to travel: keep the offset on the same side of the vehicle
                 actor.offset = -actor.offset
             actor.direction = direction
-        tilt = math.atan2(actor.direction * lateral_rate, abs(actor.speed)) if actor.speed else 0.0
+        along = abs(distance) / dt if dt > 0 else abs(actor.speed)
+        tilt = math.atan2(actor.direction * lateral_rate, along) if actor.speed else 0.0
         road_kept = location.road_id == road_before
         if not road_kept and actor.route:
             ahead = actor.route[actor.route_index : actor.route_index + _LOOKAHEAD]
