@@ -20,6 +20,10 @@ from simtest_operator.sim.world import World
 
 DEFAULT_MAX_LATERAL_ACCELERATION = 0.5
 """m/s^2 for LaneOffsetActions without ``maxLateralAcc``."""
+SPRING = 0.4
+"""Spring stiffness (1/s^2) per m/s^2 of allowed lateral acceleration (lateral distance)."""
+LATERAL_TOLERANCE = 0.01
+"""Metres from the requested lateral distance at which a non-continuous action is done."""
 
 
 def lanes_between(start: int, target: int) -> int:
@@ -150,8 +154,10 @@ class LateralDistanceRun(Run):
     """A running LateralDistanceAction: hold a lateral distance to another entity.
 
     Measured across the road (difference of t, free space subtracting the half widths); the
-    requested side is kept (``any``: the side the actor is on now). Without constraints the actor
-    snaps to the distance; with them its lateral speed (and acceleration) are limited.
+    requested side is kept (``any``: the side the actor is on now). Without limits the actor
+    snaps to the distance. With them it moves like the reference player: a critically damped
+    spring (stiffness 0.4 per m/s^2 of allowed acceleration) with the acceleration and the
+    lateral speed clamped; a non-continuous action ends within 1 cm of the distance.
     """
 
     __slots__ = ("_action", "_lateral_speed", "_ref", "_side")
@@ -189,17 +195,23 @@ class LateralDistanceRun(Run):
         target_t = self._t(world, self._ref) + self._side * actor.direction * distance
         target = target_t - world.lane_t(actor.road_id, actor.s, actor.lane_id)
         limits = action.constraints
-        if limits is None or dt <= 0.0:
-            if limits is None:
-                actor.offset = target
-        else:
-            wanted = (target - actor.offset) / dt
-            if limits.max_speed is not None:
-                wanted = max(-limits.max_speed, min(limits.max_speed, wanted))
-            if limits.max_acceleration is not None:
-                step = limits.max_acceleration * dt
-                wanted = max(self._lateral_speed - step, min(self._lateral_speed + step, wanted))
-            self._lateral_speed = wanted
-            actor.offset += wanted * dt
-        if not action.continuous and abs(actor.offset - target) < 0.05:
+        rigid = limits is None or (limits.max_acceleration is None and limits.max_speed is None)
+        if rigid:
+            actor.offset = target
+        elif dt > 0.0:
+            assert limits is not None
+            error = target - actor.offset
+            max_speed = limits.max_speed if limits.max_speed is not None else math.inf
+            if limits.max_acceleration is None:
+                speed = error / dt  # no acceleration limit: as fast as the speed limit allows
+            else:
+                stiffness = SPRING * limits.max_acceleration
+                wanted = error * stiffness - self._lateral_speed * 2.0 * math.sqrt(stiffness)
+                wanted = max(-limits.max_acceleration, min(limits.max_acceleration, wanted))
+                speed = self._lateral_speed + wanted * dt
+            speed = max(-max_speed, min(max_speed, speed))
+            self._lateral_speed = speed
+            actor.offset += speed * dt
+            actor.lane_changing = True  # steering sideways takes from the distance driven
+        if not action.continuous and abs(actor.offset - target) < LATERAL_TOLERANCE:
             self.finished = True

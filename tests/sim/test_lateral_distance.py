@@ -1,0 +1,66 @@
+"""Keeping a lateral distance (LateralDistanceAction): with an acceleration limit the actor
+closes the gap like a critically damped spring of stiffness 0.4 per m/s^2 (the closed form),
+with a speed limit only it moves at that speed, and a non-continuous action ends within 1 cm."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from simtest_operator.openscenario import model
+from tests.sim.worlds import DT, Bench, lane, speed, teleport
+
+
+def keep(limits: model.DynamicConstraints, *, continuous: bool = True) -> (
+        model.LateralDistanceAction):  # fmt: skip
+    return model.LateralDistanceAction(
+        entity_ref="Lead",
+        freespace=False,
+        continuous=continuous,
+        distance=2.0,
+        coordinate_system=model.CoordinateSystem.ROAD,
+        displacement=model.LateralDisplacement.RIGHT,
+        constraints=limits,
+    )
+
+
+def bench() -> Bench:
+    b = Bench("Car", "Lead")
+    for name, lane_id in (("Lead", -1), ("Car", -2)):
+        b.start(name, teleport(lane(lane_id, 100.0)))
+        b.start(name, speed(10.0))
+    return b  # Car 3.5 m right of Lead: 1.5 m too far
+
+
+def test_acceleration_limit_gives_a_critically_damped_approach() -> None:
+    b = bench()
+    b.start("Car", keep(model.DynamicConstraints(max_acceleration=10.0)))
+    car = b.actor("Car")
+    omega = math.sqrt(0.4 * 10.0)
+    for step in range(1, 41):
+        b.step()
+        tau = step * DT
+        expected = 1.5 * (1 + omega * tau) * math.exp(-omega * tau)
+        remaining = -3.75 - (-5.25 + car.offset)  # target t minus the car's t
+        assert remaining == pytest.approx(expected, abs=0.06)
+
+
+def test_speed_limit_only_moves_at_that_speed() -> None:
+    b = bench()
+    b.start("Car", keep(model.DynamicConstraints(max_speed=1.0)))
+    b.step(10)
+    assert b.actor("Car").offset == pytest.approx(0.5)
+
+
+def test_non_continuous_ends_within_a_centimetre() -> None:
+    b = bench()
+    b.start("Car", keep(model.DynamicConstraints(max_acceleration=7.0), continuous=False))
+    run = b.dispatcher.runs(b.actor("Car"))
+    (action,) = set(run.values())
+    for _ in range(200):
+        b.step()
+        if action.finished:
+            break
+    assert action.finished
+    assert abs(b.actor("Car").offset - 1.5) < 0.01
