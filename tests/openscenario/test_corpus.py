@@ -18,7 +18,6 @@ from simtest_operator.openscenario import FileKind, expand_distribution, file_ki
 
 EXPECTED_UNSUPPORTED = {
     "InfrastructureAction": "traffic_lights.xosc",
-    "RelativeClearanceCondition": "two_plus_one_road.xosc",
     "TrafficAction": "swarm.xosc",
     "TrafficSignalCondition": "traffic_lights.xosc",
     "Trailer": "trailers.xosc",

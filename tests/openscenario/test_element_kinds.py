@@ -261,7 +261,7 @@ def test_every_condition_kind(rich: model.Scenario) -> None:
         "ReachPositionCondition",
         "DistanceCondition",
         "RelativeDistanceCondition",
-        "Unsupported:RelativeClearanceCondition",
+        "RelativeClearanceCondition",
         "SimulationTimeCondition",
         "StoryboardElementStateCondition",
         "ParameterCondition",
@@ -351,7 +351,6 @@ def test_every_action_kind(rich: model.Scenario) -> None:
 def test_unsupported_listed_in_place(rich: model.Scenario) -> None:
     listed = {(u.element, u.reason) for u in rich.unsupported()}
     assert listed == {
-        ("RelativeClearanceCondition", "lane-clearance queries are not implemented"),
         ("TrafficSignalCondition", "traffic signals are not simulated"),
         ("TrailerAction", "trailers are not simulated"),
         ("InfrastructureAction", "traffic signals are not simulated"),

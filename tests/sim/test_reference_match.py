@@ -4,7 +4,7 @@ here that exercises it (clothoid and clothoid-spline trajectories with jumps, of
 per-segment timing; NURBS timing; follow-mode timed polylines with a stop; reversing along a
 trajectory and road-position headings in a parking lot; jerk-limited follow-mode speed
 profiles; spring-model distance keeping with jerk limits; lane changes on a circle with a headway
-trigger; end-of-road teleports restarting acts; lateral distance keeping)."""
+trigger; end-of-road teleports restarting acts; lateral distance keeping; lane clearance on a 2+1 road)."""
 
 from __future__ import annotations
 
@@ -53,6 +53,7 @@ def compare(relative: str, tmp_path: Path) -> references.Comparison:
         "xosc/light_state.xosc",
         "xosc/lane_change_simple.xosc",
         "xosc/keep_lateral_distance.xosc",
+        "xosc/two_plus_one_road.xosc",
     ],
 )
 def test_matches_the_reference_player(relative: str, tmp_path: Path) -> None:

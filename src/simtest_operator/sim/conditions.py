@@ -14,7 +14,7 @@ from collections.abc import Callable
 from simtest_operator import geometry
 from simtest_operator.errors import ScenarioError
 from simtest_operator.openscenario import model
-from simtest_operator.sim import measures, positions
+from simtest_operator.sim import clearance, measures, positions
 from simtest_operator.sim.actors import Actor
 from simtest_operator.sim.triggers import Truth
 from simtest_operator.sim.world import World
@@ -175,6 +175,8 @@ class Conditions:
             return compare(abs(value), condition.rule, condition.value)
         if isinstance(condition, model.TimeHeadwayCondition):
             return compare(self._headway(actor, condition), condition.rule, condition.value)
+        if isinstance(condition, model.RelativeClearanceCondition):
+            return clearance.is_clear(self._world, actor, condition)
         if isinstance(condition, model.TimeToCollisionCondition):
             return compare(self._ttc(actor, condition), condition.rule, condition.value)
         raise ScenarioError(f"condition {type(condition).__name__} is not supported")

@@ -204,6 +204,22 @@ class RelativeDistanceCondition:
     line: int | None = None
 
 
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class RelativeClearanceCondition:
+    """No entity (of ``entity_refs``, when given) in the lanes ``lane_ranges`` relative to the
+    triggering entity's lane (positive: to its left), from ``distance_backward`` behind to
+    ``distance_forward`` ahead (1.2+)."""
+
+    lane_ranges: tuple[tuple[int, int], ...]
+    """(from, to) relative lane ranges; empty: every lane."""
+    entity_refs: tuple[str, ...]
+    opposite_lanes: bool
+    freespace: bool
+    distance_forward: float | None = None
+    distance_backward: float | None = None
+    line: int | None = None
+
+
 EntityCondition = (
     EndOfRoadCondition
     | OffRoadCondition
@@ -218,9 +234,10 @@ EntityCondition = (
     | ReachPositionCondition
     | DistanceCondition
     | RelativeDistanceCondition
+    | RelativeClearanceCondition
     | Unsupported
 )
-"""RelativeClearance, Angle and RelativeAngle conditions arrive as :class:`Unsupported`."""
+"""Angle and RelativeAngle conditions arrive as :class:`Unsupported`."""
 
 
 # --- value conditions -------------------------------------------------------------------------

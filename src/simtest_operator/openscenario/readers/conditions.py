@@ -10,7 +10,6 @@ from simtest_operator.xmlsafe import Element
 
 _DISTANCE_ALIASES = {"cartesianDistance": m.RelativeDistanceType.EUCLIDEAN}
 _UNSUPPORTED_ENTITY = {
-    "RelativeClearanceCondition": "lane-clearance queries are not implemented",
     "AngleCondition": "angle conditions are not implemented",
     "RelativeAngleCondition": "relative angle conditions are not implemented",
 }
@@ -138,6 +137,21 @@ def entity_condition(el: Element, ctx: reading.Context) -> c.EntityCondition:
             relative_distance_type=kind_,
             along_route=along,
             routing_algorithm=ctx.opt_enum(el, "routingAlgorithm", m.RoutingAlgorithm),
+            line=line,
+        )
+    if tag == "RelativeClearanceCondition":
+        return c.RelativeClearanceCondition(
+            lane_ranges=tuple(
+                (ctx.opt_integer(r, "from", 0) or 0, ctx.opt_integer(r, "to", 0) or 0)
+                for r in reading.all_children(el, "RelativeLaneRange")
+            ),
+            entity_refs=tuple(
+                ctx.string(ref, "entityRef") for ref in reading.all_children(el, "EntityRef")
+            ),
+            opposite_lanes=ctx.boolean(el, "oppositeLanes"),
+            freespace=ctx.boolean(el, "freeSpace"),
+            distance_forward=ctx.opt_double(el, "distanceForward"),
+            distance_backward=ctx.opt_double(el, "distanceBackward"),
             line=line,
         )
     if tag == "RelativeDistanceCondition":
