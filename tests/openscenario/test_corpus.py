@@ -17,9 +17,7 @@ from simtest_operator.errors import ScenarioError
 from simtest_operator.openscenario import FileKind, expand_distribution, file_kind, load_scenario
 
 EXPECTED_UNSUPPORTED = {
-    "InfrastructureAction": "traffic_lights.xosc",
     "TrafficAction": "swarm.xosc",
-    "TrafficSignalCondition": "traffic_lights.xosc",
     "Trailer": "trailers.xosc",
     "TrailerAction": "trailer_connect.xosc",
 }

@@ -266,7 +266,7 @@ def test_every_condition_kind(rich: model.Scenario) -> None:
         "StoryboardElementStateCondition",
         "ParameterCondition",
         "VariableCondition",
-        "Unsupported:TrafficSignalCondition",
+        "TrafficSignalCondition",
     ]
     events = _events(rich)
     headway = events[4].start_trigger.condition_groups[0].conditions[0].body  # type: ignore[union-attr]
@@ -312,7 +312,7 @@ def test_every_action_kind(rich: model.Scenario) -> None:
         "ModifyValueAction",
         "ModifyValueAction",
         "Ignored:EnvironmentAction",
-        "Unsupported:InfrastructureAction",
+        "TrafficSignalStateAction",
     ]
     speed, distance, sync, modify = bodies[1], bodies[2], bodies[9], bodies[17]
     assert isinstance(speed, model.SpeedAction)
@@ -351,9 +351,7 @@ def test_every_action_kind(rich: model.Scenario) -> None:
 def test_unsupported_listed_in_place(rich: model.Scenario) -> None:
     listed = {(u.element, u.reason) for u in rich.unsupported()}
     assert listed == {
-        ("TrafficSignalCondition", "traffic signals are not simulated"),
         ("TrailerAction", "trailers are not simulated"),
-        ("InfrastructureAction", "traffic signals are not simulated"),
     }
     for node in rich.unsupported():
         assert node.line is not None and node.file == str(rich.path)

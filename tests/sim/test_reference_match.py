@@ -3,8 +3,9 @@
 here that exercises it (clothoid and clothoid-spline trajectories with jumps, offsets and
 per-segment timing; NURBS timing; follow-mode timed polylines with a stop; reversing along a
 trajectory and road-position headings in a parking lot; jerk-limited follow-mode speed
-profiles; spring-model distance keeping with jerk limits; lane changes on a circle with a headway
-trigger; end-of-road teleports restarting acts; lateral distance keeping; lane clearance on a 2+1 road)."""
+profiles; spring-model distance keeping with jerk limits; lane changes on a circle with a
+headway trigger; end-of-road teleports restarting acts; lateral distance keeping; lane
+clearance on a 2+1 road; traffic signal states with edge-triggered events)."""
 
 from __future__ import annotations
 
@@ -54,6 +55,7 @@ def compare(relative: str, tmp_path: Path) -> references.Comparison:
         "xosc/lane_change_simple.xosc",
         "xosc/keep_lateral_distance.xosc",
         "xosc/two_plus_one_road.xosc",
+        "xosc/traffic_lights.xosc",
     ],
 )
 def test_matches_the_reference_player(relative: str, tmp_path: Path) -> None:

@@ -1,6 +1,7 @@
-"""Trigger layer: condition edges (none/rising/falling/risingOrFalling, first evaluation against
-False), delays (queued firings), AND within and OR across condition groups, the empty trigger,
-triggering entities reported, reset."""
+"""Trigger layer: condition edges (none/rising/falling/risingOrFalling; the first evaluation
+only sets the reference, so a condition true from the start is no rising edge), delays (queued
+firings), AND within and OR across condition groups, the empty trigger, triggering entities
+reported, reset."""
 
 from __future__ import annotations
 
@@ -26,7 +27,7 @@ def test_edges() -> None:
     pattern = [True, True, False, False, True, False]
     assert run(b.trigger((b.sim_time(0, edge="none"),)), pattern) == pattern
     assert run(b.trigger((b.sim_time(0, edge="rising"),)), pattern) == [
-        True,
+        False,
         False,
         False,
         False,
@@ -42,7 +43,7 @@ def test_edges() -> None:
         True,
     ]
     assert run(b.trigger((b.sim_time(0, edge="risingOrFalling"),)), pattern) == [
-        True,
+        False,
         False,
         True,
         False,
@@ -53,13 +54,13 @@ def test_edges() -> None:
 
 def test_delay_queues_each_firing() -> None:
     trig = b.trigger((b.sim_time(0, edge="rising", delay=2.0),))
-    assert run(trig, [True, False, True, False, False, False, False]) == [
+    assert run(trig, [False, True, False, True, False, False, False]) == [
+        False,
         False,
         False,
         True,
         False,
         True,
-        False,
         False,
     ]
 
@@ -100,7 +101,10 @@ def test_empty_and_missing_trigger() -> None:
 
 def test_triggering_entities_and_reset() -> None:
     state = TriggerState(b.trigger((b.sim_time(0, edge="rising"),)))
-    assert state.evaluate(0, lambda body: (True, frozenset({"A"}))) == (True, frozenset({"A"}))
-    assert state.evaluate(1, lambda body: (True, frozenset({"A"})))[0] is False
+    assert state.evaluate(0, lambda body: (False, frozenset()))[0] is False
+    assert state.evaluate(1, lambda body: (True, frozenset({"A"}))) == (True, frozenset({"A"}))
+    assert state.evaluate(2, lambda body: (True, frozenset({"A"})))[0] is False
     state.reset()
-    assert state.evaluate(2, lambda body: (True, frozenset({"A"})))[0] is True
+    assert state.evaluate(3, lambda body: (True, frozenset({"A"})))[0] is False
+    assert state.evaluate(4, lambda body: (False, frozenset()))[0] is False
+    assert state.evaluate(5, lambda body: (True, frozenset({"A"})))[0] is True

@@ -112,6 +112,8 @@ class Conditions:
                 )
             current = world.variables[condition.variable_ref]
             return _compare_typed(current, condition.rule, condition.value)
+        if isinstance(condition, model.TrafficSignalCondition):
+            return world.signals.get(condition.name) == condition.state
         raise positions.unsupported(condition)
 
     # --- entity conditions --------------------------------------------------------------------

@@ -103,6 +103,9 @@ class Dispatcher:
             )
             store[body.ref] = type(current)(value)
             return Done()
+        if isinstance(body, model.TrafficSignalStateAction):
+            world.signals[body.name] = body.state
+            return Done()
         if isinstance(body, model.IgnoredAction):
             self._ignore(body.kind)
             return Done()

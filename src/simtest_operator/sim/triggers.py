@@ -6,7 +6,8 @@ result through
 
 - its **edge**: ``none`` passes the value through; ``rising``/``falling``/``risingOrFalling`` are
   true only in the evaluation where the value changed that way since the previous evaluation (the
-  first evaluation compares against ``False``, as esmini does);
+  first evaluation sets the reference: a condition already true then is no rising edge; esmini's
+  traffic_lights waits for the light to turn green *again*);
 - its **delay**: a result that became true at time t is reported at t + delay (every firing is
   queued, so a condition that fires twice within its delay fires twice later).
 
@@ -35,7 +36,7 @@ class _ConditionState:
     __slots__ = ("fire_times", "previous")
 
     def __init__(self) -> None:
-        self.previous = False
+        self.previous: bool | None = None
         self.fire_times: collections.deque[tuple[float, frozenset[str]]] = collections.deque()
 
 
@@ -85,6 +86,8 @@ class TriggerState:
             state = self._states[id(condition)] = _ConditionState()
         value, who = raw(condition.body)
         edge = condition.edge
+        if state.previous is None:
+            state.previous = value  # the first evaluation has nothing to compare with
         if edge is model.ConditionEdge.NONE:
             result = value
         elif edge is model.ConditionEdge.RISING:

@@ -31,6 +31,7 @@ class World:
         "parameters",
         "rng",
         "roads",
+        "signals",
         "time",
         "variables",
     )
@@ -54,6 +55,8 @@ class World:
         self.parameters = parameters
         self.variables = variables
         self.ignored: list[str] = []
+        self.signals: dict[str, str] = {}
+        """Traffic signal states by signal name (as TrafficSignalStateActions set them)."""
         self._states: dict[str, EntityState] = {}
 
     def actor(self, name: str) -> Actor:

@@ -82,6 +82,7 @@ from simtest_operator.openscenario.model.conditions import (
     StoryboardElementType,
     TimeHeadwayCondition,
     TimeToCollisionCondition,
+    TrafficSignalCondition,
     TraveledDistanceCondition,
     Trigger,
     TriggeringEntitiesRule,
@@ -95,6 +96,7 @@ from simtest_operator.openscenario.model.controls import (
     ModifyRule,
     ModifyValueAction,
     SetValueAction,
+    TrafficSignalStateAction,
 )
 from simtest_operator.openscenario.model.entities import (
     Axle,
@@ -264,6 +266,8 @@ __all__ = [
     "TimeHeadwayCondition",
     "TimeToCollisionCondition",
     "Timing",
+    "TrafficSignalCondition",
+    "TrafficSignalStateAction",
     "Trajectory",
     "TransitionDynamics",
     "TraveledDistanceCondition",

@@ -22,6 +22,7 @@ from simtest_operator.openscenario.model.controls import (
     IgnoredAction,
     ModifyValueAction,
     SetValueAction,
+    TrafficSignalStateAction,
 )
 from simtest_operator.openscenario.model.positions import Position, Route
 from simtest_operator.openscenario.model.trajectories import Trajectory
@@ -343,9 +344,11 @@ PrivateAction = (
 )
 """Private actions; OverrideControllerValue, RandomRoute and Trailer actions are Unsupported."""
 
-GlobalAction = SetValueAction | ModifyValueAction | IgnoredAction | Unsupported
-"""Global actions; Entity, Infrastructure (traffic signals), Traffic, SetMonitor and
-UserDefined actions are Unsupported."""
+GlobalAction = (
+    SetValueAction | ModifyValueAction | TrafficSignalStateAction | IgnoredAction | Unsupported
+)
+"""Global actions; Entity, traffic signal controller, Traffic, SetMonitor and UserDefined actions
+are Unsupported."""
 
 AnyAction = PrivateAction | GlobalAction
 

@@ -282,14 +282,24 @@ class VariableCondition:
     line: int | None = None
 
 
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class TrafficSignalCondition:
+    """The traffic signal ``name`` shows ``state``."""
+
+    name: str
+    state: str
+    line: int | None = None
+
+
 ValueCondition = (
     SimulationTimeCondition
     | StoryboardElementStateCondition
     | ParameterCondition
     | VariableCondition
+    | TrafficSignalCondition
     | Unsupported
 )
-"""TimeOfDay, UserDefinedValue, TrafficSignal and TrafficSignalController conditions arrive as
+"""TimeOfDay, UserDefinedValue and TrafficSignalController conditions arrive as
 :class:`Unsupported`."""
 
 

@@ -1,4 +1,4 @@
-"""Controller, parameter/variable and ignored actions of the scenario model.
+"""Controller, parameter/variable, traffic signal and ignored actions of the scenario model.
 
 Split from :mod:`.actions` to keep modules small; import them through ``model``.
 """
@@ -68,6 +68,15 @@ class ModifyValueAction:
     ref: str
     rule: ModifyRule
     value: float
+    line: int | None = None
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class TrafficSignalStateAction:
+    """Set the state of the traffic signal ``name`` (OpenDRIVE signal id) to ``state``."""
+
+    name: str
+    state: str
     line: int | None = None
 
 

@@ -14,7 +14,6 @@ _PRIVATE_UNSUPPORTED = {
 }
 _GLOBAL_UNSUPPORTED = {
     "EntityAction": "adding/deleting entities at run time is not supported",
-    "InfrastructureAction": "traffic signals are not simulated",
     "TrafficAction": "traffic sources/sinks/swarms are not supported",
     "SetMonitorAction": "monitors are not supported",
 }
@@ -101,6 +100,15 @@ def global_(el: Element, ctx: reading.Context) -> a.GlobalAction:
                 line=chosen.sourceline,
             )
         raise ctx.error(inner, "expected SetAction or ModifyAction")
+    if tag == "InfrastructureAction":
+        signal = ctx.choice(ctx.require(chosen, "TrafficSignalAction"))
+        if signal.tag == "TrafficSignalStateAction":
+            return ctl.TrafficSignalStateAction(
+                name=ctx.string(signal, "name"),
+                state=ctx.string(signal, "state"),
+                line=signal.sourceline,
+            )
+        return ctx.unsupported(signal, "traffic signal controllers are not simulated")
     reason = _GLOBAL_UNSUPPORTED.get(str(tag), f"unknown global action {tag}")
     return ctx.unsupported(chosen, reason)
 

@@ -16,7 +16,6 @@ _UNSUPPORTED_ENTITY = {
 _UNSUPPORTED_VALUE = {
     "TimeOfDayCondition": "time of day is not simulated",
     "UserDefinedValueCondition": "user-defined values have no source in the stand-in",
-    "TrafficSignalCondition": "traffic signals are not simulated",
     "TrafficSignalControllerCondition": "traffic signal controllers are not simulated",
 }
 
@@ -217,6 +216,10 @@ def value_condition(el: Element, ctx: reading.Context) -> c.ValueCondition:
             value=ctx.string(el, "value"),
             rule=ctx.enum(el, "rule", m.Rule),
             line=line,
+        )
+    if tag == "TrafficSignalCondition":
+        return c.TrafficSignalCondition(
+            name=ctx.string(el, "name"), state=ctx.string(el, "state"), line=line
         )
     reason = _UNSUPPORTED_VALUE.get(str(tag), f"unknown value condition {tag}")
     return ctx.unsupported(el, reason)
