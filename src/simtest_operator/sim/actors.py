@@ -64,6 +64,7 @@ class Actor:
         "s",
         "speed",
         "standstill_time",
+        "stretch",
         "stuck",
         "x",
         "y",
@@ -105,6 +106,9 @@ class Actor:
         """Roads of an assigned route in order; the next ones are preferred at forks."""
         self.route_index = 0
         """Position of the actor's current road in ``route``."""
+        self.stretch = 1.0
+        """Reference-line metres per metre driven at the actor's lateral position (from its
+        last lane pose; more than 1 inside a curve)."""
         self.lane_changing = False
         """Set by a lane change for the coming motion step: its lateral motion is part of the
         distance driven (esmini), not added to it."""

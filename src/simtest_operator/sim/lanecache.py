@@ -85,7 +85,7 @@ class LaneCache:
     def _interpolate(self, road_id: str, s: float, lane_id: int) -> _Row | None:
         recent = self._last.setdefault((road_id, lane_id), [])
         for chunk in recent:
-            if chunk[2][0] <= s < chunk[2][-1]:
+            if chunk[2][0] <= s <= chunk[2][-1]:
                 break
         else:
             found = self._chunk(road_id, s, lane_id)
@@ -111,17 +111,6 @@ class LaneCache:
             a[6] + f * (b[6] - a[6]),
         )
 
-    def pose(
-        self, road_id: str, s: float, lane_id: int, offset: float
-    ) -> tuple[float, float, float, float]:
-        """(x, y, z, heading along +s) of the lane centre + ``offset`` (positive to the left)."""
-        row = self._interpolate(road_id, s, lane_id)
-        if row is None:
-            exact = self._roads.lane_pose(road_id, s, lane_id, offset)
-            return exact.x, exact.y, exact.z, exact.heading
-        x, y, z, heading, ref_heading, _, _ = row
-        return x - offset * math.sin(ref_heading), y + offset * math.cos(ref_heading), z, heading
-
     def lane_t(self, road_id: str, s: float, lane_id: int) -> float:
         """t of the lane centre at s (0 where the lane does not exist)."""
         row = self._interpolate(road_id, s, lane_id)
@@ -130,15 +119,26 @@ class LaneCache:
             return bounds.t_center if bounds is not None else 0.0
         return row[5]
 
-    def stretch(self, road_id: str, s: float, lane_id: int, offset: float) -> float:
-        """Reference-line metres per metre driven at the lane centre + ``offset``: R / (R - t)
-        on a reference line of radius R (more inside a curve, less outside), as the reference
-        player scales motion along s."""
+    def frame(
+        self, road_id: str, s: float, lane_id: int, offset: float
+    ) -> tuple[float, float, float, float, float]:
+        """(x, y, z, heading along +s, stretch) of the lane centre + ``offset``; the stretch is
+        reference-line metres per metre driven there: R / (R - t) on a reference line of
+        radius R (more inside a curve, less outside), as the reference player scales motion
+        along s."""
         row = self._interpolate(road_id, s, lane_id)
         if row is None:
-            return 1.0
-        shrink = 1.0 - row[6] * (row[5] + offset)
-        return 1.0 / min(max(shrink, 0.5), 2.0)
+            exact = self._roads.lane_pose(road_id, s, lane_id, offset)
+            return exact.x, exact.y, exact.z, exact.heading, 1.0
+        x, y, z, heading, ref_heading, lane_t, curvature = row
+        shrink = min(max(1.0 - curvature * (lane_t + offset), 0.5), 2.0)
+        return (
+            x - offset * math.sin(ref_heading),
+            y + offset * math.cos(ref_heading),
+            z,
+            heading,
+            1.0 / shrink,
+        )
 
 
 def _curvature(

@@ -59,7 +59,9 @@ def move(
             lateral = min(abs(lateral_rate) * dt, abs(distance))
             distance = math.copysign(math.sqrt(distance * distance - lateral * lateral), distance)
         actor.lane_changing = False
-        stretched = distance * world.stretch(actor)
+        # s per metre driven at the lateral position the last pose found (one step old: the
+        # lateral motion within a step changes it by far less than a per mille)
+        stretched = distance * actor.stretch
         location = world.roads.advance(
             actor.road_id,
             actor.s,

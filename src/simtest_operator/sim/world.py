@@ -123,7 +123,9 @@ class World:
         actor.offset = offset
         actor.direction = direction
         actor.stuck = False
-        lane_heading = self._lanes.pose(road_id, s, lane_id, offset)[3]
+        frame = self._lanes.frame(road_id, s, lane_id, offset)
+        lane_heading = frame[3]
+        actor.stretch = frame[4]
         base = lane_heading if direction > 0 else lane_heading + math.pi
         actor.heading_offset = math.remainder(actor.heading - base, 2.0 * math.pi)
 
@@ -131,11 +133,6 @@ class World:
         """t of a lane's centre at s (0 for the centre lane or a lane that does not exist)."""
         assert self._lanes is not None
         return self._lanes.lane_t(road_id, s, lane_id)
-
-    def stretch(self, actor: Actor) -> float:
-        """Reference-line metres per metre an actor drives at its lateral position."""
-        assert self._lanes is not None and actor.road_id is not None
-        return self._lanes.stretch(actor.road_id, actor.s, actor.lane_id, actor.offset)
 
     def current_lane(self, actor: Actor) -> int:
         """The lane containing the actor's reference point (its logical lane while changing)."""
@@ -151,8 +148,11 @@ class World:
     def pose_on_road(self, actor: Actor, lateral_angle: float = 0.0) -> None:
         """Recompute a ROAD-mode actor's pose from its lane coordinates."""
         assert self._lanes is not None and actor.road_id is not None
-        x, y, z, heading = self._lanes.pose(actor.road_id, actor.s, actor.lane_id, actor.offset)
+        x, y, z, heading, stretch = self._lanes.frame(
+            actor.road_id, actor.s, actor.lane_id, actor.offset
+        )
         actor.x, actor.y, actor.z = x, y, z
+        actor.stretch = stretch
         base = heading if actor.direction > 0 else heading + math.pi
         actor.heading = math.remainder(base + actor.heading_offset + lateral_angle, 2.0 * math.pi)
 
