@@ -3,7 +3,8 @@
 Generates a 20-vehicle OpenSCENARIO scenario on ``e6mini.xodr`` of the development corpus (three
 lanes per direction on a long curved road; every vehicle gets a speed profile, a third of them
 change lanes; 60 s simulated) and runs it side by side, each variant in a fresh process because
-libsumo is one simulation per process:
+libsumo is one simulation per process, in rounds over the variants (best of ``--repeat``, by
+stepping time):
 
 * ``sumo``: the default -- SUMO hosts the network; no SUMO traffic, so actors are not mirrored;
 * ``sumo+mirror``: every actor pushed into SUMO every step (``BackendConfig.mirror=True``);
@@ -130,11 +131,16 @@ def run_child(path: Path, nets: Path, out: Path, variant: str) -> dict[str, obje
     return dict(json.loads(result.stdout.strip().splitlines()[-1]))
 
 
+def _stepping(row: dict[str, object]) -> float:
+    """Wall seconds spent stepping (the run without loading and starting)."""
+    return float(str(row["wall"])) - float(str(row["startup"]))
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=(__doc__ or "").split("\n", 1)[0])
     parser.add_argument("--vehicles", type=int, default=20)
     parser.add_argument("--seconds", type=float, default=60.0)
-    parser.add_argument("--repeat", type=int, default=3, help="runs per variant (best counts)")
+    parser.add_argument("--repeat", type=int, default=5, help="runs per variant (best counts)")
     parser.add_argument("--json", type=Path, default=None)
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
@@ -142,15 +148,15 @@ def main() -> None:
         path = folder / "bench.xosc"
         path.write_text(scenario_text(args.vehicles, args.seconds), encoding="utf-8")
         nets = folder / "nets"
-        cold = run_child(path, nets, str(folder / "cold"), "sumo")  # network cache miss
-        rows = []
-        for variant in ("sumo", "sumo+mirror", "sumo+record", "memory"):
-            # Best of a few runs: the machine is shared, the fastest run is the least disturbed.
-            runs = [
-                run_child(path, nets, str(folder / f"{variant}{k}"), variant)
-                for k in range(args.repeat)
-            ]
-            rows.append(min(runs, key=lambda r: float(str(r["wall"]))))
+        cold = run_child(path, nets, folder / "cold", "sumo")  # network cache miss
+        variants = ("sumo", "sumo+mirror", "sumo+record", "memory")
+        # Rounds over all variants, best run per variant: the machine is shared, so the variants
+        # see the same background load, and the fastest run is the least disturbed one.
+        runs: dict[str, list[dict[str, object]]] = {variant: [] for variant in variants}
+        for k in range(args.repeat):
+            for variant in variants:
+                runs[variant].append(run_child(path, nets, folder / f"{variant}{k}", variant))
+        rows = [min(runs[variant], key=_stepping) for variant in variants]
     print(f"{'variant':14} {'sim s':>6} {'wall s':>7} {'startup s':>9} {'RTF':>6} {'RTF steps':>9}")
     for row in rows:
         simulated, wall = float(str(row["simulated"])), float(str(row["wall"]))
@@ -163,11 +169,7 @@ def main() -> None:
         )
     base = next(r for r in rows if r["variant"] == "sumo")
     rec = next(r for r in rows if r["variant"] == "sumo+record")
-
-    def stepping(row: dict[str, object]) -> float:
-        return float(str(row["wall"])) - float(str(row["startup"]))
-
-    overhead = stepping(rec) / stepping(base) - 1.0
+    overhead = _stepping(rec) / _stepping(base) - 1.0
     print(f"recording overhead: {overhead * 100:.1f} % of stepping time")
     print(
         f"startup: imports {base['import']:.2f} s; scenario, map and SUMO start with the network "
