@@ -3,7 +3,7 @@
 Covers: the campaign completes with correct counters (passed, failed, errored after retries, a
 flaky scenario retried once) and printer columns; every scenario has exactly one result; no node
 ever runs more simulator pods than its ``simtest.dev/simulator`` slots; finished pods and
-SimEnvironments are cleaned up; conditions and events are set.
+SimEnvironments are cleaned up; conditions and events (campaign phases, finished batches) are posted.
 """
 
 from __future__ import annotations
@@ -52,6 +52,7 @@ def test_fifty_scenarios_on_kwok(
         while (cluster.items("simenvironments") or cluster.pods()) and time.monotonic() < deadline:
             time.sleep(0.5)
         leftovers = len(cluster.items("simenvironments")) + len(cluster.pods())
+        events = cluster.core.list_namespaced_event(cluster.namespace).items
     assert status["phase"] == "Error"  # broken-000 ends Error after its retry
     counts = {
         k: status[k]
@@ -104,3 +105,6 @@ def test_fifty_scenarios_on_kwok(
         "Degraded": "True",
     }
     assert leftovers == 0
+    reasons = {e.reason for e in events if e.involved_object.kind == "TestCampaign"}
+    assert {"Running", "Error"} <= reasons, reasons
+    assert any(e.reason == "BatchSucceeded" for e in events)

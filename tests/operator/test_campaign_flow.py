@@ -1,7 +1,8 @@
 """Whole campaigns through the planner on the in-memory cluster (no API server).
 
 Covers: window mode completes with correct counters and one result per scenario; the window and
-node slots are never exceeded; live SimEnvironments stay bounded; batches are created lazily;
+node slots are never exceeded; live SimEnvironments stay bounded; prefetch only beyond
+a derived window with pending headroom; batches are created lazily;
 barrier mode starts a batch only after the previous one has final verdicts; infrastructure
 errors are retried as new attempts and Failed never is; retries run out into Error; suspend
 pauses; Reuse runs queues on warm workers; a crash after any prefix of a plan's actions (an
@@ -36,8 +37,8 @@ def test_window_mode_completes_with_correct_counters() -> None:
     assert status["batches"] == 6
     assert len(cluster.results()) == 50
     assert max(cluster.max_per_node.values()) <= 2
-    assert cluster.max_in_flight <= 6
-    assert cluster.max_live_envs <= 2 * 6  # in flight + finished awaiting their fold
+    assert cluster.max_in_flight <= 6 + 3  # the slots plus one prefetched pod per node
+    assert cluster.max_live_envs <= 2 * 9  # in flight + finished awaiting their fold
     complete = next(c for c in status["conditions"] if c["type"] == "Complete")
     assert complete["status"] == "True"
     assert not cluster.of(Kind.POD)
@@ -160,3 +161,17 @@ def test_crash_after_any_prefix_of_a_plan_loses_and_duplicates_nothing() -> None
     retried = {k for k, r in results.items() if r["attempts"] > 1}
     assert retried == {"s003.xosc", "s007.xosc", "s013.xosc", "s017.xosc"}
     assert cluster.status()["passed"] == 20
+
+
+def test_explicit_max_parallel_is_never_exceeded_and_prefetch_needs_pending_headroom() -> None:
+    cluster = FakeCluster(nodes={"n0": 3, "n1": 3})
+    cluster.start_campaign(campaign_body(batchSize=5, maxParallel=4), frozen_list(12), batch_size=5)
+    cluster.run()
+    assert cluster.max_in_flight <= 4
+    tight = FakeCluster(nodes={"n0": 2, "n1": 2})
+    body = campaign_body(
+        batchSize=5, maxSimulatorsPerNode=2, timeoutSeconds=60, pendingTimeoutSeconds=90
+    )
+    tight.start_campaign(body, frozen_list(12), batch_size=5)
+    tight.run()
+    assert tight.max_in_flight <= 4  # a Pending wait could trip pendingTimeoutSeconds: no prefetch

@@ -65,7 +65,10 @@ class Applier:
     parallel: int = 16
     render: Callable[[EnvironmentRequest], RenderedEnvironment] | None = None
     """Renders pods of environments created in the same step (see ``Create.provision``)."""
-    _last_event: dict[tuple[Kind, str], datetime.datetime] = dataclasses.field(default_factory=dict)
+    _last_event: dict[tuple[Kind, str, str], datetime.datetime] = dataclasses.field(
+        default_factory=dict
+    )
+    """Last event per (object, reason): repeats of one reason are limited, a new phase is not."""
 
     async def apply(self, plan: Plan, *, now: datetime.datetime) -> Applied:
         """Send every action; never raises for API errors (they are counted and logged)."""
@@ -223,7 +226,7 @@ class Applier:
             return
 
     async def _emit(self, action: Emit, *, now: datetime.datetime) -> None:
-        key = (action.kind, action.name)
+        key = (action.kind, action.name, action.reason)
         last = self._last_event.get(key)
         if (
             not action.terminal

@@ -242,18 +242,27 @@ def _group(candidates: Sequence[ScenarioState], layout: Layout, *, chunk: int) -
     return units
 
 
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Capacity:
+    """Simulator slots on the nodes a campaign's pods may use."""
+
+    slots: int = 0
+    nodes: int = 0
+
+
 def cluster_slots(
     nodes: Mapping[str, NodeView] | None,
     *,
     per_node: int,
     node_selector: Mapping[str, str],
     tolerated: Iterable[tuple[str | None, str | None, str | None, str]],
-) -> int:
-    """Simulator slots on the nodes a simulator pod may use (0 when unknown)."""
+) -> Capacity:
+    """Simulator slots (and nodes) a simulator pod may use (zero when unknown)."""
     if nodes is None:
-        return 0
+        return Capacity()
     tolerations = tuple(tolerated)
     total = 0
+    usable = 0
     for node in nodes.values():
         labels = dict(node.labels)
         if not node.ready or node.unschedulable or node.slots <= 0:
@@ -263,7 +272,8 @@ def cluster_slots(
         if not all(_tolerates(taint, tolerations) for taint in node.taints):
             continue
         total += min(node.slots, per_node)
-    return total
+        usable += 1
+    return Capacity(slots=total, nodes=usable)
 
 
 def _tolerates(

@@ -342,13 +342,22 @@ class _Step:
         execution = self.spec.execution
         if execution.max_parallel is not None:
             return execution.max_parallel
-        slots = cluster_slots(
+        capacity = cluster_slots(
             self.inputs.nodes,
             per_node=execution.max_simulators_per_node,
             node_selector=execution.node_selector,
             tolerated=requests.tolerations(self.spec),
         )
-        return slots if slots > 0 else execution.batch_size
+        if capacity.slots <= 0:
+            return execution.batch_size
+        # A few pods beyond the slots wait in Pending, so the scheduler binds the next one the
+        # moment a slot frees -- the operator is off the refill path. The scheduler still caps
+        # what runs at the slots. Only when a Pending wait of a scenario's length cannot trip
+        # pendingTimeoutSeconds.
+        prefetch = 0
+        if execution.pending_timeout_seconds >= 2 * execution.timeout_seconds:
+            prefetch = self.config.prefetch_per_node * capacity.nodes
+        return capacity.slots + prefetch
 
     def _start(self, states: Sequence[ScenarioState], *, in_flight: int, window: int) -> None:
         execution = self.spec.execution

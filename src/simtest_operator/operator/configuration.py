@@ -45,6 +45,10 @@ class OperatorConfig:
     keep_finished_environments: bool = False
     """Keep SimEnvironments after their results are folded into the batch (debugging); by
     default they are deleted so live objects stay bounded by the in-flight window."""
+    prefetch_per_node: int = 1
+    """Window mode with a derived window (no maxParallel): pods created beyond the free
+    simulator slots, per usable node. They wait in Pending and the scheduler starts one the
+    moment a slot frees, without a round trip through the operator. 0 turns it off."""
     reuse_queue: int = 8
     """Scenarios per warm simulator with isolation ``Reuse`` (bounded by the 4 KiB termination
     message that carries their results)."""
@@ -71,6 +75,7 @@ class OperatorConfig:
             ("missing_pod_grace", "MISSING_POD_GRACE", float),
             ("backstop_grace", "BACKSTOP_GRACE", float),
             ("reuse_queue", "REUSE_QUEUE", int),
+            ("prefetch_per_node", "PREFETCH", int),
             ("metrics_port", "METRICS_PORT", int),
         ):
             raw = env.get(ENV_PREFIX + key)
