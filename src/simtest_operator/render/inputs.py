@@ -11,30 +11,16 @@ import dataclasses
 from collections.abc import Mapping
 from typing import Any
 
+from simtest_operator.scenarios.pinned import PinnedScenario
+
 SIMULATOR_RESOURCE = "simtest.dev/simulator"
 """Extended resource: one unit is one simulator slot on a node."""
 GPU_RESOURCE = "nvidia.com/gpu"
 
 
-@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
-class ScenarioRef:
-    """One frozen scenario the environment runs."""
-
-    id: str
-    source: str
-    """URI the runner fetches the file from (``file://``, ``git+...``, ``http(s)://``, ...)."""
-    sha256: str
-    overrides: Mapping[str, str] = dataclasses.field(default_factory=dict)
-    """OpenSCENARIO parameter values for this run."""
-
-    def to_json(self) -> dict[str, Any]:
-        """Wire form (camelCase), as it appears in the run spec."""
-        return {
-            "id": self.id,
-            "source": self.source,
-            "sha256": self.sha256,
-            "overrides": dict(sorted(self.overrides.items())),
-        }
+ScenarioRef = PinnedScenario
+"""One frozen scenario the environment runs: the pinned entry of the campaign's frozen list
+(id, source URI, sha256, parameter overrides), with the same wire form."""
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
