@@ -209,11 +209,14 @@ def select(
         )
     else:
         budget = max(selection.free_slots, 0)
-    units = _group(candidates, layout, chunk=max(selection.chunk, 1))
-    return tuple(units[:budget])
+    return tuple(_group(candidates, layout, chunk=max(selection.chunk, 1), limit=budget))
 
 
-def _group(candidates: Sequence[ScenarioState], layout: Layout, *, chunk: int) -> list[Unit]:
+def _group(
+    candidates: Sequence[ScenarioState], layout: Layout, *, chunk: int, limit: int
+) -> list[Unit]:
+    """Consecutive candidates of one batch and attempt, ``chunk`` at a time; at most ``limit``
+    units (the rest of a long queue is not even looked at)."""
     units: list[Unit] = []
     current: list[ScenarioState] = []
 
@@ -231,6 +234,8 @@ def _group(candidates: Sequence[ScenarioState], layout: Layout, *, chunk: int) -
             current.clear()
 
     for candidate in candidates:
+        if len(units) >= limit:
+            break
         if current and (
             len(current) >= chunk
             or layout.batch_of(candidate.position) != layout.batch_of(current[0].position)
@@ -238,7 +243,8 @@ def _group(candidates: Sequence[ScenarioState], layout: Layout, *, chunk: int) -
         ):
             flush()
         current.append(candidate)
-    flush()
+    if len(units) < limit:
+        flush()
     return units
 
 

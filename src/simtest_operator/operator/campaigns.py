@@ -295,8 +295,12 @@ class _Step:
     # --- batches ---------------------------------------------------------------------------
 
     def _batches(self, states: Sequence[ScenarioState]) -> None:
+        busy = {env.batch for env in self.envs}
         for index, batch in sorted(self.batches.items()):
-            mine = [states[p] for p in self.layout.positions(index)]
+            positions = self.layout.positions(index)
+            if batch.name not in busy and len(batch.results) == len(positions):
+                continue  # every result recorded and nothing running: the status is final
+            mine = [states[p] for p in positions]
             desired = statuses.batch_status(states=mine, current=batch.status, now=self.now)
             patch = statuses.changed_fields(desired, batch.status)
             if not patch:
