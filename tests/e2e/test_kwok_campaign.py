@@ -3,7 +3,8 @@
 Covers: the campaign completes with correct counters (passed, failed, errored after retries, a
 flaky scenario retried once) and printer columns; every scenario has exactly one result; no node
 ever runs more simulator pods than its ``simtest.dev/simulator`` slots; finished pods and
-SimEnvironments are cleaned up; conditions and events (campaign phases, finished batches) are posted.
+SimEnvironments are cleaned up; conditions and events (campaign phases, finished batches) are
+posted.
 """
 
 from __future__ import annotations
