@@ -30,6 +30,9 @@ lint: setup
 	$(VENV)/bin/mypy
 	$(VENV)/bin/lint-imports
 
-crds: setup
+# Regenerate everything derived from the API models: CRDs and their reference, the chart's
+# copies, and the rendered chart goldens (the kustomize base is one of them).
+crds: setup toolchain
 	$(SIMTEST) crds
 	$(SIMTEST) package sync
+	$(VENV)/bin/python -m pytest -q tests/charts/test_chart_golden.py --update-golden
