@@ -90,9 +90,7 @@ def run_job(
 ) -> list[ScenarioOutcome]:
     """Run every scenario of the job; never raises for scenario or simulator problems."""
     spec = job.spec
-    locator = Locator(
-        FetchContext(base_dir=Path("/"), cache_dir=job.settings.cache.root / "sources")
-    )
+    locator = Locator(FetchContext(base_dir=Path("/"), cache_dir=job.settings.cache.sources))
     isolated = spec.isolation == "Reuse" and len(spec.scenarios) > 1 if fork is None else fork
     outcomes: list[ScenarioOutcome] = []
     for scenario in spec.scenarios:
