@@ -51,7 +51,17 @@ class TestCampaignSpec(ApiModel):
     results: ResultsSpec = Field(default_factory=ResultsSpec)
     """Results database."""
     suspend: bool = False
-    """Pause: no new scenarios start while true; running ones finish."""
+    """Pause, resumable: no new scenarios start while true (retries included); running ones
+    finish. Setting it back to false continues where the campaign stopped."""
+    cancel: bool = False
+    """Stop now, for good: running simulator pods are deleted, their scenarios and every one not
+    started yet end ``Skipped`` (reason ``cancelled``), phase ``Cancelled``, condition
+    ``Complete=True`` with reason ``Cancelled``. Final: setting it back to false does nothing
+    (use ``suspend`` to pause and resume)."""
+    active_deadline_seconds: Annotated[int, Field(gt=0, le=31_536_000)] | None = None
+    """Wall-clock limit of the whole campaign in seconds, counted from ``status.startTime`` (the
+    first scenario start; suspended time counts too), like a Job's. When exceeded the campaign is
+    cancelled as by ``cancel`` with reason ``DeadlineExceeded``. Unset: no limit."""
 
 
 class TestCampaignStatus(CommonStatus):
