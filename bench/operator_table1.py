@@ -25,45 +25,41 @@ import argparse
 import contextlib
 import dataclasses
 import json
-import os
-import random
 import re
-import secrets
-import shutil
-import signal
-import socket
 import statistics
-import subprocess
-import sys
 import tempfile
-import threading
 import time
-import urllib.request
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
-from kubernetes import client, watch
+from kubernetes import client
 
+from kwokbench import (
+    CAMPAIGN,
+    CAP_SECONDS,
+    GROUP,
+    REPO,
+    VERSION,
+    PodClock,
+    campaign_body,
+    campaign_complete,
+    dev_cluster,
+    durations,
+    fake_nodes,
+    greedy_makespan,
+    metric_total,
+    new_namespace,
+    operator_metrics,
+    operator_process,
+    prepare_templates,
+    proc_usage,
+    set_slots,
+    write_scenarios,
+)
 from simtest_operator.devcluster import provisioning
-from simtest_operator.devcluster.cluster import DevCluster
-from simtest_operator.devcluster.toolchain import Toolchain
-from simtest_operator.settings import Settings
 
-REPO = Path(__file__).resolve().parents[1]
-GROUP, VERSION = "simtest.dev", "v1alpha1"
-CAP_SECONDS = 35.0
 NODES = 3
-SMOKE = REPO / "scenarios" / "smoke" / "cut-in_highway_v25_gap30_dv5.xosc"
-
-BENCH_VALUES = """{#- Bench-only: kwok fake runs; the id holds the duration (d<ms>). -#}
-{%- set ms = scenario.id.split("-d")[1].split(".")[0] | int %}
-{%- set message = {"verdict": "Passed", "wallSeconds": ms / 1000} | json %}
-{%- set extraPodAnnotations = {"simtest.dev/fake-duration": (ms / 1000) ~ "s",
-    "simtest.dev/fake-termination-message": message} %}
-{% include "default/values.yaml.j2" %}
-"""
-BENCH_POD = '{% include "default/pod.yaml.j2" %}\n'
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
@@ -103,124 +99,6 @@ class Result:
     """From campaign creation to the first simulator pod (resolution, batch, environment)."""
 
 
-def durations(count: int, *, scale: float, seed: int) -> list[float]:
-    """Truncated-normal scenario durations: mean 0.75 of the cap, sd 0.2, within [0.2, 1] x cap."""
-    rng = random.Random(seed)
-    cap = CAP_SECONDS * scale
-    out = []
-    for _ in range(count):
-        value = rng.gauss(0.75, 0.2)
-        out.append(round(min(max(value, 0.2), 1.0) * cap, 3))
-    return out
-
-
-def greedy_makespan(seconds: Sequence[float], *, slots: int, barrier_batch: int | None) -> float:
-    """Makespan of starting scenarios in list order on the first free slot, with no overhead;
-    with a barrier, batch by batch (each batch starts when the previous one has ended)."""
-    groups = (
-        [list(seconds)]
-        if barrier_batch is None
-        else [list(seconds[i : i + barrier_batch]) for i in range(0, len(seconds), barrier_batch)]
-    )
-    clock = 0.0
-    for group in groups:
-        free = [clock] * slots
-        end = clock
-        for duration in group:
-            start = min(free)
-            free[free.index(start)] = start + duration
-            end = max(end, start + duration)
-        clock = end
-    return clock
-
-
-def free_port() -> int:
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        return int(sock.getsockname()[1])
-
-
-class PodClock:
-    """Watches simulator pods; records when each was created and when it terminated."""
-
-    def __init__(self, core: client.CoreV1Api, namespace: str) -> None:
-        self.core = core
-        self.namespace = namespace
-        self.created: dict[str, float] = {}
-        self.ended: dict[str, float] = {}
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._run, daemon=True)
-
-    def __enter__(self) -> PodClock:
-        self._thread.start()
-        return self
-
-    def __exit__(self, *_: object) -> None:
-        self._stop.set()
-        self._thread.join(timeout=10)
-
-    def _run(self) -> None:
-        while not self._stop.is_set():
-            watcher: Any = watch.Watch()  # type: ignore[no-untyped-call]
-            stream = watcher.stream(
-                self.core.list_namespaced_pod, self.namespace, timeout_seconds=2
-            )
-            for event in stream:
-                pod = event["object"]
-                name = pod.metadata.name
-                now = time.monotonic()
-                self.created.setdefault(name, now)
-                statuses = pod.status.container_statuses or []
-                if any(s.state and s.state.terminated for s in statuses):
-                    self.ended.setdefault(name, now)
-                if self._stop.is_set():
-                    break
-
-
-def _metric_total(text: str, name: str) -> float:
-    return sum(
-        float(m.group(1)) for m in re.finditer(rf"^{name}(?:{{[^}}]*}})? ([0-9.e+-]+)$", text, re.M)
-    )
-
-
-def _proc_usage(pid: int) -> tuple[float, float]:
-    with Path(f"/proc/{pid}/stat").open() as handle:
-        fields = handle.read().rsplit(")", 1)[1].split()
-    ticks = os.sysconf("SC_CLK_TCK")
-    cpu = (int(fields[11]) + int(fields[12])) / ticks
-    rss = 0.0
-    with Path(f"/proc/{pid}/status").open() as handle:
-        for line in handle:
-            if line.startswith("VmHWM:"):
-                rss = int(line.split()[1]) / 1024
-    return cpu, rss
-
-
-def _wait_ready(port: int, operator: subprocess.Popen[bytes], timeout: float = 60.0) -> None:
-    """Until the operator answers /readyz (its start-up is not part of the makespan)."""
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if operator.poll() is not None:
-            raise RuntimeError("operator exited during start-up")
-        with contextlib.suppress(OSError):
-            if urllib.request.urlopen(f"http://127.0.0.1:{port}/readyz", timeout=2).status == 200:
-                time.sleep(1.0)  # kopf's initial listings
-                return
-        time.sleep(0.2)
-    raise RuntimeError("operator not ready")
-
-
-def set_slots(core: client.CoreV1Api, nodes: Sequence[str], slots: int) -> None:
-    for node in nodes:
-        patch = {
-            "status": {
-                "capacity": {"simtest.dev/simulator": str(slots)},
-                "allocatable": {"simtest.dev/simulator": str(slots)},
-            }
-        }
-        core.patch_node_status(node, patch)
-
-
 def run_one(
     api: client.ApiClient,
     kubeconfig: Path,
@@ -232,91 +110,49 @@ def run_one(
 ) -> Result:
     core = client.CoreV1Api(api)
     custom = client.CustomObjectsApi(api)
-    namespace = f"bench-{secrets.token_hex(3)}"
-    core.create_namespace({"metadata": {"name": namespace}})  # type: ignore[arg-type]
-    while not provisioning.default_service_account_exists(api, namespace):
-        time.sleep(0.1)
+    namespace = new_namespace(api)
     set_slots(core, nodes, config.simulators)
     sources = workdir / namespace
-    (sources / "scenarios").mkdir(parents=True)
-    text = SMOKE.read_text()
-    for i, duration in enumerate(seconds):
-        name = f"s{i:04d}-d{int(duration * 1000)}.xosc"
-        (sources / "scenarios" / name).write_text(text + f"<!-- {name} -->\n")
-    templates = workdir / "templates"
-    port = free_port()
-    log = (workdir / f"{config.label}.log").open("wb")
-    operator = subprocess.Popen(
-        [
-            sys.executable,
-            "-c",
-            "from simtest_operator.cli.main import main; main()",
-            "operator",
-            "--namespace",
-            namespace,
-            "--kubeconfig",
-            str(kubeconfig),
-            "--templates",
-            str(templates),
-            "--sources",
-            str(sources),
-            "--cache",
-            str(workdir / "cache"),
-            "--metrics-port",
-            str(port),
-        ],
-        stdout=log,
-        stderr=subprocess.STDOUT,
+    write_scenarios(sources, seconds)
+    body = campaign_body(
+        {
+            "batchSize": config.batch,
+            "batchBarrier": config.barrier,
+            "maxSimulatorsPerNode": config.simulators,
+            "timeoutSeconds": 600,
+            "pendingTimeoutSeconds": 3600,
+            "retries": 0,
+        }
     )
-    execution: dict[str, Any] = {
-        "batchSize": config.batch,
-        "batchBarrier": config.barrier,
-        "maxSimulatorsPerNode": config.simulators,
-        "timeoutSeconds": 600,
-        "pendingTimeoutSeconds": 3600,
-        "retries": 0,
-    }
-    body = {
-        "apiVersion": f"{GROUP}/{VERSION}",
-        "kind": "TestCampaign",
-        "metadata": {"name": "bench"},
-        "spec": {
-            "scenarios": {"sources": [{"path": "scenarios"}], "include": ["*.xosc"]},
-            "environment": {"template": "bench"},
-            "execution": execution,
-        },
-    }
     try:
-        _wait_ready(port, operator)
-        with PodClock(core, namespace) as clock:
+        with (
+            operator_process(
+                namespace=namespace,
+                kubeconfig=kubeconfig,
+                templates=workdir / "templates",
+                sources=sources,
+                cache=workdir / "cache",
+                log=workdir / f"{config.label}.log",
+            ) as (operator, port),
+            PodClock(core, namespace) as clock,
+        ):
             custom.create_namespaced_custom_object(GROUP, VERSION, namespace, "testcampaigns", body)
             started = time.monotonic()
             status: dict[str, Any] = {}
             while True:
                 reply: Any = custom.get_namespaced_custom_object(
-                    GROUP, VERSION, namespace, "testcampaigns", "bench"
+                    GROUP, VERSION, namespace, "testcampaigns", CAMPAIGN
                 )
                 status = dict(reply.get("status") or {})
-                if any(
-                    c["type"] == "Complete" and c["status"] == "True"
-                    for c in status.get("conditions", [])
-                ):
+                if campaign_complete(status):
                     break
                 if operator.poll() is not None:
-                    raise RuntimeError(f"operator exited; see {log.name}")
+                    raise RuntimeError(f"operator exited; see {workdir / config.label}.log")
                 time.sleep(0.1)
             makespan = time.monotonic() - started
-        metrics = (
-            urllib.request.urlopen(f"http://127.0.0.1:{port}/metrics", timeout=10).read().decode()
-        )
-        cpu, rss = _proc_usage(operator.pid)
+            metrics = operator_metrics(port)
+            cpu, _, rss = proc_usage(operator.pid)
     finally:
-        operator.send_signal(signal.SIGTERM)
-        with contextlib.suppress(subprocess.TimeoutExpired):
-            operator.wait(timeout=20)
-        if operator.poll() is None:
-            operator.kill()
-        log.close()
         core.delete_namespace(namespace, grace_period_seconds=0)
     slots = NODES * config.simulators
     total = sum(seconds)
@@ -339,7 +175,7 @@ def run_one(
         next((c for c in creations if c >= end), end) - end
         for end in sorted(clock.ended.values())[:-1]
     )
-    requests = _metric_total(metrics, "simtest_api_requests_total")
+    requests = metric_total(metrics, "simtest_api_requests_total")
     return Result(
         config=config,
         scenarios=len(seconds),
@@ -366,25 +202,10 @@ def run_one(
 @contextlib.contextmanager
 def cluster(kubeconfig: Path | None, workdir: Path) -> Iterator[tuple[Path, list[str]]]:
     if kubeconfig is not None:
-        api = provisioning.api_client(kubeconfig)
-        nodes = [
-            str(n.metadata.name)
-            for n in client.CoreV1Api(api).list_node().items
-            if n.metadata and (n.metadata.annotations or {}).get("kwok.x-k8s.io/node") == "fake"
-        ]
-        api.close()  # type: ignore[no-untyped-call]
-        yield kubeconfig, [str(n) for n in nodes[:NODES]]
+        yield kubeconfig, fake_nodes(kubeconfig)[:NODES]
         return
-    dev = DevCluster(
-        workdir / "cluster",
-        Toolchain(root=Settings.from_env().cache.toolchain),
-        tied_to_this_process=True,
-    )
-    info = dev.up(nodes=NODES, slots=3, crds_dir=REPO / "crds")
-    try:
+    with dev_cluster(workdir / "cluster", nodes=NODES, slots=3) as info:
         yield info.kubeconfig, list(info.nodes)
-    finally:
-        dev.down()
 
 
 def table(results: Sequence[Result]) -> str:
@@ -462,11 +283,7 @@ def main(argv: Sequence[str] | None = None) -> None:
     results: list[Result] = []
     with tempfile.TemporaryDirectory(prefix="simtest-bench-") as scratch:
         workdir = Path(scratch)
-        templates = workdir / "templates"
-        shutil.copytree(REPO / "helm-templates" / "default", templates / "default")
-        (templates / "bench").mkdir()
-        (templates / "bench" / "values.yaml.j2").write_text(BENCH_VALUES)
-        (templates / "bench" / "pod.yaml.j2").write_text(BENCH_POD)
+        prepare_templates(workdir)
         with cluster(args.kubeconfig, workdir) as (kubeconfig, nodes):
             api = provisioning.api_client(kubeconfig)
             try:
