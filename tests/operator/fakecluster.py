@@ -367,6 +367,7 @@ class FakeCluster:
                 "Succeeded",
                 "Failed",
                 "Error",
+                "Cancelled",
             ) and not self.of(Kind.ENVIRONMENT):
                 return steps
         raise AssertionError("campaign did not finish")

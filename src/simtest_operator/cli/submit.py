@@ -4,7 +4,8 @@ For CI steps and GitOps checks. The manifest is validated locally first (same ru
 paths as the API server), then created. With ``--wait`` the command follows the campaign's
 ``Complete`` condition, prints progress as it changes, collects the per-scenario results from the
 campaign's ScenarioBatches and exits like ``simtest run``: 0 all passed, 1 some failed or timed
-out, 2 errors (or the campaign could not be submitted, or the wait timed out).
+out, 2 errors, a cancelled campaign (``spec.cancel`` or ``activeDeadlineSeconds``; the reason is
+printed on one line), a campaign that could not be submitted, or a wait that timed out.
 """
 
 from __future__ import annotations
@@ -121,6 +122,8 @@ def submit(
         if result.get("verdict") != "Passed":
             click.echo(f"  {result['verdict']:<8} {result['id']}: {result.get('reason', '')}")
     click.echo(f"{name}: {phase} ({_counts(status)})")
+    if phase == "Cancelled":
+        click.echo(f"{name}: cancelled: {_complete_reason(status)}", err=True)
     raise SystemExit(EXIT_BY_PHASE.get(phase, EXIT_ERROR))
 
 
@@ -173,6 +176,16 @@ def _complete(status: Mapping[str, Any]) -> bool:
         c.get("type") == "Complete" and c.get("status") == "True"
         for c in status.get("conditions") or ()
     )
+
+
+def _complete_reason(status: Mapping[str, Any]) -> str:
+    """``<reason>: <message>`` of the Complete condition (why a campaign was cancelled)."""
+    for condition in status.get("conditions") or ():
+        if condition.get("type") == "Complete":
+            message = str(condition.get("message") or "").strip()
+            reason = str(condition.get("reason") or "")
+            return f"{reason}: {message}" if message else reason
+    return "no reason recorded"
 
 
 def _watch(custom: Any, namespace: str, name: str, timeout: float) -> Iterator[Mapping[str, Any]]:

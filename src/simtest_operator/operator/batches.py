@@ -8,7 +8,9 @@ exactly what the previous one knew. A scenario is:
 * ``DONE``: it has a final verdict that is not yet in the batch status;
 * ``RETRY``: its latest attempt ended with ``Error`` and attempts remain;
 * ``RUNNING``: its latest attempt is in flight;
-* ``PENDING``: nothing has started it yet.
+* ``PENDING``: nothing has started it yet;
+* ``SKIPPED``: the campaign was cancelled before its batch object existed — final, counted in the
+  campaign counters only (see :mod:`cancelling`).
 
 Work is picked in frozen-list order, retries first: in *window* mode as many units as there are
 free slots, in *barrier* mode the whole next batch once every scenario of the previous one has a
@@ -35,11 +37,18 @@ class State(enum.StrEnum):
     RETRY = "Retry"
     DONE = "Done"
     FOLDED = "Folded"
+    SKIPPED = "Skipped"
 
     @property
     def final(self) -> bool:
         """The scenario has its final verdict (whether or not it is recorded yet)."""
-        return self in (State.DONE, State.FOLDED)
+        return self in (State.DONE, State.FOLDED, State.SKIPPED)
+
+    @property
+    def settled(self) -> bool:
+        """Nothing more will happen to the scenario: recorded in its batch, or cancelled
+        before its batch existed."""
+        return self in (State.FOLDED, State.SKIPPED)
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)

@@ -22,10 +22,12 @@ from simtest_operator.api.v1alpha1 import TestCampaignSpec
 from simtest_operator.errors import RenderError
 from simtest_operator.operator import (
     bodies,
+    cancelling,
     conditions,
     environments,
     names,
     observed,
+    provisioning,
     requests,
     statuses,
 )
@@ -51,6 +53,7 @@ from simtest_operator.operator.batches import (
 )
 from simtest_operator.operator.configuration import OperatorConfig
 from simtest_operator.operator.environments import Assessment, Limits
+from simtest_operator.operator.jobviews import JobView
 from simtest_operator.operator.observed import (
     BatchView,
     CampaignView,
@@ -80,6 +83,8 @@ class Inputs:
     """None when the operator cannot see nodes (then maxParallel defaults to batchSize)."""
     now: datetime.datetime
     last_status_write: datetime.datetime | None = None
+    jobs: Mapping[str, JobView] = dataclasses.field(default_factory=dict)
+    """helmfile Jobs by name (``provisioner: Helmfile``)."""
 
 
 def plan(inputs: Inputs, *, config: OperatorConfig, render: Renderer) -> Plan:
@@ -169,7 +174,15 @@ class _Step:
 
     def run(self) -> Plan:
         execution = self.spec.execution
+        cancellation = cancelling.decide(self.spec, self.campaign.status, now=self.now)
         assessments = {env.name: self._assess(env) for env in self.envs}
+        if cancellation is not None:
+            assessments = {
+                env.name: cancelling.assessment(
+                    env, assessments[env.name], cancellation, now=self.now
+                )
+                for env in self.envs
+            }
         states = scenario_states(
             self.layout,
             batches=self.batches.values(),
@@ -177,20 +190,38 @@ class _Step:
             assessments=assessments,
             retries=execution.retries,
         )
+        if cancellation is not None:
+            states = cancelling.states(
+                states, self.layout, cancellation, batches=self.batches.keys()
+            )
         for env in self.envs:
             self._environment(env, assessments[env.name])
+        self.actions.extend(
+            provisioning.teardowns(
+                self.spec,
+                self.envs,
+                jobs=self.inputs.jobs,
+                pods=self.inputs.pods,
+                batches=self.batches.values(),
+                render=self.render,
+                config=self.config,
+            )
+        )
         self._batches(states)
         folded = {s.id for s in states if s.state is State.FOLDED}
         for env in self.envs:
             self._cleanup(env, assessments[env.name], folded)
-        complete = all(s.state is State.FOLDED for s in states)
+        complete = all(s.state.settled for s in states)
         in_flight = sum(
             1 for env in self.envs if not env.deleting and not assessments[env.name].ended
         )
         window = self._window()
-        if not complete and not self.campaign.deleting:
+        if not complete and not self.campaign.deleting and cancellation is None:
             self._start(states, in_flight=in_flight, window=window)
-        self._campaign_status(states, complete=complete)
+            limit = cancelling.deadline(self.spec, self.campaign.status)
+            if limit is not None:
+                self.wakes.append(limit)
+        self._campaign_status(states, complete=complete, cancellation=cancellation)
         counts = statuses.counters(states)
         return Plan(
             actions=tuple(self.actions),
@@ -220,8 +251,14 @@ class _Step:
 
     def _assess(self, env: EnvironmentView) -> Assessment:
         pod = self.inputs.pods.get(env.pod or env.name)
-        return environments.assess(
-            env, pod, nodes=self.inputs.nodes, now=self.now, limits=self._limits(env)
+        return provisioning.assess(
+            env,
+            pod,
+            jobs=self.inputs.jobs,
+            pods=self.inputs.pods,
+            nodes=self.inputs.nodes,
+            now=self.now,
+            limits=self._limits(env),
         )
 
     def _environment(self, env: EnvironmentView, assessment: Assessment) -> None:
@@ -269,6 +306,18 @@ class _Step:
             )
             self.actions.append(PatchStatus(kind=Kind.ENVIRONMENT, name=env.name, patch=status))
             return
+        if provisioning.uses_helmfile(self.spec):
+            self.actions.append(
+                provisioning.provision(
+                    self.spec,
+                    env,
+                    rendered,
+                    config=self.config,
+                    campaign_uid=self.campaign.uid,
+                    now=self.now,
+                )
+            )
+            return
         self.actions.append(
             Provision(
                 environment=env.name,
@@ -284,7 +333,9 @@ class _Step:
     def _cleanup(self, env: EnvironmentView, assessment: Assessment, folded: set[str]) -> None:
         if env.deleting or not env.finished or self.config.keep_finished_environments:
             return
-        if all(scenario_id in folded for scenario_id in env.scenario_ids):
+        if all(scenario_id in folded for scenario_id in env.scenario_ids) and (
+            provisioning.torn_down(env, self.inputs.jobs)
+        ):
             self.actions.append(Delete(kind=Kind.ENVIRONMENT, name=env.name, uid=env.uid))
             timings = assessment.timings
             if timings.queued and timings.finished:
@@ -414,7 +465,10 @@ class _Step:
             request = requests.environment_request(
                 self.spec, observed.environment_view(body), config=self.config
             )
-            self.actions.append(Create(kind=Kind.ENVIRONMENT, body=body, provision=request))
+            direct = not provisioning.uses_helmfile(self.spec)
+            self.actions.append(
+                Create(kind=Kind.ENVIRONMENT, body=body, provision=request if direct else None)
+            )
 
     def _lookahead(self, states: Sequence[ScenarioState]) -> set[int]:
         """Create the next batch object once every scenario of the newest one has started, so
@@ -430,7 +484,13 @@ class _Step:
 
     # --- campaign status -------------------------------------------------------------------
 
-    def _campaign_status(self, states: Sequence[ScenarioState], *, complete: bool) -> None:
+    def _campaign_status(
+        self,
+        states: Sequence[ScenarioState],
+        *,
+        complete: bool,
+        cancellation: cancelling.Cancellation | None,
+    ) -> None:
         campaign = self.campaign
         status = campaign.status
         counts = statuses.counters(states)
@@ -438,6 +498,9 @@ class _Step:
         if total == 0:
             phase, reason, message = "Error", "NoScenarios", "the selection matched no scenarios"
             complete = True
+        elif cancellation is not None:
+            phase = cancelling.CANCELLED_PHASE
+            reason, message = cancellation.reason.value, cancellation.message
         elif complete:
             phase = statuses.final_phase(counts)
             reason, message = phase, _summary(counts)
@@ -479,7 +542,11 @@ class _Step:
                 conditions.Desired(
                     type="Complete",
                     status=complete,
-                    reason=reason if complete else "InProgress",
+                    reason=reason
+                    if complete
+                    else "Cancelling"
+                    if cancellation is not None
+                    else "InProgress",
                     message=message,
                 ),
                 conditions.Desired(
@@ -513,10 +580,10 @@ class _Step:
                     kind=Kind.CAMPAIGN,
                     name=campaign.name,
                     uid=campaign.uid,
-                    reason=phase,
+                    reason=reason if cancellation is not None else phase,
                     message=message,
-                    warning=phase == "Error",
-                    terminal=complete,
+                    warning=phase == "Error" or reason == cancelling.Reason.DEADLINE_EXCEEDED,
+                    terminal=complete or cancellation is not None,
                 )
             )
 

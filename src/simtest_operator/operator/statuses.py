@@ -2,8 +2,9 @@
 
 Counters count scenarios by where they are; a scenario with a final verdict counts under that
 verdict as soon as the verdict is known. The phase of a finished campaign or batch says the worst
-thing that happened: ``Error`` (some scenario ended Error or Invalid) over ``Failed`` (some
-Failed or Timeout) over ``Succeeded``.
+thing that happened: ``Cancelled`` (some scenario was skipped by a cancellation) over ``Error``
+(some scenario ended Error or Invalid) over ``Failed`` (some Failed or Timeout) over
+``Succeeded``.
 """
 
 from __future__ import annotations
@@ -62,7 +63,10 @@ def progress(counts: Mapping[str, int]) -> str:
 
 
 def final_phase(counts: Mapping[str, int]) -> str:
-    """Phase of a set of scenarios that all have final verdicts."""
+    """Phase of a set of scenarios that all have final verdicts (``Cancelled`` when some were
+    skipped: only a cancellation skips scenarios)."""
+    if counts["skipped"]:
+        return "Cancelled"
     if counts["errored"] or counts["invalid"]:
         return "Error"
     if counts["failed"] or counts["timedOut"]:
