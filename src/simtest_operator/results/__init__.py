@@ -7,8 +7,22 @@ Public API (import from here)::
     store.add_outcome(key, scenario_info, outcome)   # one transaction, idempotent per attempt
     store.finish_campaign(key, finished_at=now, phase="Succeeded")
     store.outcomes(key); store.compare(key_a, key_b)
+
+On a cluster (pods record attempts, the operator finishes the run; see :mod:`.clusterruns`)::
+
+    key = results.cluster_run_key(namespace=ns, name=name, uid=uid, created=created)
+    results.record_pod_attempt(store, key, campaign=name, scenario=info, outcome=o, now=now)
+    results.finish_campaign_run(store, key, info=campaign_info, finish=results.Finish(...))
 """
 
+from simtest_operator.results.clusterruns import (
+    Finish,
+    cluster_run_key,
+    finish_campaign_run,
+    key_time,
+    record_pod_attempt,
+    start_campaign_run,
+)
 from simtest_operator.results.comparing import Change, Comparison, ScenarioChange, compare
 from simtest_operator.results.migrating import LATEST_VERSION
 from simtest_operator.results.opening import describe, open_store
@@ -34,6 +48,7 @@ __all__ = [
     "CampaignRecord",
     "Change",
     "Comparison",
+    "Finish",
     "PostgresStore",
     "ResultSink",
     "ResultSource",
@@ -43,9 +58,14 @@ __all__ = [
     "SqliteStore",
     "Store",
     "StoredOutcome",
+    "cluster_run_key",
     "compare",
     "derive_run_key",
     "describe",
+    "finish_campaign_run",
     "is_failing",
+    "key_time",
     "open_store",
+    "record_pod_attempt",
+    "start_campaign_run",
 ]

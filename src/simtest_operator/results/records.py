@@ -52,6 +52,9 @@ class CampaignRecord:
     """``None`` while running, or when the run was killed before it finished."""
     phase: str = ""
     """Final phase given to :meth:`Store.finish_campaign` (e.g. ``Succeeded``, ``Cancelled``)."""
+    counts: Mapping[str, int] = dataclasses.field(default_factory=dict)
+    """Final counters given to :meth:`Store.finish_campaign` (``total``, ``passed``, ...); empty
+    when none were given (a local run derives them from its rows)."""
 
     @property
     def finished(self) -> bool:

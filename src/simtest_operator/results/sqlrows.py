@@ -35,7 +35,7 @@ OUTCOME_COLUMNS = (
 )
 CAMPAIGN_COLUMNS = (
     "run_key, name, namespace, manifest_sha256, started_at, finished_at, phase, sut_name, "
-    "sut_version, simulator_version, settings"
+    "sut_version, simulator_version, settings, counts"
 )
 
 
@@ -55,6 +55,7 @@ def campaign(codec: Codec, row: Row) -> records.CampaignRecord:
         ),
         finished_at=None if row[5] is None else codec.time_out(row[5]),
         phase=row[6],
+        counts={str(k): int(v) for k, v in dict(codec.json_out(row[11]) or {}).items()},
     )
 
 

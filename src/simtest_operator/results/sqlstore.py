@@ -120,7 +120,7 @@ class SqlStore(abc.ABC):
         with self._transaction(write=True) as tx:
             tx.query(
                 f"INSERT INTO campaigns ({sqlrows.CAMPAIGN_COLUMNS}) "
-                "VALUES (?, ?, ?, ?, ?, NULL, '', ?, ?, ?, ?) ON CONFLICT (run_key) DO NOTHING",
+                "VALUES (?, ?, ?, ?, ?, NULL, '', ?, ?, ?, ?, ?) ON CONFLICT (run_key) DO NOTHING",
                 (
                     key,
                     campaign.name,
@@ -131,6 +131,7 @@ class SqlStore(abc.ABC):
                     campaign.sut_version,
                     campaign.simulator_version,
                     codec.json_in(dict(campaign.settings)),
+                    codec.json_in({}),
                 ),
             )
             owner = tx.query("SELECT name FROM campaigns WHERE run_key = ?", (key,))
@@ -220,22 +221,63 @@ class SqlStore(abc.ABC):
             )
 
     def finish_campaign(
-        self, run_key: records.RunKey, *, finished_at: datetime.datetime, phase: str
+        self,
+        run_key: records.RunKey,
+        *,
+        finished_at: datetime.datetime,
+        phase: str,
+        counts: Mapping[str, int] | None = None,
+        info: records.CampaignInfo | None = None,
     ) -> None:
+        codec = self._codec
+        when = codec.time_in(require_aware(finished_at, "finished_at"))
         with self._transaction(write=True) as tx:
-            done = tx.query(
-                "UPDATE campaigns SET finished_at = ?, phase = ? WHERE run_key = ? RETURNING 1",
-                (self._codec.time_in(require_aware(finished_at, "finished_at")), phase, run_key),
-            )
-            if not done:
+            owner = tx.query("SELECT name FROM campaigns WHERE run_key = ?", (run_key,))
+            if not owner:
                 raise ResultsError(f"unknown campaign run {run_key!r}")
+            if info is not None and owner[0][0] != info.name:
+                raise ResultsError(
+                    f"run {run_key} belongs to campaign {owner[0][0]!r}, not {info.name!r}"
+                )
+            tx.query(
+                "UPDATE campaigns SET finished_at = ?, phase = ? WHERE run_key = ?",
+                (when, phase, run_key),
+            )
+            if counts is not None:
+                tx.query(
+                    "UPDATE campaigns SET counts = ? WHERE run_key = ?",
+                    (codec.json_in({str(k): int(v) for k, v in counts.items()}), run_key),
+                )
+            if info is not None:
+                tx.query(
+                    "UPDATE campaigns SET namespace = ?, manifest_sha256 = ?, started_at = ?, "
+                    "sut_name = ?, sut_version = ?, simulator_version = ?, settings = ? "
+                    "WHERE run_key = ?",
+                    (
+                        info.namespace,
+                        info.manifest_sha256,
+                        codec.time_in(require_aware(info.started_at, "started_at")),
+                        info.sut_name,
+                        info.sut_version,
+                        info.simulator_version,
+                        codec.json_in(dict(info.settings)),
+                        run_key,
+                    ),
+                )
 
     def _upsert_scenarios(self, tx: Tx, scenarios: Iterable[records.ScenarioInfo]) -> None:
+        # A row is one file content (id + sha256), so its labels never change; a writer that did
+        # not read the file (the operator lists the frozen list without headers) sends blanks,
+        # and a blank must not erase what a pod or the local runner read from the header.
         tx.execute_many(
             "INSERT INTO scenarios (scenario_id, sha256, source, tags, category, road) "
             "VALUES (?, ?, ?, ?, ?, ?) ON CONFLICT (scenario_id, sha256) DO UPDATE SET "
-            "source = excluded.source, tags = excluded.tags, category = excluded.category, "
-            "road = excluded.road",
+            "source = CASE WHEN excluded.source = '' THEN scenarios.source "
+            "ELSE excluded.source END, "
+            "tags = CASE WHEN ? THEN excluded.tags ELSE scenarios.tags END, "
+            "category = CASE WHEN excluded.category = ? THEN scenarios.category "
+            "ELSE excluded.category END, "
+            "road = CASE WHEN excluded.road = '' THEN scenarios.road ELSE excluded.road END",
             [
                 (
                     s.scenario_id,
@@ -244,6 +286,8 @@ class SqlStore(abc.ABC):
                     self._codec.json_in(list(s.tags)),
                     s.category,
                     s.road,
+                    bool(s.tags),
+                    records.UNCATEGORIZED,
                 )
                 for s in scenarios
             ],

@@ -62,9 +62,21 @@ class ResultSink(Protocol):
         ...
 
     def finish_campaign(
-        self, run_key: records.RunKey, *, finished_at: datetime.datetime, phase: str
+        self,
+        run_key: records.RunKey,
+        *,
+        finished_at: datetime.datetime,
+        phase: str,
+        counts: Mapping[str, int] | None = None,
+        info: records.CampaignInfo | None = None,
     ) -> None:
-        """Mark a run finished with its final phase (``Succeeded``, ``Failed``, ``Cancelled``)."""
+        """Mark a run finished with its final phase (``Succeeded``, ``Failed``, ``Cancelled``).
+
+        ``counts`` stores the final counters; ``info`` (same campaign name) replaces what
+        :meth:`begin_campaign` recorded about the run -- for a run first recorded by a simulator
+        pod that knew only the campaign's name. Calling it again overwrites: it is idempotent for
+        the same arguments.
+        """
         ...
 
 
