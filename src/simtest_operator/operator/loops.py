@@ -131,6 +131,7 @@ class CampaignLoop:
         if self.stored is None and campaign.spec is not None:
             await self._resolve(campaign)
             now = shared.clock()
+        planning = time.perf_counter()  # reading the cache and planning: no API calls
         inputs = campaigns.Inputs(
             campaign=campaign,
             stored=self.stored,
@@ -143,6 +144,7 @@ class CampaignLoop:
             last_status_write=self.last_status_write,
         )
         plan = campaigns.plan(inputs, config=shared.config, render=shared.render)
+        shared.metrics.plan.observe(time.perf_counter() - planning)
         applied = await self.applier.apply(plan, now=now)
         self.expectations.expect(applied.expectations, now=now)
         if applied.campaign_written:

@@ -63,6 +63,12 @@ class Metrics:
             buckets=(0.001, 0.005, 0.01, 0.025, 0.05, 0.1, 0.25, 0.5, 1.0, 5.0),
             registry=self.registry,
         )
+        self.plan = Histogram(
+            "simtest_plan_seconds",
+            "One campaign step without its API calls: reading the cache and planning.",
+            buckets=(0.0005, 0.001, 0.0025, 0.005, 0.01, 0.025, 0.05, 0.1, 0.25, 1.0),
+            registry=self.registry,
+        )
         self.api_requests = Counter(
             "simtest_api_requests",
             "Kubernetes API requests sent by the operator's client (kopf's watches excluded).",
