@@ -26,6 +26,8 @@ class Kind(enum.StrEnum):
     POD = "pods"
     CONFIG_MAP = "configmaps"
     SERVICE_ACCOUNT = "serviceaccounts"
+    JOB = "jobs"
+    ROLE_BINDING = "rolebindings"
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
@@ -52,6 +54,26 @@ class Provision:
     environment: str
     pod: Mapping[str, Any]
     status: Mapping[str, Any]
+    scenario_ids: tuple[str, ...] = ()
+    attempt: int = 1
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class RunHelmfile:
+    """Start a helmfile Job of an environment (``provisioner: Helmfile``): make sure the campaign's
+    identities exist (``identities``, created once per operator run), create the ConfigMap with
+    the rendered helmfile and the Job, then merge ``status`` into the environment's status.
+
+    A ``sync`` ConfigMap is owned by the environment; a ``destroy`` Job is owned by the batch (it
+    outlives the environment) and its ConfigMap by the Job itself (``config_map_owned_by_job``:
+    the applier fills in the Job's uid), so deleting the finished Job removes both."""
+
+    environment: str
+    job: Mapping[str, Any]
+    config_map: Mapping[str, Any]
+    config_map_owned_by_job: bool = False
+    identities: tuple[tuple[Kind, Mapping[str, Any]], ...] = ()
+    status: Mapping[str, Any] | None = None
     scenario_ids: tuple[str, ...] = ()
     attempt: int = 1
 
@@ -94,7 +116,7 @@ class Emit:
     """Terminal events bypass the rate limit."""
 
 
-Action = Create | Provision | PatchStatus | Delete | Emit
+Action = Create | Provision | RunHelmfile | PatchStatus | Delete | Emit
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)

@@ -27,8 +27,15 @@ from simtest_operator.operator.actions import (
     PatchStatus,
     Plan,
     Provision,
+    RunHelmfile,
 )
-from simtest_operator.operator.client import AlreadyExistsError, ApiError, Client, ConflictError
+from simtest_operator.operator.client import (
+    AlreadyExistsError,
+    ApiError,
+    Client,
+    ConflictError,
+    NotFoundError,
+)
 from simtest_operator.operator.expectations import Expectation, Want
 from simtest_operator.operator.metrics import Metrics
 from simtest_operator.render import EnvironmentRequest, RenderedEnvironment
@@ -69,6 +76,9 @@ class Applier:
         default_factory=dict
     )
     """Last event per (object, reason): repeats of one reason are limited, a new phase is not."""
+    _identities_ready: bool = False
+    """The campaign's helmfile identities were created (or found) by this applier: once per
+    operator run, not once per environment."""
 
     async def apply(self, plan: Plan, *, now: datetime.datetime) -> Applied:
         """Send every action; never raises for API errors (they are counted and logged)."""
@@ -115,6 +125,8 @@ class Applier:
                 await self._provision_new(created, action.provision, applied, now=now)
         elif isinstance(action, Provision):
             await self._provision(action, applied, now=now)
+        elif isinstance(action, RunHelmfile):
+            await self._run_helmfile(action, applied, now=now)
         elif isinstance(action, PatchStatus):
             reply = await self.client.patch_status(
                 action.kind,
@@ -205,6 +217,62 @@ class Applier:
             )
         )
 
+    async def _create(self, kind: Kind, body: Mapping[str, Any]) -> dict[str, Any] | None:
+        """Create; None when it exists already."""
+        try:
+            return await self.client.create(kind, self.namespace, body)
+        except AlreadyExistsError:
+            return None
+
+    async def _run_helmfile(
+        self, action: RunHelmfile, applied: Applied, *, now: datetime.datetime
+    ) -> None:
+        job_name = str(action.job["metadata"]["name"])
+        try:
+            if action.identities and not self._identities_ready:
+                for kind, body in action.identities:
+                    await self._create(kind, body)
+                self._identities_ready = True
+            if not action.config_map_owned_by_job:
+                await self._create(Kind.CONFIG_MAP, action.config_map)
+            job = await self._create(Kind.JOB, action.job)
+            if action.config_map_owned_by_job:
+                if job is None:
+                    job = await self.client.get(Kind.JOB, self.namespace, job_name)
+                await self._create(Kind.CONFIG_MAP, _owned_by_job(action.config_map, job))
+        except ApiError as exc:
+            if action.status is None or exc.status not in (400, 403, 422):
+                raise
+            # Refused for good (RBAC, admission, an invalid spec): every attempt would be refused
+            # the same way, so the environment ends as Error with the server's words.
+            status = environments.failed_status(
+                action.scenario_ids,
+                attempt=action.attempt,
+                reason=f"the API server refused the helmfile Job {job_name}: {exc}",
+                now=now,
+            )
+            await self.client.patch_status(
+                Kind.ENVIRONMENT, self.namespace, action.environment, status
+            )
+            return
+        applied.expectations.append(Expectation(kind=Kind.JOB, name=job_name, want=Want.PRESENT))
+        if action.status is None:
+            return
+        try:
+            reply = await self.client.patch_status(
+                Kind.ENVIRONMENT, self.namespace, action.environment, action.status
+            )
+        except NotFoundError:
+            return  # the environment went meanwhile; its destroy Job runs on regardless
+        applied.expectations.append(
+            Expectation(
+                kind=Kind.ENVIRONMENT,
+                name=action.environment,
+                want=Want.VERSION,
+                version=str((reply.get("metadata") or {}).get("resourceVersion", "")),
+            )
+        )
+
     async def _rejected(self, action: Provision, exc: ApiError, *, now: datetime.datetime) -> None:
         """The API server refuses the pod (admission, invalid spec): every attempt would be
         refused the same way, so the environment ends as Error with the server's words."""
@@ -251,3 +319,20 @@ class Applier:
             component=names.MANAGED_BY,
         )
         await self.client.create("events", self.namespace, body)
+
+
+def _owned_by_job(config_map: Mapping[str, Any], job: Mapping[str, Any]) -> dict[str, Any]:
+    """The destroy Job's ConfigMap, owned by that Job (deleting the Job removes it). Nothing
+    needs to block the Job's deletion on it, so no ``blockOwnerDeletion`` (which would need
+    ``update`` on ``jobs/finalizers`` where OwnerReferencesPermissionEnforcement is on)."""
+    meta = job.get("metadata") or {}
+    reference = {
+        "apiVersion": "batch/v1",
+        "kind": "Job",
+        "name": str(meta.get("name", "")),
+        "uid": str(meta.get("uid", "")),
+        "controller": True,
+    }
+    body = dict(config_map)
+    body["metadata"] = {**dict(config_map["metadata"]), "ownerReferences": [reference]}
+    return body

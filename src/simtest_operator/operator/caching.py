@@ -12,6 +12,7 @@ from collections.abc import Iterable, Mapping
 from typing import Any
 
 from simtest_operator.operator.actions import Kind
+from simtest_operator.operator.jobviews import JobView
 from simtest_operator.operator.observed import (
     BatchView,
     CampaignView,
@@ -36,6 +37,8 @@ class Cache:
     pods: Mapping[Any, Iterable[PodView]]
     nodes: Mapping[Any, Iterable[NodeView]] | None
     """None when the operator does not watch nodes."""
+    jobs: Mapping[Any, Iterable[JobView]] = dataclasses.field(default_factory=dict)
+    """helmfile Jobs by (namespace, campaign) (``provisioner: Helmfile``)."""
 
     def campaign(self, key: CampaignKey) -> CampaignView | None:
         """The campaign's view, if it exists."""
@@ -53,6 +56,10 @@ class Cache:
         """The campaign's simulator pods by name."""
         return {p.name: p for p in self.pods.get(key, ())}
 
+    def jobs_of(self, key: CampaignKey) -> dict[str, JobView]:
+        """The campaign's helmfile Jobs by name."""
+        return {j.name: j for j in self.jobs.get(key, ())}
+
     def node_map(self) -> dict[str, NodeView] | None:
         """All nodes by name (None when nodes are not watched)."""
         if self.nodes is None:
@@ -61,7 +68,7 @@ class Cache:
 
     def lookup(self, key: CampaignKey, kind: Kind, name: str) -> tuple[bool, str, bool] | None:
         """(present, resourceVersion, deleting) of one object of the campaign, for expectations."""
-        found: CampaignView | BatchView | EnvironmentView | PodView | None
+        found: CampaignView | BatchView | EnvironmentView | PodView | JobView | None
         if kind is Kind.CAMPAIGN:
             found = self.campaign(key)
         elif kind is Kind.BATCH:
@@ -70,6 +77,8 @@ class Cache:
             found = next((e for e in self.environments.get(key, ()) if e.name == name), None)
         elif kind is Kind.POD:
             found = next((p for p in self.pods.get(key, ()) if p.name == name), None)
+        elif kind is Kind.JOB:
+            found = next((j for j in self.jobs.get(key, ()) if j.name == name), None)
         else:
             return (True, "", False)
         if found is None:

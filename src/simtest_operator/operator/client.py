@@ -113,8 +113,16 @@ def load_credentials(kubeconfig: Path | None = None, *, context: str | None = No
     )
 
 
+GROUP_PATHS: Mapping[str, str] = {
+    Kind.JOB: "/apis/batch/v1",
+    Kind.ROLE_BINDING: "/apis/rbac.authorization.k8s.io/v1",
+}
+"""Built-in kinds outside the core group."""
+
+
 def _path(kind: Kind | str, namespace: str | None, name: str | None = None) -> str:
     base = "/api/v1" if kind in CORE_KINDS else f"/apis/{GROUP}/{VERSION}"
+    base = GROUP_PATHS.get(kind, base)
     if kind == "nodes":
         base = "/api/v1"
     scope = f"/namespaces/{namespace}" if namespace else ""

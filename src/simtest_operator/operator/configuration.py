@@ -58,6 +58,17 @@ class OperatorConfig:
     """Threads for Kubernetes API calls."""
     metrics_port: int = 8080
     """Port of ``/metrics``, ``/healthz`` and ``/readyz``; 0 disables the server."""
+    helmfile_image: str = ""
+    """Image of the ``provisioner: Helmfile`` Jobs (helm, helmfile and ``charts/``);
+    ``SIMTEST_OPERATOR_HELMFILE_IMAGE``. Empty: campaigns asking for the Helmfile provisioner end
+    their environments as Error with a reason saying so."""
+    helmfile_role: str = ""
+    """ClusterRole bound (per campaign, in its namespace) to the helmfile Jobs' ServiceAccount;
+    ``SIMTEST_OPERATOR_HELMFILE_ROLE`` (the chart's ``<release>-helmfile-provisioner``)."""
+    helmfile_node_selector: Mapping[str, str] = dataclasses.field(default_factory=dict)
+    """Node selector of the helmfile Jobs (``key=value,...``;
+    ``SIMTEST_OPERATOR_HELMFILE_NODE_SELECTOR``): provisioning needs no simulator node, and may
+    need nodes that reach chart registries."""
 
     @classmethod
     def from_env(
@@ -83,8 +94,27 @@ class OperatorConfig:
                 values[name] = kind(raw)
         if env.get(ENV_PREFIX + "KEEP_ENVIRONMENTS", "").lower() in ("1", "true", "yes"):
             values["keep_finished_environments"] = True
+        for name, key in (("helmfile_image", "HELMFILE_IMAGE"), ("helmfile_role", "HELMFILE_ROLE")):
+            if env.get(ENV_PREFIX + key):
+                values[name] = env[ENV_PREFIX + key]
+        selector = env.get(ENV_PREFIX + "HELMFILE_NODE_SELECTOR", "")
+        if selector.strip():
+            values["helmfile_node_selector"] = _pairs(selector)
         claim = env.get(ENV_PREFIX + "SCENARIO_CLAIM")
         if claim:
             values["scenario_volume"] = PvcVolume(claim_name=claim, read_only=True)
         values.update({k: v for k, v in (overrides or {}).items() if v is not None})
         return cls(**values)  # type: ignore[arg-type]
+
+
+def _pairs(text: str) -> dict[str, str]:
+    """``a=b,c=d`` as a mapping (blank items ignored)."""
+    pairs = {}
+    for item in text.split(","):
+        if not item.strip():
+            continue
+        key, sep, value = item.partition("=")
+        if not sep or not key.strip():
+            raise ValueError(f"{ENV_PREFIX}HELMFILE_NODE_SELECTOR: {item!r} is not key=value")
+        pairs[key.strip()] = value.strip()
+    return pairs

@@ -322,6 +322,18 @@ def _elapsed(started: datetime.datetime | None, end: datetime.datetime) -> float
     return max((end - started).total_seconds(), 0.0) if started else 0.0
 
 
+def failed_records(
+    env: EnvironmentView,
+    verdict: Verdict,
+    reason: str,
+    *,
+    started: datetime.datetime | None = None,
+    end: datetime.datetime | None = None,
+) -> tuple[ResultRecord, ...]:
+    """The same non-runner verdict for every scenario of the environment that has none yet."""
+    return _fail(env, verdict, reason, started=started, end=end)
+
+
 def _fail(
     env: EnvironmentView,
     verdict: Verdict,
@@ -379,16 +391,30 @@ def desired_status(env: EnvironmentView, assessment: Assessment) -> dict[str, An
 
 
 def provisioned_status(
-    env: EnvironmentView, *, pod: str, rendered_hash: str, now: datetime.datetime
+    env: EnvironmentView,
+    *,
+    pod: str,
+    rendered_hash: str,
+    now: datetime.datetime,
+    provisioner: str = "Pod",
+    sync_job: str | None = None,
 ) -> dict[str, Any]:
-    """Status recorded right after the pod was created."""
+    """Status recorded right after the pod (``Pod``) or its helmfile sync Job (``Helmfile``) was
+    created."""
     queued = env.timings.queued or env.created or now
+    if sync_job is not None:
+        reason, message = "HelmfileJobCreated", f"helmfile sync Job {sync_job} created"
+    else:
+        reason, message = "PodCreated", f"pod {pod} created"
+    extra: dict[str, Any] = {"jobs": {"sync": sync_job}} if sync_job is not None else {}
     return {
         "phase": Phase.PROVISIONING.value,
         "observedGeneration": 1,
         "scenario": env.scenarios[0].id,
         "pod": pod,
         "renderedHash": rendered_hash,
+        "provisioner": provisioner,
+        **extra,
         "timings": {"queued": conditions.rfc3339(queued)},
         "conditions": conditions.merge(
             env.status.get("conditions"),
@@ -396,8 +422,8 @@ def provisioned_status(
                 conditions.Desired(
                     type="Provisioned",
                     status=True,
-                    reason="PodCreated",
-                    message=f"pod {pod} created",
+                    reason=reason,
+                    message=message,
                 )
             ],
             now=now,

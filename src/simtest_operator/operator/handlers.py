@@ -19,7 +19,7 @@ from typing import Any
 import kopf
 
 from simtest_operator.api.v1alpha1 import GROUP, VERSION
-from simtest_operator.operator import names, observed, runtime
+from simtest_operator.operator import jobviews, names, observed, runtime
 from simtest_operator.operator.caching import ALL_NODES, Cache
 from simtest_operator.operator.client import Credentials, load_credentials
 from simtest_operator.operator.configuration import OperatorConfig
@@ -59,6 +59,14 @@ def pod_index(
     return {(namespace or "", labels[names.LABEL_CAMPAIGN]): observed.pod_view(body)}
 
 
+@kopf.index("batch", "v1", "jobs", labels=CAMPAIGN_LABEL)
+def job_index(
+    namespace: str | None, labels: kopf.Labels, body: kopf.Body, **_: Any
+) -> dict[Any, Any]:
+    """helmfile Job views by (namespace, campaign) (``provisioner: Helmfile``)."""
+    return {(namespace or "", labels[names.LABEL_CAMPAIGN]): jobviews.job_view(body)}
+
+
 @kopf.index("v1", "nodes")
 def node_index(body: kopf.Body, **_: Any) -> dict[Any, Any]:
     """Node views, all under one key."""
@@ -85,6 +93,7 @@ async def child_event(namespace: str | None, spec: kopf.Spec, memo: Any, **_: An
     memo.runtime.loops.wake((namespace or "", str(spec.get("campaign", ""))))
 
 
+@kopf.on.event("batch", "v1", "jobs", labels=CAMPAIGN_LABEL)
 @kopf.on.event("v1", "pods", labels=CAMPAIGN_LABEL)
 async def pod_event(namespace: str | None, labels: kopf.Labels, memo: Any, **_: Any) -> None:
     """A simulator pod changed: wake its campaign."""
@@ -140,6 +149,7 @@ async def startup(settings: kopf.OperatorSettings, memo: Any, **kwargs: Any) -> 
         environments=kwargs["environment_index"],
         pods=kwargs["pod_index"],
         nodes=kwargs["node_index"],
+        jobs=kwargs["job_index"],
     )
     memo.runtime = await runtime.start(config, _credentials(memo), cache)
 

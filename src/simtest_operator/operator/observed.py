@@ -53,6 +53,11 @@ def _condition(status: Raw, kind: str) -> Raw | None:
     return None
 
 
+def condition(status: Raw, kind: str) -> Raw | None:
+    """The condition of type ``kind`` in a status, if any."""
+    return _condition(status, kind)
+
+
 def _results(items: Any) -> tuple[ResultRecord, ...]:
     records = []
     for item in items or ():
@@ -101,6 +106,8 @@ class PodView:
     container: ContainerView
     disruption: str
     """``DisruptionTarget`` reason and message (eviction, preemption, pod GC), if any."""
+    job: str = ""
+    """The Job that owns the pod (helmfile Jobs' pods carry the campaign label too)."""
 
     @property
     def terminated(self) -> bool:
@@ -144,6 +151,14 @@ def pod_view(body: Raw) -> PodView:
         start_time=timestamp(status.get("startTime")),
         container=_container(status),
         disruption=disruption_text,
+        job=next(
+            (
+                str(o.get("name", ""))
+                for o in meta.get("ownerReferences") or ()
+                if isinstance(o, Mapping) and o.get("kind") == "Job"
+            ),
+            "",
+        ),
     )
 
 
@@ -250,6 +265,12 @@ class EnvironmentView:
     provisioned_at: datetime.datetime | None
     """When the operator recorded creating the pod (condition ``Provisioned``)."""
     status: Raw
+    provisioner: str = ""
+    """``Pod`` or ``Helmfile`` once provisioned (empty before, and for older environments)."""
+    sync_job: str | None = None
+    """Name of the recorded ``helmfile sync`` Job."""
+    destroy_job: str | None = None
+    """Name of the recorded ``helmfile destroy`` Job."""
 
     @property
     def scenario_ids(self) -> tuple[str, ...]:
@@ -266,6 +287,7 @@ def environment_view(body: Raw) -> EnvironmentView:
     """Parse a SimEnvironment body."""
     meta, status, spec = _meta(body), _status(body), _spec(body)
     timings = status.get("timings") or {}
+    jobs = status.get("jobs")
     provisioned = _condition(status, "Provisioned")
     scenarios = tuple(
         ScenarioRef(
@@ -305,6 +327,11 @@ def environment_view(body: Raw) -> EnvironmentView:
         if provisioned is not None and provisioned.get("status") == "True"
         else None,
         status=status,
+        provisioner=str(status.get("provisioner") or ""),
+        sync_job=str(jobs.get("sync")) if isinstance(jobs, Mapping) and jobs.get("sync") else None,
+        destroy_job=str(jobs.get("destroy"))
+        if isinstance(jobs, Mapping) and jobs.get("destroy")
+        else None,
     )
 
 

@@ -15,7 +15,7 @@ from pydantic import Field, StringConstraints
 
 from simtest_operator.api.v1alpha1 import common
 from simtest_operator.api.v1alpha1.common import ApiModel, DnsLabel
-from simtest_operator.api.v1alpha1.environment import EnvironmentSpec
+from simtest_operator.api.v1alpha1.environment import EnvironmentSpec, Provisioner
 from simtest_operator.api.v1alpha1.evaluation import EvaluationSpec
 from simtest_operator.api.v1alpha1.execution import ExecutionSpec, Isolation
 from simtest_operator.api.v1alpha1.sources import ScenarioSelection
@@ -154,6 +154,16 @@ class Timings(ApiModel):
     """Simulator container terminated."""
 
 
+class HelmfileJobs(ApiModel):
+    """The Jobs that ran the environment's rendered helmfile (``provisioner: Helmfile``)."""
+
+    sync: Annotated[str, StringConstraints(max_length=63)] | None = None
+    """Job running ``helmfile sync`` (owned by the SimEnvironment)."""
+    destroy: Annotated[str, StringConstraints(max_length=63)] | None = None
+    """Job running ``helmfile destroy`` at teardown (owned by the ScenarioBatch, so it outlives
+    the environment)."""
+
+
 class SimEnvironmentStatus(ApiModel):
     """State, placement, timings and verdict of one environment."""
 
@@ -173,6 +183,10 @@ class SimEnvironmentStatus(ApiModel):
     """Simulator pod name."""
     rendered_hash: Sha256 | None = None
     """Digest of the rendered values and pod spec, for reproducibility."""
+    provisioner: Provisioner | None = None
+    """How the environment was provisioned: ``Pod`` (created directly) or ``Helmfile``."""
+    jobs: HelmfileJobs | None = None
+    """The helmfile Jobs of a ``Helmfile`` environment."""
     timings: Timings = Field(default_factory=Timings)
     """Queued, scheduled, started and finished times."""
     results: list[ScenarioResult] = Field(default_factory=list)

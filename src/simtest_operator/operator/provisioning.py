@@ -1,0 +1,448 @@
+"""``provisioner: Helmfile``: how an environment is provisioned and torn down through helmfile Jobs.
+
+Pure, like :mod:`environments`: views and the clock in, actions and assessments out; the applier
+does the I/O. The Pod provisioner (the default fast path) creates the rendered simulator pod
+directly; the Helmfile provisioner instead runs the real ``helmfile`` binary in a Job on the
+rendered, run-specific helmfile, whose simulator release installs exactly that pod (same name,
+labels, ownerReferences — ``render.helmfiles`` checks it). From the moment the pod exists both
+paths are judged by the same :func:`environments.assess`.
+
+Lifecycle of a Helmfile environment (names from ``packaging.helmfilejobs``)::
+
+    Pending       campaign identities (the simulator ServiceAccount, the helmfile Jobs'
+                  ServiceAccount and its RoleBinding to the provisioner ClusterRole, all owned by
+                  the campaign); ConfigMap <env>-hf-sync and Job <env>-hf-sync (owned by the
+                  environment); status: provisioner, jobs.sync, renderedHash
+    Provisioning  the sync Job runs; a failed Job ends the attempt as Error with the Job's
+                  reason and its pod's termination message (helmfile's output)
+    ...           the simulator pod, exactly as with the Pod provisioner
+    Finished      Job <env>-hf-destroy (owned by the ScenarioBatch, so it outlives the
+                  environment) and its ConfigMap (owned by that Job); status: jobs.destroy.
+                  Only then may the environment be deleted. A finished destroy Job is deleted
+                  (with its pod and ConfigMap); a failed one is reported as a Warning event.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import datetime
+from collections.abc import Callable, Iterable, Mapping
+from typing import Any
+
+from simtest_operator.api.v1alpha1 import API_VERSION, Provisioner, TestCampaignSpec
+from simtest_operator.errors import RenderError
+from simtest_operator.operator import bodies, environments, names, requests
+from simtest_operator.operator.actions import Action, Delete, Emit, Kind, PatchStatus, RunHelmfile
+from simtest_operator.operator.configuration import OperatorConfig
+from simtest_operator.operator.environments import Assessment, Limits, Phase
+from simtest_operator.operator.jobviews import JobView
+from simtest_operator.operator.observed import BatchView, EnvironmentView, NodeView, PodView
+from simtest_operator.operator.records import clip
+from simtest_operator.packaging import helmfilejobs
+from simtest_operator.packaging.helmfilejobs import Action as JobAction
+from simtest_operator.packaging.helmfilejobs import HelmfileJobRequest, Owner
+from simtest_operator.render import EnvironmentRequest, RenderedEnvironment
+from simtest_operator.verdicts import Verdict
+
+HELMFILE = Provisioner.HELMFILE.value
+Renderer = Callable[[EnvironmentRequest], RenderedEnvironment]
+
+
+def uses_helmfile(spec: TestCampaignSpec) -> bool:
+    """The campaign's environments are provisioned by helmfile Jobs."""
+    return spec.environment.provisioner is Provisioner.HELMFILE
+
+
+def sync_job(env: EnvironmentView) -> str:
+    """Name of the environment's ``helmfile sync`` Job."""
+    return env.sync_job or helmfilejobs.job_name(env.name, JobAction.SYNC)
+
+
+def destroy_job(env: EnvironmentView) -> str:
+    """Name of the environment's ``helmfile destroy`` Job."""
+    return env.destroy_job or helmfilejobs.job_name(env.name, JobAction.DESTROY)
+
+
+# --- judging -----------------------------------------------------------------------------------
+
+
+def assess(
+    env: EnvironmentView,
+    pod: PodView | None,
+    *,
+    jobs: Mapping[str, JobView],
+    pods: Mapping[str, PodView],
+    nodes: Mapping[str, NodeView] | None,
+    now: datetime.datetime,
+    limits: Limits,
+) -> Assessment:
+    """Judge one environment: its pod as :func:`environments.assess` does, and before the pod
+    exists (or if provisioning breaks) its helmfile sync Job."""
+    if env.provisioner != HELMFILE or env.finished or env.deleting:
+        return environments.assess(env, pod, nodes=nodes, now=now, limits=limits)
+    job = jobs.get(sync_job(env))
+    if pod is not None:
+        judged = environments.assess(env, pod, nodes=nodes, now=now, limits=limits)
+        if judged.ended or job is None or not job.failed:
+            return judged
+        # The simulator started but the rest of the stack did not install: not a usable run.
+        return _error(env, _failure(job, pods), now=now, delete_pod=True, node=pod.node_name)
+    queued = env.timings.queued or env.created
+    timings = dataclasses.replace(env.timings, queued=queued)
+    if job is None:
+        since = env.provisioned_at or queued or now
+        grace_end = since + datetime.timedelta(seconds=limits.missing_grace)
+        if now < grace_end:
+            return Assessment(
+                phase=Phase.PROVISIONING,
+                node=None,
+                timings=timings,
+                results=None,
+                wake_at=grace_end,
+            )
+        return _error(
+            env,
+            f"helmfile sync Job {sync_job(env)} disappeared before the simulator pod appeared",
+            now=now,
+        )
+    if job.failed:
+        return _error(env, _failure(job, pods), now=now)
+    if job.succeeded:
+        since = job.finished_at or now
+        grace_end = since + datetime.timedelta(seconds=limits.missing_grace)
+        if now < grace_end:
+            return Assessment(
+                phase=Phase.PROVISIONING,
+                node=None,
+                timings=timings,
+                results=None,
+                wake_at=grace_end,
+            )
+        return _error(
+            env,
+            f"helmfile sync Job {job.name} succeeded but installed no simulator pod "
+            f"{env.pod or env.name} (the template's helmfile must install the rendered pod with "
+            "the simtest-simulator chart)",
+            now=now,
+        )
+    # Running: the Job's activeDeadlineSeconds (pendingTimeoutSeconds) ends it; the backstop
+    # covers a cluster whose Job controller does not.
+    started = job.created or env.provisioned_at or now
+    backstop = started + datetime.timedelta(seconds=limits.pending_seconds + limits.backstop_grace)
+    if now >= backstop:
+        return _error(
+            env,
+            f"helmfile sync Job {job.name} still running after "
+            f"{(now - started).total_seconds():.0f}s (pendingTimeoutSeconds "
+            f"{limits.pending_seconds:.0f})",
+            now=now,
+        )
+    return Assessment(
+        phase=Phase.PROVISIONING, node=None, timings=timings, results=None, wake_at=backstop
+    )
+
+
+def _failure(job: JobView, pods: Mapping[str, PodView]) -> str:
+    """Why a Job failed: its condition and the termination message of its last pod (helmfile's
+    output tail, through ``FallbackToLogsOnError``)."""
+    ran = sorted(
+        (p for p in pods.values() if p.job == job.name and p.container.state == "terminated"),
+        key=lambda p: (
+            p.container.finished_at
+            or p.created
+            or datetime.datetime.min.replace(tzinfo=datetime.UTC)
+        ),
+    )
+    detail = ""
+    if ran:
+        container = ran[-1].container
+        lines = [line.strip() for line in container.message.strip().splitlines() if line.strip()]
+        tail = " | ".join(lines[-3:])
+        exit_text = f"exit code {container.exit_code}" if container.exit_code is not None else ""
+        detail = ": " + "; ".join(p for p in (exit_text, tail) if p) if (exit_text or tail) else ""
+    cause = f" ({job.reason})" if job.reason else ""
+    action = job.action or "sync"
+    return clip(f"helmfile {action} Job {job.name} failed{cause}{detail}")
+
+
+def _error(
+    env: EnvironmentView,
+    reason: str,
+    *,
+    now: datetime.datetime,
+    delete_pod: bool = False,
+    node: str | None = None,
+) -> Assessment:
+    timings = dataclasses.replace(
+        env.timings, queued=env.timings.queued or env.created, finished=now
+    )
+    records = environments.failed_records(
+        env, Verdict.ERROR, reason, started=timings.started, end=now
+    )
+    return Assessment(
+        phase=Phase.FINISHED,
+        node=node or env.node,
+        timings=timings,
+        results=records,
+        reason=reason,
+        delete_pod=delete_pod,
+    )
+
+
+# --- provisioning ------------------------------------------------------------------------------
+
+
+def _labels(env: EnvironmentView) -> dict[str, str]:
+    """The campaign label (the operator watches Jobs and their pods by it), batch and attempt."""
+    labels = names.environment_labels(env.campaign, env.batch, env.attempt)
+    labels.pop(names.LABEL_COMPONENT, None)
+    return labels
+
+
+def _placed(job: dict[str, Any], node_selector: Mapping[str, str]) -> dict[str, Any]:
+    if node_selector:
+        job["spec"]["template"]["spec"]["nodeSelector"] = dict(sorted(node_selector.items()))
+    return job
+
+
+def identities(
+    *, campaign: str, namespace: str, campaign_uid: str, role: str
+) -> tuple[tuple[Kind, dict[str, Any]], ...]:
+    """The campaign's ServiceAccounts (simulator pods, helmfile Jobs) and the RoleBinding of the
+    Jobs' account to the provisioner ClusterRole, in creation order (owned by the campaign)."""
+    owner = Owner(api_version=API_VERSION, kind="TestCampaign", name=campaign, uid=campaign_uid)
+    labels = names.campaign_labels(campaign)
+    return (
+        (
+            Kind.SERVICE_ACCOUNT,
+            bodies.service_account(
+                campaign=campaign, namespace=namespace, campaign_uid=campaign_uid
+            ),
+        ),
+        (
+            Kind.SERVICE_ACCOUNT,
+            helmfilejobs.service_account(
+                campaign=campaign, namespace=namespace, owner=owner, labels=labels
+            ),
+        ),
+        (
+            Kind.ROLE_BINDING,
+            helmfilejobs.role_binding(
+                campaign=campaign,
+                namespace=namespace,
+                cluster_role=role,
+                owner=owner,
+                labels=labels,
+            ),
+        ),
+    )
+
+
+def _request(
+    env: EnvironmentView,
+    *,
+    action: JobAction,
+    helmfile: str,
+    owner: Owner,
+    spec: TestCampaignSpec,
+    config: OperatorConfig,
+) -> HelmfileJobRequest:
+    return HelmfileJobRequest(
+        environment=env.name,
+        namespace=env.namespace,
+        action=action,
+        helmfile=helmfile,
+        image=config.helmfile_image,
+        service_account=helmfilejobs.service_account_name(env.campaign),
+        owner=owner,
+        labels=_labels(env),
+        deadline_seconds=int(spec.execution.pending_timeout_seconds),
+    )
+
+
+def provision(
+    spec: TestCampaignSpec,
+    env: EnvironmentView,
+    rendered: RenderedEnvironment,
+    *,
+    config: OperatorConfig,
+    campaign_uid: str,
+    now: datetime.datetime,
+) -> Action:
+    """The action that provisions a Helmfile environment: its sync Job (or, when it cannot be
+    made, the environment's Error status)."""
+    problem = ""
+    if not config.helmfile_image or not config.helmfile_role:
+        problem = (
+            "provisioner Helmfile is not enabled in this operator (no helmfile image or "
+            "provisioner role: chart value helmfileProvisioner.enabled, or "
+            "SIMTEST_OPERATOR_HELMFILE_IMAGE and SIMTEST_OPERATOR_HELMFILE_ROLE)"
+        )
+    elif rendered.helmfile is None:
+        problem = f"environment template {spec.environment.template!r} has no helmfile.yaml.j2"
+    if problem:
+        return _failed(env, problem, now=now)
+    assert rendered.helmfile is not None
+    request = _request(
+        env,
+        action=JobAction.SYNC,
+        helmfile=rendered.helmfile,
+        owner=Owner(api_version=API_VERSION, kind="SimEnvironment", name=env.name, uid=env.uid),
+        spec=spec,
+        config=config,
+    )
+    try:
+        job = _placed(helmfilejobs.job(request), config.helmfile_node_selector)
+        config_map = helmfilejobs.config_map(request)
+    except RenderError as exc:
+        return _failed(env, f"cannot make the helmfile sync Job: {exc}", now=now)
+    return RunHelmfile(
+        environment=env.name,
+        job=job,
+        config_map=config_map,
+        identities=identities(
+            campaign=env.campaign,
+            namespace=env.namespace,
+            campaign_uid=campaign_uid,
+            role=config.helmfile_role,
+        ),
+        status=environments.provisioned_status(
+            env,
+            pod=env.name,
+            rendered_hash=rendered.content_hash,
+            now=now,
+            provisioner=HELMFILE,
+            sync_job=job["metadata"]["name"],
+        ),
+        scenario_ids=env.scenario_ids,
+        attempt=env.attempt,
+    )
+
+
+def _failed(env: EnvironmentView, reason: str, *, now: datetime.datetime) -> PatchStatus:
+    status = environments.failed_status(
+        env.scenario_ids, attempt=env.attempt, reason=reason, now=now
+    )
+    return PatchStatus(kind=Kind.ENVIRONMENT, name=env.name, patch=status)
+
+
+# --- teardown ----------------------------------------------------------------------------------
+
+
+def _applied(env: EnvironmentView, jobs: Mapping[str, JobView]) -> bool:
+    """Whether a sync Job was (possibly) created, so there may be releases to destroy."""
+    return env.sync_job is not None or sync_job(env) in jobs
+
+
+def torn_down(env: EnvironmentView, jobs: Mapping[str, JobView]) -> bool:
+    """Whether the environment object may go: nothing to destroy, or the destroy Job exists
+    (it is owned by the batch and runs on without the environment)."""
+    return env.destroy_job is not None or not _applied(env, jobs)
+
+
+def teardown(
+    spec: TestCampaignSpec,
+    env: EnvironmentView,
+    *,
+    jobs: Mapping[str, JobView],
+    batch: BatchView | None,
+    render: Renderer,
+    config: OperatorConfig,
+) -> tuple[Action, ...]:
+    """Actions that destroy the releases of an ended (or deleted) Helmfile environment."""
+    if not (env.finished or env.deleting) or not _applied(env, jobs):
+        return ()
+    if env.destroy_job is not None or destroy_job(env) in jobs:
+        return ()
+    sync = jobs.get(sync_job(env))
+    if sync is not None and not sync.done and not sync.deleting and not env.deleting:
+        # helm must not install while it uninstalls: stop the sync first (its pod goes with it).
+        return (Delete(kind=Kind.JOB, name=sync.name, uid=sync.uid),)
+    if sync is not None and not sync.done:
+        return ()
+    if batch is None or not config.helmfile_image:
+        return ()
+    request = requests.environment_request(spec, env, config=config)
+    try:
+        rendered = render(request)
+        if rendered.helmfile is None:
+            return ()
+        job_request = _request(
+            env,
+            action=JobAction.DESTROY,
+            helmfile=rendered.helmfile,
+            owner=Owner(
+                api_version=API_VERSION, kind="ScenarioBatch", name=batch.name, uid=batch.uid
+            ),
+            spec=spec,
+            config=config,
+        )
+        job = _placed(helmfilejobs.job(job_request), config.helmfile_node_selector)
+        config_map = helmfilejobs.config_map(job_request)
+    except RenderError:
+        return ()
+    return (
+        RunHelmfile(
+            environment=env.name,
+            job=job,
+            config_map=config_map,
+            config_map_owned_by_job=True,
+            status=None if env.deleting else {"jobs": {"destroy": job["metadata"]["name"]}},
+            scenario_ids=env.scenario_ids,
+            attempt=env.attempt,
+        ),
+    )
+
+
+def teardowns(
+    spec: TestCampaignSpec,
+    envs: Iterable[EnvironmentView],
+    *,
+    jobs: Mapping[str, JobView],
+    pods: Mapping[str, PodView],
+    batches: Iterable[BatchView],
+    render: Renderer,
+    config: OperatorConfig,
+) -> tuple[Action, ...]:
+    """Every teardown action of one planning step: destroy Jobs for ended environments, and the
+    clean-up of finished destroy Jobs."""
+    by_name = {b.name: b for b in batches}
+    actions: list[Action] = []
+    for env in envs:
+        actions.extend(
+            teardown(
+                spec, env, jobs=jobs, batch=by_name.get(env.batch), render=render, config=config
+            )
+        )
+    actions.extend(collect(jobs.values(), pods=pods, batches=by_name.values()))
+    return tuple(actions)
+
+
+def collect(
+    jobs: Iterable[JobView], *, pods: Mapping[str, PodView], batches: Iterable[BatchView]
+) -> tuple[Action, ...]:
+    """Delete finished destroy Jobs (their pods and ConfigMaps go with them); a failed one is
+    reported on its batch first, with helmfile's output tail, since the Job's pod goes too."""
+    by_name = {b.name: b for b in batches}
+    actions: list[Action] = []
+    for job in jobs:
+        if job.action != JobAction.DESTROY.value or not job.done or job.deleting:
+            continue
+        if job.failed:
+            batch = by_name.get(job.batch)
+            if batch is not None:
+                actions.append(
+                    Emit(
+                        kind=Kind.BATCH,
+                        name=batch.name,
+                        uid=batch.uid,
+                        reason="HelmfileDestroyFailed",
+                        message=_failure(job, pods)
+                        + f"; releases of {job.environment} may remain (helm list -n "
+                        f"{job.namespace})",
+                        warning=True,
+                        terminal=True,
+                    )
+                )
+        actions.append(Delete(kind=Kind.JOB, name=job.name, uid=job.uid))
+    return tuple(actions)
