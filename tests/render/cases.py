@@ -1,4 +1,5 @@
-"""Render requests used by the golden tests (one per interesting combination)."""
+"""Render requests used by the golden tests (one per interesting combination of both shipped
+templates, ``default`` and ``ros2``)."""
 
 from __future__ import annotations
 
@@ -76,7 +77,26 @@ CASES = {
                 "podAnnotations": {"simtest.dev/fake-duration": "3s"},
                 "extraEnv": [{"name": "LOG_LEVEL", "value": "debug"}],
             },
-            "evaluator": None,
+            "sut": {"chartValues": {"resources": {"requests": {"cpu": "250m"}}}},
+        },
+    ),
+    "ros2-minimal": request(template="ros2"),
+    "ros2-overrides": request(
+        template="ros2",
+        sut={"name": "acme-stack", "version": "3.1.0", "image": "ghcr.io/acme/stack:3.1.0"},
+        values={
+            "ros": {"domainId": 42, "rmw": "rmw_fastrtps_cpp", "unicastPeers": False},
+            "stack": {
+                "components": {
+                    "control": {"enabled": False},
+                    "planning": {
+                        "chartValues": {
+                            "args": ["ros2", "launch", "acme_planning", "planner.launch.py"],
+                            "resources": {"requests": {"cpu": "1"}},
+                        }
+                    },
+                },
+            },
         },
     ),
 }

@@ -2,6 +2,7 @@
 pod and a run-specific helmfile; plus the run-spec contract between pod and runner."""
 
 from simtest_operator.render.inputs import (
+    CHARTS_DIR,
     SIMULATOR_RESOURCE,
     Amounts,
     ArtifactTarget,
@@ -16,6 +17,7 @@ from simtest_operator.render.runspecs import RunSpec
 from simtest_operator.render.templates import TemplateLibrary
 
 __all__ = [
+    "CHARTS_DIR",
     "SIMULATOR_RESOURCE",
     "Amounts",
     "ArtifactTarget",

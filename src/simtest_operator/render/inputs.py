@@ -16,6 +16,10 @@ from simtest_operator.scenarios.pinned import PinnedScenario
 SIMULATOR_RESOURCE = "simtest.dev/simulator"
 """Extended resource: one unit is one simulator slot on a node."""
 GPU_RESOURCE = "nvidia.com/gpu"
+CHARTS_DIR = "/opt/simtest/charts"
+"""Where the helmfile image keeps ``charts/``: the default root of the charts a rendered helmfile
+refers to. Must equal ``packaging.IMAGE_CHARTS_DIR`` (``render`` may not import ``packaging``;
+``tests/render/test_helmfiles.py`` checks they agree)."""
 
 
 ScenarioRef = PinnedScenario
@@ -109,6 +113,9 @@ class EnvironmentRequest:
     """Evaluation spec in wire form (criteria plus per-scenario overrides)."""
     values: Mapping[str, Any] = dataclasses.field(default_factory=dict)
     """The campaign's Helm value overrides, deep-merged over the template's values."""
+    charts_dir: str = CHARTS_DIR
+    """Root of the charts the helmfile refers to (``values.global.chartsDir``); tests and
+    ``simtest render --charts-dir`` point it at a checkout's ``charts/``."""
 
     @property
     def deadline_seconds(self) -> int:

@@ -16,7 +16,7 @@ import jinja2
 import yaml
 
 from simtest_operator.errors import RenderError
-from simtest_operator.render import documents, podchecks
+from simtest_operator.render import documents, helmfiles, naming, podchecks
 from simtest_operator.render.inputs import EnvironmentRequest
 from simtest_operator.render.runspecs import RunSpec
 from simtest_operator.render.templates import TemplateLibrary
@@ -77,18 +77,80 @@ def render_environment(
     context = _context(request, run_spec)
     base_values = _render_mapping(templates.values, context, what="values.yaml.j2")
     values = documents.deep_merge(base_values, request.values)
+    _check_overrides(base_values, values, request)
     context = {**context, "values": values}
     pod = _render_mapping(templates.pod, context, what="pod.yaml.j2")
-    helmfile = (
-        _render_text(templates.helmfile, context, what="helmfile.yaml.j2")
-        if templates.helmfile is not None
-        else None
-    )
     podchecks.check_pod(pod, request)
+    helmfile = None
+    if templates.helmfile is not None:
+        release = helmfiles.simulator_release(request, values=values, pod=pod)
+        helmfile = _render_text(
+            templates.helmfile,
+            {**context, "pod": pod, "simulatorRelease": release},
+            what="helmfile.yaml.j2",
+        )
+        helmfiles.check_helmfile(helmfile, pod=pod, request=request)
     digest = documents.content_hash({"values": values, "pod": pod, "helmfile": helmfile})
     return RenderedEnvironment(
         values=values, pod=pod, helmfile=helmfile, run_spec=run_spec, content_hash=digest
     )
+
+
+_SIMULATOR_UNIT = (
+    ("simulator",),
+    ("simulator", "image"),
+    ("simulator", "resources", "requests", "cpu"),
+    ("simulator", "resources", "requests", "memory"),
+    ("simulator", "resources", "limits", "cpu"),
+    ("simulator", "resources", "limits", "memory"),
+)
+"""Values the template's simulator pod is built from: an override must not remove them."""
+
+
+def _lookup(values: Mapping[str, Any], path: tuple[str, ...]) -> Any:
+    current: Any = values
+    for key in path:
+        if not isinstance(current, Mapping):
+            return None
+        current = current.get(key)
+    return current
+
+
+def _check_overrides(
+    base: Mapping[str, Any], merged: Mapping[str, Any], request: EnvironmentRequest
+) -> None:
+    """The campaign's ``spec.environment.values`` may change the simulator unit, not remove it:
+    every key of it the template defines must still hold a value after the merge."""
+    lost = [
+        ".".join(path)
+        for path in _SIMULATOR_UNIT
+        if _lookup(base, path) not in (None, "", {}) and _lookup(merged, path) in (None, "", {})
+    ]
+    if lost:
+        raise RenderError(
+            f"template {request.template!r}: spec.environment.values removes the simulator "
+            f"unit every environment runs ({', '.join(lost)} set to null or emptied); override "
+            "its fields with values instead of removing them"
+        )
+
+
+def _owner_reference(request: EnvironmentRequest) -> dict[str, Any]:
+    return {
+        "apiVersion": request.owner.api_version,
+        "kind": request.owner.kind,
+        "name": request.owner.name,
+        "uid": request.owner.uid,
+        "controller": True,
+        "blockOwnerDeletion": True,
+    }
+
+
+def _stack_labels(request: EnvironmentRequest) -> dict[str, str]:
+    """The operator's ``simtest.dev/*`` labels plus the environment's name: for the objects of
+    the environment's other releases (their charts set ``app.kubernetes.io/*`` themselves)."""
+    labels = {k: v for k, v in request.labels.items() if k.startswith("simtest.dev/")}
+    labels[naming.ENVIRONMENT_LABEL] = request.name
+    return dict(sorted(labels.items()))
 
 
 def _context(request: EnvironmentRequest, run_spec: RunSpec) -> dict[str, Any]:
@@ -106,6 +168,10 @@ def _context(request: EnvironmentRequest, run_spec: RunSpec) -> dict[str, Any]:
             "name": request.owner.name,
             "uid": request.owner.uid,
         },
+        "ownerReference": _owner_reference(request),
+        "stackLabels": _stack_labels(request),
+        "rosDomainId": naming.ros_domain_id(request.namespace, request.name),
+        "chartsDir": request.charts_dir,
         "serviceAccount": request.service_account,
         "image": request.image,
         "requests": dataclasses.asdict(request.requests),
@@ -139,7 +205,7 @@ def _context(request: EnvironmentRequest, run_spec: RunSpec) -> dict[str, Any]:
 def _render_text(template: jinja2.Template, context: Mapping[str, Any], *, what: str) -> str:
     try:
         return template.render(context)
-    except (jinja2.TemplateError, TypeError, ValueError) as exc:
+    except (jinja2.TemplateError, AttributeError, KeyError, TypeError, ValueError) as exc:
         raise RenderError(f"{what}: {exc}") from exc
 
 

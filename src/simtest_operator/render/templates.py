@@ -4,7 +4,9 @@ A template folder holds ``values.yaml.j2`` (the per-scenario Helm values of ever
 ``pod.yaml.j2`` (the simulator pod of the direct provisioner) and optionally ``helmfile.yaml.j2``
 (the run-specific helmfile). Templates are trusted (they ship with the operator); everything that
 comes from a custom resource enters them as data through the ``json``/``toyaml`` filters, never
-as template source, so a manifest cannot inject markup.
+as template source, so a manifest cannot inject markup. Filters: ``json``, ``toyaml``, ``merge``
+(Helm-style deep merge) and ``release`` (``env.name | release("sut")``: a Helm release name of at
+most 53 characters). A folder may include files of another (``{% include "default/..." %}``).
 """
 
 from __future__ import annotations
@@ -18,7 +20,7 @@ from typing import Any
 import jinja2
 
 from simtest_operator.errors import RenderError
-from simtest_operator.render import documents
+from simtest_operator.render import documents, naming
 
 VALUES_FILE = "values.yaml.j2"
 POD_FILE = "pod.yaml.j2"
@@ -68,6 +70,7 @@ class TemplateLibrary:
         self._env.filters["json"] = _json_filter
         self._env.filters["toyaml"] = _yaml_filter
         self._env.filters["merge"] = documents.deep_merge
+        self._env.filters["release"] = naming.release_name
         self._cache: dict[str, TemplateSet] = {}
 
     def names(self) -> tuple[str, ...]:
