@@ -19,6 +19,7 @@ COMMANDS = {
     "dev-cluster": "simtest_operator.cli.devcluster:dev_cluster",
     "operator": "simtest_operator.cli.operator:operator",
     "package": "simtest_operator.cli.package:package",
+    "render": "simtest_operator.cli.render:render",
     "report": "simtest_operator.cli.report:report",
     "run": "simtest_operator.cli.run:run",
     "scenario": "simtest_operator.cli.scenario:scenario",
