@@ -22,7 +22,7 @@ import time
 from collections.abc import Callable
 
 from simtest_operator.errors import ClusterError, ScenarioError, SimtestError
-from simtest_operator.operator import campaigns, resolving
+from simtest_operator.operator import campaigns, recording_results, resolving
 from simtest_operator.operator.actions import Plan
 from simtest_operator.operator.applying import Applier
 from simtest_operator.operator.caching import Cache, CampaignKey
@@ -71,6 +71,7 @@ class CampaignLoop:
         self.last_status_write: datetime.datetime | None = None
         self.wake_at: datetime.datetime | None = None
         self.backoff = 1.0
+        self.recorder = recording_results.CampaignRecorder(shared.client, clock=shared.clock)
         namespace, name = key
         self.applier = Applier(
             client=shared.client,
@@ -150,6 +151,7 @@ class CampaignLoop:
         if applied.campaign_written:
             self.last_status_write = now
         self._observe(plan)
+        self.recorder.observe(campaign, self.stored)  # results DB: start/finish, in background
         shared.metrics.reconcile.observe(time.perf_counter() - started)
         self.wake_at = plan.wake_at
         if applied.failures or applied.conflict:

@@ -13,16 +13,21 @@ from simtest_operator.results import postgres, sqlite, sqlstore, stores
 
 
 def open_store(
-    target: str | Path, *, clock: sqlstore.Clock = sqlstore.utc_now, create: bool = True
+    target: str | Path,
+    *,
+    clock: sqlstore.Clock = sqlstore.utc_now,
+    create: bool = True,
+    connect_timeout: int = 10,
 ) -> stores.Store:
     """Open (migrating as needed) the store at ``target``.
 
     ``postgresql://...`` or ``postgres://...`` -> PostgreSQL; an existing folder -> its
     ``results.sqlite``; anything else -> that SQLite file. With ``create=False`` a missing SQLite
     file is an error instead of a new empty database (readers should not leave files behind).
+    ``connect_timeout`` (seconds) bounds the wait for a PostgreSQL server that does not answer.
     """
     if isinstance(target, str) and postgres.is_dsn(target):
-        return postgres.PostgresStore(target, clock=clock)
+        return postgres.PostgresStore(target, clock=clock, connect_timeout=connect_timeout)
     path = Path(target)
     if path.is_dir():
         path = path / sqlite.DEFAULT_FILENAME
