@@ -101,21 +101,16 @@ def longitudinal_gap(a: EntityState, b: EntityState, *, freespace: bool) -> floa
     With ``freespace`` it is the gap between the box extents (0 when they overlap along the axis),
     otherwise the distance between reference points.
     """
-    ax, ay = math.cos(a.heading), math.sin(a.heading)
-    if not freespace:
-        return (b.x - a.x) * ax + (b.y - a.y) * ay
-    min_a, max_a = extent_along(a, ax, ay)
-    min_b, max_b = extent_along(b, ax, ay)
-    if min_b >= max_a:
-        return min_b - max_a
-    if max_b <= min_a:
-        return max_b - min_a
-    return 0.0
+    return _gap_along(a, b, math.cos(a.heading), math.sin(a.heading), freespace=freespace)
 
 
 def lateral_gap(a: EntityState, b: EntityState, *, freespace: bool) -> float:
     """Signed distance from ``a`` to ``b`` across ``a``'s heading (positive: ``b`` to the left)."""
-    ax, ay = -math.sin(a.heading), math.cos(a.heading)
+    return _gap_along(a, b, -math.sin(a.heading), math.cos(a.heading), freespace=freespace)
+
+
+def _gap_along(a: EntityState, b: EntityState, ax: float, ay: float, *, freespace: bool) -> float:
+    """Signed gap from ``a`` to ``b`` along the unit axis (ax, ay): box extents or centres."""
     if not freespace:
         return (b.x - a.x) * ax + (b.y - a.y) * ay
     min_a, max_a = extent_along(a, ax, ay)

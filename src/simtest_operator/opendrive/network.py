@@ -143,14 +143,7 @@ class RoadNetwork:
         """
         k = self._slot(road_id)
         x, y, heading, curvature = self._lines[k].at(s)
-        layout = self._layouts[k]
-        if lane_id == 0:
-            t, slope = layout.offset(s)
-        else:
-            bounds = layout.lane_bounds(s, lane_id)
-            if bounds is None:
-                raise ScenarioError(f"road {road_id!r} has no lane {lane_id} at s={s:.2f}")
-            t, slope = bounds.t_center, bounds.slope_center
+        t, slope = self._lane_line(k, road_id, s, lane_id)
         t += offset
         return Pose(
             x=x - t * math.sin(heading),
@@ -167,15 +160,18 @@ class RoadNetwork:
         """
         k = self._slot(road_id)
         _, _, _, curvature = self._lines[k].at(s)
+        t, slope = self._lane_line(k, road_id, s, lane_id)
+        return math.hypot(1.0 - curvature * (t + offset), slope)
+
+    def _lane_line(self, k: int, road_id: str, s: float, lane_id: int) -> tuple[float, float]:
+        """Lateral position t of the lane's centre line (lane 0: the lane offset) and dt/ds."""
         layout = self._layouts[k]
         if lane_id == 0:
-            t, slope = layout.offset(s)
-        else:
-            bounds = layout.lane_bounds(s, lane_id)
-            if bounds is None:
-                raise ScenarioError(f"road {road_id!r} has no lane {lane_id} at s={s:.2f}")
-            t, slope = bounds.t_center, bounds.slope_center
-        return math.hypot(1.0 - curvature * (t + offset), slope)
+            return layout.offset(s)
+        bounds = layout.lane_bounds(s, lane_id)
+        if bounds is None:
+            raise ScenarioError(f"road {road_id!r} has no lane {lane_id} at s={s:.2f}")
+        return bounds.t_center, bounds.slope_center
 
     # -- lanes ---------------------------------------------------------------------------------
 
