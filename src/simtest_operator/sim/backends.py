@@ -52,6 +52,19 @@ class ActorSpec:
     front_offset: float
     """Distance from the reference point forward to the front bumper (m)."""
 
+    def placed(self, *, x: float, y: float, heading: float, speed: float) -> ActorState:
+        """This actor's state at a pose the engine chose."""
+        return ActorState(
+            name=self.name,
+            x=x,
+            y=y,
+            heading=heading,
+            speed=speed,
+            length=self.length,
+            width=self.width,
+            front_offset=self.front_offset,
+        )
+
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
 class ActorState:

@@ -43,16 +43,7 @@ class MemoryBackend:
         spec = self._specs.get(name)
         if spec is None:
             raise SimulationError(f"actor {name!r} placed before it was added")
-        self._states[name] = ActorState(
-            name=name,
-            x=x,
-            y=y,
-            heading=heading,
-            speed=speed,
-            length=spec.length,
-            width=spec.width,
-            front_offset=spec.front_offset,
-        )
+        self._states[name] = spec.placed(x=x, y=y, heading=heading, speed=speed)
 
     def step(self) -> None:
         if self._config is None:

@@ -176,16 +176,7 @@ class SumoBackend:
     def place(self, name: str, *, x: float, y: float, heading: float, speed: float) -> None:
         self._require()
         spec = self._specs[name]
-        self._placed[name] = ActorState(
-            name=name,
-            x=x,
-            y=y,
-            heading=heading,
-            speed=speed,
-            length=spec.length,
-            width=spec.width,
-            front_offset=spec.front_offset,
-        )
+        self._placed[name] = spec.placed(x=x, y=y, heading=heading, speed=speed)
 
     def _push(self) -> None:
         """Mirror the engine-driven actors' poses into SUMO for the coming step."""
