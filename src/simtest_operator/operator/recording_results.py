@@ -155,7 +155,7 @@ class CampaignRecorder:
             key = run_key(campaign)
             infos = scenario_infos(stored)
             await asyncio.to_thread(self._write, dsn, key, info, infos, finish)
-        except Exception as exc:  # noqa: BLE001 - a record is never worth a crashed task
+        except Exception as exc:  # a record is never worth a crashed task
             if not isinstance(exc, SimtestError | OSError):
                 log.exception("%s: unexpected error while recording the run", where)
             self._retry_at = self._clock() + datetime.timedelta(seconds=self._delay)
