@@ -58,6 +58,23 @@ class OperatorConfig:
     """Threads for Kubernetes API calls."""
     metrics_port: int = 8080
     """Port of ``/metrics``, ``/healthz`` and ``/readyz``; 0 disables the server."""
+    leader_election: bool = False
+    """Run campaign loops only while holding the Lease ``lease_name`` (two or more replicas);
+    ``SIMTEST_OPERATOR_LEADER_ELECTION``. Off: this process always acts (one replica)."""
+    lease_name: str = "simtest-operator"
+    """Name of the coordination.k8s.io Lease; ``SIMTEST_OPERATOR_LEASE_NAME``."""
+    lease_namespace: str = ""
+    """Namespace of the Lease (the operator's own); empty: the first watched namespace, else
+    ``default``; ``SIMTEST_OPERATOR_LEASE_NAMESPACE``."""
+    identity: str = ""
+    """Holder identity in the Lease (the pod name); empty: ``<hostname>_<pid>``;
+    ``SIMTEST_OPERATOR_IDENTITY``."""
+    lease_duration: float = 15.0
+    """Seconds without a renewal before a follower takes over (client-go's default)."""
+    renew_deadline: float = 10.0
+    """Seconds the leader keeps acting without a successful renewal (client-go's default)."""
+    retry_period: float = 2.0
+    """Seconds between two acquire/renew attempts (client-go's default)."""
     helmfile_image: str = ""
     """Image of the ``provisioner: Helmfile`` Jobs (helm, helmfile and ``charts/``);
     ``SIMTEST_OPERATOR_HELMFILE_IMAGE``. Empty: campaigns asking for the Helmfile provisioner end
@@ -88,12 +105,20 @@ class OperatorConfig:
             ("reuse_queue", "REUSE_QUEUE", int),
             ("prefetch_per_node", "PREFETCH", int),
             ("metrics_port", "METRICS_PORT", int),
+            ("lease_name", "LEASE_NAME", str),
+            ("lease_namespace", "LEASE_NAMESPACE", str),
+            ("identity", "IDENTITY", str),
+            ("lease_duration", "LEASE_DURATION", float),
+            ("renew_deadline", "RENEW_DEADLINE", float),
+            ("retry_period", "RETRY_PERIOD", float),
         ):
             raw = env.get(ENV_PREFIX + key)
             if raw:
                 values[name] = kind(raw)
         if env.get(ENV_PREFIX + "KEEP_ENVIRONMENTS", "").lower() in ("1", "true", "yes"):
             values["keep_finished_environments"] = True
+        if env.get(ENV_PREFIX + "LEADER_ELECTION", "").lower() in ("1", "true", "yes"):
+            values["leader_election"] = True
         for name, key in (("helmfile_image", "HELMFILE_IMAGE"), ("helmfile_role", "HELMFILE_ROLE")):
             if env.get(ENV_PREFIX + key):
                 values[name] = env[ENV_PREFIX + key]

@@ -78,12 +78,12 @@ def node_index(body: kopf.Body, **_: Any) -> dict[Any, Any]:
 
 @kopf.on.event(GROUP, VERSION, "testcampaigns")
 async def campaign_event(type: str, namespace: str | None, name: str, memo: Any, **_: Any) -> None:
-    """A campaign appeared, changed or went away: start, wake or stop its loop."""
-    loops = memo.runtime.loops
+    """A campaign appeared, changed or went away: start (only while leading), wake or stop its
+    loop."""
     if type == "DELETED":
-        loops.stop((namespace or "", name))
+        memo.runtime.loops.stop((namespace or "", name))
     else:
-        loops.ensure((namespace or "", name))
+        memo.runtime.ensure((namespace or "", name))
 
 
 @kopf.on.event(GROUP, VERSION, "scenariobatches")
@@ -138,7 +138,9 @@ async def startup(settings: kopf.OperatorSettings, memo: Any, **kwargs: Any) -> 
     """Tune kopf for a watch-heavy, write-light operator and start the runtime."""
     settings.posting.enabled = False  # our own, rate-limited events only
     settings.batching.batch_window = 0.01  # wake loops within ~10 ms of a change
-    settings.peering.standalone = True  # one replica (Deployment strategy Recreate)
+    # No kopf peering: same-priority peers all freeze; replicas elect a leader over a Lease
+    # instead (leadership.py), and only the leader's campaign loops write.
+    settings.peering.standalone = True
     settings.watching.server_timeout = 600
     config = memo.get("config")
     if config is None:

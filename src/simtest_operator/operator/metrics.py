@@ -69,6 +69,11 @@ class Metrics:
             buckets=(0.0005, 0.001, 0.0025, 0.005, 0.01, 0.025, 0.05, 0.1, 0.25, 1.0),
             registry=self.registry,
         )
+        self.leader = Gauge(
+            "simtest_operator_leader",
+            "1 while this replica runs the campaign loops (holds the Lease, or no election).",
+            registry=self.registry,
+        )
         self.api_requests = Counter(
             "simtest_api_requests",
             "Kubernetes API requests sent by the operator's client (kopf's watches excluded).",

@@ -7,6 +7,7 @@ too (configuration then comes from ``SIMTEST_OPERATOR_*`` variables and the cred
 
 from __future__ import annotations
 
+import dataclasses
 import importlib
 import logging
 import threading
@@ -33,8 +34,11 @@ def run(
     importlib.import_module("simtest_operator.operator.handlers")  # registers the handlers
     kopf.configure(verbose=verbose, log_format=kopf.LogFormat.PLAIN)
     logging.getLogger("aiohttp.access").setLevel(logging.WARNING)
+    config = OperatorConfig.from_env(overrides=options)
+    if config.leader_election and not config.lease_namespace and namespaces:
+        config = dataclasses.replace(config, lease_namespace=namespaces[0])
     memo = kopf.Memo(
-        config=OperatorConfig.from_env(overrides=options),
+        config=config,
         credentials=load_credentials(kubeconfig),
     )
     kopf.run(
