@@ -13,6 +13,13 @@ a simulator (no SUMO module in the parent process) and the worker of the previou
 exited — so no state can leak from one scenario into the next. A scenario whose reset cannot be
 verified is not run: it ends as ``Error`` (the operator retries it in a fresh pod).
 
+After the run the results are delivered (:mod:`simtest_operator.runner.delivering`): with an
+``s3://`` artifacts URI the files are uploaded (endpoint and keys from ``AWS_ENDPOINT_URL_S3`` or
+``AWS_ENDPOINT_URL``, ``AWS_ACCESS_KEY_ID``, ``AWS_SECRET_ACCESS_KEY``), and with
+``SIMTEST_RESULTS_DSN`` plus ``SIMTEST_RESULTS_RUN_KEY`` every attempt becomes a row of the
+results database. Neither can change a verdict: the termination message stays the source of
+truth, an entry whose row was not stored says ``"resultsStored": false``.
+
 Exit status: 0 once a result is written (the verdict is in the message, not the exit code); 2
 for a malformed run spec. A crash leaves the traceback in the log, which the kubelet uses as the
 termination message (``FallbackToLogsOnError``), so the operator still records an Error with it.
@@ -22,24 +29,35 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import json
 import multiprocessing
 import multiprocessing.connection
 import os
 import sys
 import time
 from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Set as AbstractSet
 from pathlib import Path
 
+from simtest_operator import results
 from simtest_operator.api import converting
 from simtest_operator.api.v1alpha1 import EvaluationSpec, SimulatorSettings, SutConfig
-from simtest_operator.errors import RenderError, ScenarioError, SimtestError
+from simtest_operator.errors import RenderError, ResultsError, ScenarioError, SimtestError
 from simtest_operator.render import RunSpec, ScenarioRef, messages, runspecs
-from simtest_operator.runner import execution
+from simtest_operator.render.inputs import STARTUP_ALLOWANCE_SECONDS
+from simtest_operator.results import uploading
+from simtest_operator.runner import delivering, execution
 from simtest_operator.scenarios import FetchContext, Locator, PinnedScenario
 from simtest_operator.settings import Settings
 from simtest_operator.verdicts import ScenarioOutcome, Verdict
 
 TERMINATION_LOG = "/dev/termination-log"
+DSN_VAR = "SIMTEST_RESULTS_DSN"
+RUN_KEY_VAR = "SIMTEST_RESULTS_RUN_KEY"
+RESULTS_STORED = "resultsStored"
+"""Key of the termination-message entry flag set (to false) when the row was not stored."""
+DEADLINE_MARGIN_SECONDS = 10.0
+"""Time kept free before the pod's activeDeadlineSeconds (pod start precedes the runner's)."""
 SIMULATOR_MODULES = ("libsumo", "traci")
 """Modules whose presence in the parent process would mean simulator state could leak."""
 
@@ -87,14 +105,15 @@ def safe_name(scenario_id: str) -> str:
 
 def run_job(
     job: Job, *, run_one: RunOne = _run_one, fork: bool | None = None
-) -> list[ScenarioOutcome]:
+) -> list[delivering.Attempt]:
     """Run every scenario of the job; never raises for scenario or simulator problems."""
     spec = job.spec
     locator = Locator(FetchContext(base_dir=Path("/"), cache_dir=job.settings.cache.sources))
     isolated = spec.isolation == "Reuse" and len(spec.scenarios) > 1 if fork is None else fork
-    outcomes: list[ScenarioOutcome] = []
+    attempts: list[delivering.Attempt] = []
     for scenario in spec.scenarios:
         started = time.perf_counter()
+        path: Path | None = None
         try:
             path = locator.locate(
                 PinnedScenario(
@@ -119,8 +138,8 @@ def run_job(
             outcome = _failed(scenario.id, Verdict.INVALID, str(exc), started)
         except SimtestError as exc:
             outcome = _failed(scenario.id, Verdict.ERROR, str(exc), started)
-        outcomes.append(_with_uris(outcome, job))
-    return outcomes
+        attempts.append(_attempt(scenario, path, outcome, job))
+    return attempts
 
 
 def reset_problem() -> str | None:
@@ -184,28 +203,88 @@ def _failed(scenario_id: str, verdict: Verdict, reason: str, started: float) -> 
     )
 
 
-def _with_uris(outcome: ScenarioOutcome, job: Job) -> ScenarioOutcome:
-    """Local artifact paths as URIs under the run spec's prefix; the result file added."""
-    folder = job.artifacts / safe_name(outcome.scenario_id)
+def _attempt(
+    scenario: ScenarioRef, path: Path | None, outcome: ScenarioOutcome, job: Job
+) -> delivering.Attempt:
+    """The attempt with the pod's attempt number and every local artifact (result file added)."""
+    folder = job.artifacts / safe_name(scenario.id)
     artifacts = dict(outcome.artifacts)
     if (folder / "result.json").is_file():
         artifacts["result"] = str(folder / "result.json")
     if (folder / "run.log").is_file():
         artifacts.setdefault("log", str(folder / "run.log"))
-    prefix = job.spec.artifacts_uri
-    if prefix:
-        root = str(job.artifacts)
-        artifacts = {
-            k: prefix + v[len(root) :] if v.startswith(root) else v for k, v in artifacts.items()
-        }
-    return dataclasses.replace(outcome, artifacts=artifacts)
+    outcome = dataclasses.replace(outcome, artifacts=artifacts, attempts=job.spec.attempt)
+    return delivering.Attempt(scenario=scenario, path=path, outcome=outcome, folder=folder)
 
 
-def write_message(outcomes: Sequence[ScenarioOutcome], path: Path) -> str:
-    """Write the compact result where the kubelet picks it up."""
-    text = messages.encode(outcomes)
+def write_message(
+    outcomes: Sequence[ScenarioOutcome], path: Path, *, unstored: AbstractSet[str] = frozenset()
+) -> str:
+    """Write the compact result where the kubelet picks it up; flag entries not stored."""
+    flag = f',"{RESULTS_STORED}":false'
+    text = messages.encode(outcomes, limit=messages.LIMIT_BYTES - len(flag) * len(unstored))
+    if unstored:
+        data = json.loads(text)
+        entries = data["results"] if isinstance(data.get("results"), list) else [data]
+        for entry in entries:
+            if entry.get("scenarioId") in unstored:
+                entry[RESULTS_STORED] = False
+        text = json.dumps(data, sort_keys=True, separators=(",", ":"), ensure_ascii=False)
     path.write_text(text, encoding="utf-8")
     return text
+
+
+def deliverer_for(
+    job: Job, env: Mapping[str, str], *, run_key: str | None, deadline: float | None
+) -> delivering.Deliverer:
+    """The pod's deliverer from the run spec and the container environment."""
+    spec = job.spec
+    deliverer = delivering.Deliverer(
+        campaign=spec.campaign,
+        artifacts_root=job.artifacts,
+        uri_prefix=spec.artifacts_uri,
+        sut={k: str(v) for k, v in spec.sut.items() if k in ("name", "version")},
+        remaining=None if deadline is None else (lambda: deadline - time.monotonic()),
+    )
+    if spec.artifacts_uri.startswith(uploading.SCHEME):
+        try:
+            deliverer.uploader = uploading.Uploader(
+                uploading.S3Location.parse(spec.artifacts_uri),
+                s3_credentials(env),
+                remaining=deliverer.remaining,
+            )
+        except ResultsError as exc:
+            deliverer.upload_problem = str(exc)
+    dsn = env.get(DSN_VAR, "").strip()
+    key = (run_key or env.get(RUN_KEY_VAR, "")).strip()
+    if dsn and key:
+        deliverer.results_target = delivering.ResultsTarget(dsn=dsn, run_key=results.RunKey(key))
+    elif dsn:
+        deliverer.results_problem = f"no run key (set {RUN_KEY_VAR})"
+    return deliverer
+
+
+def s3_credentials(env: Mapping[str, str]) -> uploading.S3Credentials:
+    """Endpoint and keys from the standard ``AWS_*`` variables; missing ones are an error."""
+    endpoint = env.get("AWS_ENDPOINT_URL_S3") or env.get("AWS_ENDPOINT_URL") or ""
+    missing = [
+        name
+        for name, value in (
+            ("AWS_ENDPOINT_URL_S3 or AWS_ENDPOINT_URL", endpoint),
+            ("AWS_ACCESS_KEY_ID", env.get("AWS_ACCESS_KEY_ID")),
+            ("AWS_SECRET_ACCESS_KEY", env.get("AWS_SECRET_ACCESS_KEY")),
+        )
+        if not value
+    ]
+    if missing:
+        raise ResultsError(f"the pod has no {', '.join(missing)}")
+    return uploading.S3Credentials(
+        endpoint=endpoint,
+        access_key_id=env["AWS_ACCESS_KEY_ID"],
+        secret_access_key=env["AWS_SECRET_ACCESS_KEY"],
+        session_token=env.get("AWS_SESSION_TOKEN", ""),
+        region=env.get("AWS_REGION") or env.get("AWS_DEFAULT_REGION") or "us-east-1",
+    )
 
 
 def _arguments(argv: Sequence[str] | None, env: Mapping[str, str]) -> argparse.Namespace:
@@ -220,6 +299,11 @@ def _arguments(argv: Sequence[str] | None, env: Mapping[str, str]) -> argparse.N
         type=Path,
         default=Path(env.get("SIMTEST_TERMINATION_LOG", TERMINATION_LOG)),
         help="where the compact result goes (default: /dev/termination-log)",
+    )
+    parser.add_argument(
+        "--run-key",
+        default=None,
+        help=f"results run key (default: ${RUN_KEY_VAR})",
     )
     parser.add_argument(
         "--artifacts",
@@ -242,11 +326,24 @@ def main(argv: Sequence[str] | None = None) -> None:
     except RenderError as exc:
         sys.stderr.write(f"simtest-runner: {exc}\n")
         raise SystemExit(2) from exc
+    begun = time.monotonic()
+    deadline = (
+        begun
+        + spec.timeout_seconds * len(spec.scenarios)
+        + STARTUP_ALLOWANCE_SECONDS
+        - DEADLINE_MARGIN_SECONDS
+    )
     artifacts = args.artifacts or Path(spec.artifacts_dir)
     artifacts.mkdir(parents=True, exist_ok=True)
     job = Job(spec=spec, artifacts=artifacts, settings=Settings.from_env(env))
-    outcomes = run_job(job)
-    text = write_message(outcomes, args.termination_log)
-    for outcome in outcomes:
+    attempts = run_job(job)
+    # The verdicts first: whatever happens while delivering, the kubelet finds them.
+    write_message([a.outcome for a in attempts], args.termination_log)
+    deliverer = deliverer_for(job, env, run_key=args.run_key, deadline=deadline)
+    delivered = deliverer.deliver(attempts)
+    for note in delivered.notes:
+        sys.stderr.write(f"simtest-runner: {note}\n")
+    text = write_message(delivered.outcomes, args.termination_log, unstored=delivered.unstored)
+    for outcome in delivered.outcomes:
         sys.stdout.write(f"{outcome.scenario_id}: {outcome.verdict.value} {outcome.reason}\n")
     sys.stdout.write(f"termination message: {len(text.encode())} bytes\n")
