@@ -27,6 +27,7 @@ from simtest_operator.operator import (
     environments,
     names,
     observed,
+    provisioning,
     requests,
     statuses,
 )
@@ -52,6 +53,7 @@ from simtest_operator.operator.batches import (
 )
 from simtest_operator.operator.configuration import OperatorConfig
 from simtest_operator.operator.environments import Assessment, Limits
+from simtest_operator.operator.jobviews import JobView
 from simtest_operator.operator.observed import (
     BatchView,
     CampaignView,
@@ -81,6 +83,8 @@ class Inputs:
     """None when the operator cannot see nodes (then maxParallel defaults to batchSize)."""
     now: datetime.datetime
     last_status_write: datetime.datetime | None = None
+    jobs: Mapping[str, JobView] = dataclasses.field(default_factory=dict)
+    """helmfile Jobs by name (``provisioner: Helmfile``)."""
 
 
 def plan(inputs: Inputs, *, config: OperatorConfig, render: Renderer) -> Plan:
@@ -192,6 +196,17 @@ class _Step:
             )
         for env in self.envs:
             self._environment(env, assessments[env.name])
+        self.actions.extend(
+            provisioning.teardowns(
+                self.spec,
+                self.envs,
+                jobs=self.inputs.jobs,
+                pods=self.inputs.pods,
+                batches=self.batches.values(),
+                render=self.render,
+                config=self.config,
+            )
+        )
         self._batches(states)
         folded = {s.id for s in states if s.state is State.FOLDED}
         for env in self.envs:
@@ -236,8 +251,14 @@ class _Step:
 
     def _assess(self, env: EnvironmentView) -> Assessment:
         pod = self.inputs.pods.get(env.pod or env.name)
-        return environments.assess(
-            env, pod, nodes=self.inputs.nodes, now=self.now, limits=self._limits(env)
+        return provisioning.assess(
+            env,
+            pod,
+            jobs=self.inputs.jobs,
+            pods=self.inputs.pods,
+            nodes=self.inputs.nodes,
+            now=self.now,
+            limits=self._limits(env),
         )
 
     def _environment(self, env: EnvironmentView, assessment: Assessment) -> None:
@@ -285,6 +306,18 @@ class _Step:
             )
             self.actions.append(PatchStatus(kind=Kind.ENVIRONMENT, name=env.name, patch=status))
             return
+        if provisioning.uses_helmfile(self.spec):
+            self.actions.append(
+                provisioning.provision(
+                    self.spec,
+                    env,
+                    rendered,
+                    config=self.config,
+                    campaign_uid=self.campaign.uid,
+                    now=self.now,
+                )
+            )
+            return
         self.actions.append(
             Provision(
                 environment=env.name,
@@ -300,7 +333,9 @@ class _Step:
     def _cleanup(self, env: EnvironmentView, assessment: Assessment, folded: set[str]) -> None:
         if env.deleting or not env.finished or self.config.keep_finished_environments:
             return
-        if all(scenario_id in folded for scenario_id in env.scenario_ids):
+        if all(scenario_id in folded for scenario_id in env.scenario_ids) and (
+            provisioning.torn_down(env, self.inputs.jobs)
+        ):
             self.actions.append(Delete(kind=Kind.ENVIRONMENT, name=env.name, uid=env.uid))
             timings = assessment.timings
             if timings.queued and timings.finished:
@@ -430,7 +465,10 @@ class _Step:
             request = requests.environment_request(
                 self.spec, observed.environment_view(body), config=self.config
             )
-            self.actions.append(Create(kind=Kind.ENVIRONMENT, body=body, provision=request))
+            direct = not provisioning.uses_helmfile(self.spec)
+            self.actions.append(
+                Create(kind=Kind.ENVIRONMENT, body=body, provision=request if direct else None)
+            )
 
     def _lookahead(self, states: Sequence[ScenarioState]) -> set[int]:
         """Create the next batch object once every scenario of the newest one has started, so

@@ -143,6 +143,7 @@ class CampaignLoop:
             nodes=cache.node_map(),
             now=now,
             last_status_write=self.last_status_write,
+            jobs=cache.jobs_of(self.key),
         )
         plan = campaigns.plan(inputs, config=shared.config, render=shared.render)
         shared.metrics.plan.observe(time.perf_counter() - planning)
