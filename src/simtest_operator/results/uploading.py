@@ -110,8 +110,8 @@ class Uploader:
             raise ResultsError(f"cannot upload {path.name}: {exc.strerror or exc}") from exc
         if size > policy.max_object_bytes:
             raise ResultsError(
-                f"{path.name} not uploaded: {size / 2**20:.0f} MiB exceeds the "
-                f"{policy.max_object_bytes / 2**20:.0f} MiB upload limit"
+                f"{path.name} not uploaded: {_size(size)} exceeds the "
+                f"{_size(policy.max_object_bytes)} upload limit"
             )
         key = self.location.key(relative)
         delay = policy.first_backoff_seconds
@@ -179,6 +179,10 @@ class Uploader:
             ),
         )
         return self._client
+
+
+def _size(count: int) -> str:
+    return f"{count / 2**20:.1f} MiB" if count >= 2**20 else f"{count} bytes"
 
 
 class _TransientError(ResultsError):

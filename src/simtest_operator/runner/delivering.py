@@ -20,6 +20,7 @@ time to finish, so delivery can never turn a verdict into a deadline ``Timeout``
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import datetime
 import hashlib
@@ -155,6 +156,10 @@ class Deliverer:
                 uris["result"] = result_path
                 failed.append("result")
                 notes.append(f"{outcome.scenario_id}: {exc}")
+                final = _with_note(dataclasses.replace(outcome, artifacts=uris), failed)
+                with contextlib.suppress(OSError):  # the local copy tells the truth again
+                    _rewrite_result(Path(result_path), final)
+                return final
         elif result_path:
             uris["result"] = result_path
         return _with_note(dataclasses.replace(outcome, artifacts=uris), failed)
