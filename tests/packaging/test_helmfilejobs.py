@@ -144,6 +144,7 @@ def _rendered_stack(
     ros-stack template (the default template's values and pod, our helmfile)."""
     charts = tmp_path / "charts"
     shutil.copytree(ROS_CHART, charts / "k8s-ros")
+    shutil.copytree(REPO / "charts" / "simtest-simulator", charts / "simtest-simulator")
     inputs = rospackaging.load_inputs(TESTDATA / "ros" / "planner" / "package.yaml", ROS_CHART)
     rospackaging.write(rospackaging.chart_files(inputs), charts, "planner")
     templates = tmp_path / "helm-templates"
@@ -226,11 +227,20 @@ def test_job_objects_pass_a_server_side_dry_run(
     assert out.count("serverside-applied (server dry run)") == len(docs)
 
 
+def _simulator_service_account(
+    kubectl: Tool, kubeconfig: Path, namespace: str, rendered: render.RenderedEnvironment
+) -> None:
+    """The ServiceAccount the operator creates before the simulator pod (admission checks it)."""
+    name = rendered.pod["spec"]["serviceAccountName"]
+    kubectl.run("--kubeconfig", kubeconfig, "--namespace", namespace, "create", "sa", name)
+
+
 def test_helmfile_output_passes_a_server_side_dry_run(
     tmp_path: Path, helmfile: Tool, kubectl: Tool, kubeconfig_path: Path, k8s_namespace: str
 ) -> None:
     _, rendered = _rendered_stack(tmp_path, k8s_namespace)
     assert rendered.helmfile is not None
+    _simulator_service_account(kubectl, kubeconfig_path, k8s_namespace, rendered)
     docs = _helmfile_template(helmfile, tmp_path, rendered.helmfile)
     out = _dry_run(kubectl, kubeconfig_path, k8s_namespace, docs)
     assert out.count("serverside-applied (server dry run)") == len(docs)
@@ -262,19 +272,31 @@ def test_helmfile_sync_and_destroy_on_the_dev_cluster(
     )
     _, rendered = _rendered_stack(tmp_path, k8s_namespace, owner_uid=created["metadata"]["uid"])
     assert rendered.helmfile is not None
+    _simulator_service_account(kubectl, kubeconfig_path, k8s_namespace, rendered)
     path = tmp_path / "helmfile.yaml"
     path.write_text(rendered.helmfile)
     runner = dataclasses.replace(helmfile, env={**helmfile.env, "KUBECONFIG": str(kubeconfig_path)})
     runner.run("--file", path, "--no-color", "sync", "--skip-deps", cwd=tmp_path)
     selector = "simtest.dev/campaign=demo"
     listed = yaml.safe_load(
-        kubectl.run(*kube, "get", "deployments,jobs", "-l", selector, "-o", "yaml").stdout
+        kubectl.run(*kube, "get", "deployments,jobs,pods", "-l", selector, "-o", "yaml").stdout
     )["items"]
-    assert sorted(item["kind"] for item in listed) == ["Deployment", "Job"]
+    listed = [
+        i
+        for i in listed
+        if i["kind"] != "Pod" or i["metadata"]["name"] == rendered.pod["metadata"]["name"]
+    ]
+    assert sorted(item["kind"] for item in listed) == ["Deployment", "Job", "Pod"]
     for item in listed:
         assert item["metadata"]["ownerReferences"][0]["uid"] == created["metadata"]["uid"]
     releases = kubectl.run(*kube, "get", "configmaps", "-l", "owner=helm", "-o", "name").stdout
-    assert len(releases.split()) == 2  # HELM_DRIVER=configmap: release records, no Secrets
+    assert len(releases.split()) == 3  # HELM_DRIVER=configmap: release records, no Secrets
     runner.run("--file", path, "--no-color", "destroy", "--skip-deps", cwd=tmp_path)
-    left = kubectl.run(*kube, "get", "deployments,jobs", "-l", selector, "-o", "name").stdout
-    assert left.strip() == ""
+    left = yaml.safe_load(
+        kubectl.run(*kube, "get", "deployments,jobs,pods", "-l", selector, "-o", "yaml").stdout
+    )["items"]
+    alive = [i["metadata"]["name"] for i in left if not i["metadata"].get("deletionTimestamp")]
+    assert rendered.pod["metadata"]["name"] not in alive
+    assert not [
+        i for i in left if i["kind"] in ("Deployment", "Job") and i["metadata"]["name"] in alive
+    ]
