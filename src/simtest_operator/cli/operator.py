@@ -6,7 +6,6 @@ command loads the operator's entry point by module name — the same way ``kopf 
 
 from __future__ import annotations
 
-import importlib
 from pathlib import Path
 
 import click
@@ -63,7 +62,8 @@ def operator(
     verbose: bool,
 ) -> None:
     """Run the simtest operator: TestCampaigns in, simulator pods and verdicts out."""
-    running = importlib.import_module("simtest_operator.operator.running")
+    from simtest_operator.operator import running  # kopf loads only when the command runs
+
     running.run(
         namespaces=namespaces,
         kubeconfig=kubeconfig,

@@ -12,11 +12,10 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
-import importlib
 import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any, NoReturn
+from typing import NoReturn
 
 import click
 import yaml
@@ -25,6 +24,7 @@ from simtest_operator import render as rendering
 from simtest_operator.api import converting, v1alpha1
 from simtest_operator.cli.run import env_secrets
 from simtest_operator.errors import ScenarioError, SimtestError
+from simtest_operator.operator import bodies, configuration, names, observed, requests
 from simtest_operator.runner import preparing, resolving
 from simtest_operator.scenarios.pinned import PinnedScenario
 from simtest_operator.scenarios.resolving import FetchContext
@@ -136,21 +136,11 @@ def _environment_request(
     namespace: str,
     templates: Path,
 ) -> rendering.EnvironmentRequest:
-    """The operator's request for the scenario's first environment.
-
-    The operator's pure functions are loaded by name, as ``simtest operator`` loads its entry
-    point: ``cli`` and ``operator`` are independent layers, and these functions need both ``api``
-    and ``render``, which only the layers above them may combine. They import no kopf.
-    """
-    names: Any = importlib.import_module("simtest_operator.operator.names")
-    bodies: Any = importlib.import_module("simtest_operator.operator.bodies")
-    observed: Any = importlib.import_module("simtest_operator.operator.observed")
-    requests: Any = importlib.import_module("simtest_operator.operator.requests")
-    configuration: Any = importlib.import_module("simtest_operator.operator.configuration")
+    """The operator's request for the scenario's first environment, built by its own functions."""
     spec = campaign.spec
     batch_size = spec.execution.batch_size
     batch_index, first = divmod(position, batch_size)
-    body: dict[str, Any] = bodies.environment(
+    body = bodies.environment(
         campaign=campaign.name,
         namespace=namespace,
         batch_name=names.batch(campaign.name, batch_index),
@@ -162,10 +152,7 @@ def _environment_request(
     )
     body["metadata"]["uid"] = PLACEHOLDER_UID
     config = configuration.OperatorConfig(templates_dir=templates)
-    request = requests.environment_request(spec, observed.environment_view(body), config=config)
-    if not isinstance(request, rendering.EnvironmentRequest):
-        raise TypeError("operator.requests.environment_request returned no EnvironmentRequest")
-    return request
+    return requests.environment_request(spec, observed.environment_view(body), config=config)
 
 
 def _summary(
