@@ -88,6 +88,13 @@ def test_destroy_job_and_config_map() -> None:
     assert config_map["data"] == {"helmfile.yaml": "releases: [{name: a}]\n"}
 
 
+def test_node_selector_places_the_job_only_when_given() -> None:
+    pod = helmfilejobs.job(job_request())["spec"]["template"]["spec"]
+    assert "nodeSelector" not in pod
+    placed = helmfilejobs.job(job_request(node_selector={"pool": "infra", "arch": "amd64"}))
+    assert placed["spec"]["template"]["spec"]["nodeSelector"] == {"arch": "amd64", "pool": "infra"}
+
+
 def test_names_stay_within_63_characters() -> None:
     long_env = "c" * 50 + "-b00042-e007-a12"
     name = helmfilejobs.job_name(long_env, Action.DESTROY)

@@ -199,12 +199,6 @@ def _labels(env: EnvironmentView) -> dict[str, str]:
     return labels
 
 
-def _placed(job: dict[str, Any], node_selector: Mapping[str, str]) -> dict[str, Any]:
-    if node_selector:
-        job["spec"]["template"]["spec"]["nodeSelector"] = dict(sorted(node_selector.items()))
-    return job
-
-
 def identities(
     *, campaign: str, namespace: str, campaign_uid: str, role: str
 ) -> tuple[tuple[Kind, dict[str, Any]], ...]:
@@ -257,6 +251,7 @@ def _request(
         owner=owner,
         labels=_labels(env),
         deadline_seconds=int(spec.execution.pending_timeout_seconds),
+        node_selector=config.helmfile_node_selector,
     )
 
 
@@ -292,7 +287,7 @@ def provision(
         config=config,
     )
     try:
-        job = _placed(helmfilejobs.job(request), config.helmfile_node_selector)
+        job = helmfilejobs.job(request)
         config_map = helmfilejobs.config_map(request)
     except RenderError as exc:
         return _failed(env, f"cannot make the helmfile sync Job: {exc}", now=now)
@@ -377,7 +372,7 @@ def teardown(
             spec=spec,
             config=config,
         )
-        job = _placed(helmfilejobs.job(job_request), config.helmfile_node_selector)
+        job = helmfilejobs.job(job_request)
         config_map = helmfilejobs.config_map(job_request)
     except RenderError:
         return ()

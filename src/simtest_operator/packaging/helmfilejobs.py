@@ -97,6 +97,8 @@ class HelmfileJobRequest:
     """``ttlSecondsAfterFinished``: finished Jobs (and their logs) are kept this long."""
     cpu: str = "100m"
     memory: str = "256Mi"
+    node_selector: Mapping[str, str] = dataclasses.field(default_factory=dict)
+    """Where the Job may run (e.g. away from the simulator nodes); empty: anywhere."""
 
 
 def job_name(environment: str, action: Action) -> str:
@@ -177,6 +179,11 @@ def job(request: HelmfileJobRequest) -> dict[str, Any]:
                 "metadata": {"labels": labels},
                 "spec": {
                     "restartPolicy": "Never",
+                    **(
+                        {"nodeSelector": dict(sorted(request.node_selector.items()))}
+                        if request.node_selector
+                        else {}
+                    ),
                     "serviceAccountName": request.service_account,
                     # helm talks to the API server with this ServiceAccount's token.
                     "automountServiceAccountToken": True,
