@@ -61,7 +61,14 @@ CASES = {
             uri_prefix="pvc://artifacts/runs/demo",
         ),
         results_dsn=render.SecretKey(name="results-db", key="dsn"),
+        results_run_key="demo-20261121T101500Z-0a1b2c3d",
         scenario_volume=render.PvcVolume(claim_name="scenarios", read_only=True),
+    ),
+    "s3-artifacts": request(
+        artifacts=render.ArtifactTarget(
+            s3=render.S3Target(endpoint="https://s3.example.org", secret_name="artifact-keys"),
+            uri_prefix="s3://simtest-artifacts/nightly/demo",
+        ),
     ),
     "reuse-values-override": request(
         isolation="Reuse",

@@ -28,6 +28,7 @@ from simtest_operator.operator import (
     names,
     observed,
     provisioning,
+    recording_results,
     requests,
     statuses,
 )
@@ -161,6 +162,7 @@ class _Step:
         self.render = render
         self.now = inputs.now
         self.campaign = inputs.campaign
+        self.run_key = recording_results.run_key(inputs.campaign)
         self.frozen = inputs.stored.frozen.scenarios
         self.layout = Layout(
             ids=tuple(s.id for s in self.frozen), batch_size=inputs.stored.batch_size
@@ -294,7 +296,9 @@ class _Step:
             )
 
     def _provision(self, env: EnvironmentView) -> None:
-        request = requests.environment_request(self.spec, env, config=self.config)
+        request = requests.environment_request(
+            self.spec, env, config=self.config, run_key=self.run_key
+        )
         try:
             rendered = self.render(request)
         except RenderError as exc:
@@ -463,7 +467,10 @@ class _Step:
                 scenarios=[self.frozen[p] for p in unit.positions],
             )
             request = requests.environment_request(
-                self.spec, observed.environment_view(body), config=self.config
+                self.spec,
+                observed.environment_view(body),
+                config=self.config,
+                run_key=self.run_key,
             )
             direct = not provisioning.uses_helmfile(self.spec)
             self.actions.append(

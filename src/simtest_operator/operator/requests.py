@@ -18,14 +18,19 @@ from simtest_operator.render import (
     EnvironmentRequest,
     OwnerRef,
     PvcVolume,
+    S3Target,
     SecretKey,
 )
 
 
 def environment_request(
-    spec: TestCampaignSpec, env: EnvironmentView, *, config: OperatorConfig
+    spec: TestCampaignSpec, env: EnvironmentView, *, config: OperatorConfig, run_key: str = ""
 ) -> EnvironmentRequest:
-    """What the environment's pod renders from."""
+    """What the environment's pod renders from.
+
+    ``run_key`` names the campaign's run in the results database (see
+    ``recording_results.run_key``); callers that only need names or release lists may omit it.
+    """
     execution = spec.execution
     requests = execution.resources.requests
     limits = execution.resources.limits or requests
@@ -55,6 +60,7 @@ def environment_request(
         if config.scenario_volume
         else "/scenarios",
         results_dsn=SecretKey(name=database.name, key=database.key) if database else None,
+        results_run_key=run_key if database else "",
         sut=environment.sut.to_wire(),
         simulator=environment.simulator.to_wire(),
         evaluation=spec.evaluation.to_wire(),
@@ -63,7 +69,12 @@ def environment_request(
 
 
 def _artifacts(spec: TestCampaignSpec, campaign: str) -> ArtifactTarget:
-    pvc = spec.artifacts.pvc
+    pvc, s3 = spec.artifacts.pvc, spec.artifacts.s3
+    if s3 is not None:
+        return ArtifactTarget(
+            s3=S3Target(endpoint=s3.endpoint, secret_name=s3.secret_ref),
+            uri_prefix=f"s3://{s3.bucket}/" + "/".join(p for p in (s3.prefix, campaign) if p),
+        )
     if pvc is None:
         return ArtifactTarget()
     sub = "/".join(p for p in (pvc.sub_path, campaign) if p)

@@ -9,6 +9,7 @@ from simtest_operator.render.inputs import (
     EnvironmentRequest,
     OwnerRef,
     PvcVolume,
+    S3Target,
     ScenarioRef,
     SecretKey,
 )
@@ -26,6 +27,7 @@ __all__ = [
     "PvcVolume",
     "RenderedEnvironment",
     "RunSpec",
+    "S3Target",
     "ScenarioRef",
     "SecretKey",
     "TemplateLibrary",

@@ -56,12 +56,23 @@ class PvcVolume:
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class S3Target:
+    """An S3-compatible endpoint the runner uploads to, keys from a Secret (never inlined)."""
+
+    endpoint: str
+    secret_name: str
+    """Secret with ``AWS_ACCESS_KEY_ID`` and ``AWS_SECRET_ACCESS_KEY``."""
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
 class ArtifactTarget:
-    """Where the runner writes artifacts: a PVC folder, or the pod's scratch space."""
+    """Where the runner writes artifacts: a PVC folder, an S3 bucket, or the pod's scratch space."""
 
     pvc: PvcVolume | None = None
+    s3: S3Target | None = None
     uri_prefix: str = ""
-    """Prefix of the artifact URIs the runner reports (``pvc://claim/sub/campaign/env``)."""
+    """Prefix of the artifact URIs the runner reports (``pvc://claim/sub/campaign`` or
+    ``s3://bucket/prefix/campaign``); the environment's name is appended."""
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
@@ -104,6 +115,8 @@ class EnvironmentRequest:
     """Read-only volume holding ``file://`` scenario sources, mounted at ``scenario_mount``."""
     scenario_mount: str = "/scenarios"
     results_dsn: SecretKey | None = None
+    results_run_key: str = ""
+    """The campaign's run in the results database (``SIMTEST_RESULTS_RUN_KEY`` of the pod)."""
     """Results database DSN, handed to the runner through a secretKeyRef."""
     sut: Mapping[str, Any] = dataclasses.field(default_factory=dict)
     """System-under-test config in wire form (camelCase)."""

@@ -183,6 +183,7 @@ def _context(request: EnvironmentRequest, run_spec: RunSpec) -> dict[str, Any]:
         "artifacts": {
             "mountPath": ARTIFACTS_MOUNT,
             "pvc": dataclasses.asdict(request.artifacts.pvc) if request.artifacts.pvc else None,
+            "s3": dataclasses.asdict(request.artifacts.s3) if request.artifacts.s3 else None,
             "uriPrefix": request.artifacts.uri_prefix,
         },
         "scenarioVolume": dataclasses.asdict(request.scenario_volume)
@@ -190,6 +191,7 @@ def _context(request: EnvironmentRequest, run_spec: RunSpec) -> dict[str, Any]:
         else None,
         "scenarioMount": request.scenario_mount,
         "resultsDsn": dataclasses.asdict(request.results_dsn) if request.results_dsn else None,
+        "resultsRunKey": request.results_run_key,
     }
     return {
         "env": env,
