@@ -140,6 +140,7 @@ def test_deployment_follows_values(helm: Tool) -> None:
         **FEATURES["volumes"],
         "operator": {**FEATURES["volumes"]["operator"], "verbose": True, "reuseQueue": 4},
         "image": {"digest": "sha256:" + "ab" * 32},
+        "helmfileProvisioner": {"nodeSelector": {"zone": "b", "node-role/infra": "true"}},
     }
     deployment, container = _operator(_render(helm, values))
     assert container["args"] == [
@@ -153,6 +154,7 @@ def test_deployment_follows_values(helm: Tool) -> None:
     assert env["SIMTEST_OPERATOR_SCENARIO_CLAIM"] == "scenarios"
     assert env["SIMTEST_OPERATOR_SOURCES"] == "/scenarios"
     assert env["SIMTEST_OPERATOR_REUSE_QUEUE"] == "4"
+    assert env["SIMTEST_OPERATOR_HELMFILE_NODE_SELECTOR"] == "node-role/infra=true,zone=b"
     mounts = {m["name"]: m for m in container["volumeMounts"]}
     assert mounts["scenarios"] == {"name": "scenarios", "mountPath": "/scenarios", "readOnly": True}
     assert mounts["template-ros"]["mountPath"] == "/opt/simtest/helm-templates/ros"

@@ -59,3 +59,12 @@ app.kubernetes.io/part-of: simtest
 {{- printf "%s:%s" $image.repository (default $root.Chart.AppVersion $image.tag) }}
 {{- end }}
 {{- end }}
+
+{{/* A string map as `k1=v1,k2=v2`, keys sorted (the operator's SIMTEST_OPERATOR_*_SELECTOR form). */}}
+{{- define "simtest-operator.pairs" -}}
+{{- $pairs := list -}}
+{{- range $key := keys . | sortAlpha -}}
+{{- $pairs = append $pairs (printf "%s=%s" $key (index $ $key)) -}}
+{{- end -}}
+{{- join "," $pairs -}}
+{{- end -}}
