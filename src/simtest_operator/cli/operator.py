@@ -1,7 +1,7 @@
 """``simtest operator``: run the Kubernetes operator in the foreground.
 
-The operator package sits beside ``cli`` in the layer map and neither imports the other, so the
-command loads the operator's entry point by module name — the same way ``kopf run -m`` does.
+Flags override the ``SIMTEST_OPERATOR_*`` variables the chart sets (``operator.configuration``).
+The operator package (and kopf with it) is imported only when the command runs.
 """
 
 from __future__ import annotations
@@ -50,6 +50,16 @@ import click
     default=None,
     help="Keep finished SimEnvironments instead of deleting them once recorded.",
 )
+@click.option(
+    "--leader-election",
+    is_flag=True,
+    default=None,
+    help="Run campaign loops only while holding the Lease (for 2+ replicas).",
+)
+@click.option(
+    "--identity",
+    help="This replica's name in the Lease (default: the pod name, else host and pid).",
+)
 @click.option("--verbose", "-v", is_flag=True, help="Log every reconcile step.")
 def operator(
     namespaces: tuple[str, ...],
@@ -59,6 +69,8 @@ def operator(
     cache: Path | None,
     metrics_port: int | None,
     keep_environments: bool | None,
+    leader_election: bool | None,
+    identity: str | None,
     verbose: bool,
 ) -> None:
     """Run the simtest operator: TestCampaigns in, simulator pods and verdicts out."""
@@ -73,6 +85,8 @@ def operator(
             "cache_dir": cache,
             "metrics_port": metrics_port,
             "keep_finished_environments": keep_environments,
+            "leader_election": leader_election,
+            "identity": identity,
         },
         verbose=verbose,
     )
