@@ -57,7 +57,7 @@ class S3Server:
         return uploading.S3Credentials(endpoint=self.endpoint, **CREDENTIALS)
 
     def client(self) -> Any:
-        import boto3  # type: ignore[import-untyped]
+        import boto3
 
         return boto3.client(
             "s3",

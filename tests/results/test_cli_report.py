@@ -15,8 +15,8 @@ import pytest
 from click.testing import CliRunner
 
 from simtest_operator import results
-from simtest_operator.cli import report as report_command
 from simtest_operator.cli.main import cli
+from simtest_operator.runner.campaigns import read_recording
 from tests.results.sampleoutdir import make_outdir, write_recording
 
 
@@ -49,7 +49,7 @@ def test_report_with_comparison_and_junit(tmp_path: Path) -> None:
 
 def test_recording_reader_names_the_ego(tmp_path: Path) -> None:
     path = write_recording(tmp_path / "rec.mcap", "x.xosc", crossing=True)
-    paths = report_command.read_recording(path)
+    paths = read_recording(path)
     assert [(p.entity, p.is_ego) for p in paths] == [("ego", True), ("object 1", False)]
     ego = paths[0].points
     assert len(ego) == 101

@@ -140,7 +140,7 @@ class Uploader:
         return self._remaining() - pause >= self.policy.min_budget_seconds
 
     def _put(self, path: Path, key: str) -> None:
-        import botocore.exceptions  # type: ignore[import-untyped]
+        import botocore.exceptions
 
         client = self._client or self._connect()
         try:
@@ -158,8 +158,8 @@ class Uploader:
             raise _TransientError(f"{type(exc).__name__}: {exc}") from None
 
     def _connect(self) -> Any:
-        import boto3  # type: ignore[import-untyped]
-        import botocore.config  # type: ignore[import-untyped]
+        import boto3
+        import botocore.config
 
         credentials = self._credentials
         session = boto3.session.Session(
