@@ -122,7 +122,7 @@ class CampaignLoop:
         shared = self.shared
         cache = shared.cache
         now = shared.clock()
-        if not self.expectations.satisfied(lambda k, n: cache.lookup(self.key, k, n), now=now):
+        if not self.expectations.satisfied(cache.lookups(self.key), now=now):
             self.wake_at = self.expectations.deadline
             return True
         campaign = cache.campaign(self.key)
