@@ -4,7 +4,10 @@ A kubelet cannot run on our machines (no container runtime, cgroup v1), so real 
 cannot run on a real node. This agent plays kubelet for one dedicated Node object: it registers
 the node (with ``simtest.dev/simulator`` slots), keeps its Lease and Ready condition fresh, and
 runs every pod the scheduler binds to it as a local ``simtest-runner`` *process* with the pod's
-environment. When the process exits it reports the pod's terminated state — exit code, reason and
+environment — literal values, and ``valueFrom`` references to Secrets and ConfigMaps read from the
+API server at start, as a kubelet resolves them (a missing object or key keeps the pod ``Pending``
+with its container waiting in ``CreateContainerConfigError``, retried on every resync, as a
+kubelet does). When the process exits it reports the pod's terminated state — exit code, reason and
 the termination message read from a per-pod file standing in for ``/dev/termination-log`` (the
 log tail when that file is empty, as ``FallbackToLogsOnError`` would) — and, like a kubelet,
 finishes pods that are being deleted. What the operator sees is the same pod lifecycle a real
@@ -16,6 +19,7 @@ local folder per pod), resource limits, activeDeadlineSeconds enforcement.
 
 from __future__ import annotations
 
+import base64
 import contextlib
 import dataclasses
 import datetime
@@ -24,6 +28,7 @@ import subprocess
 import sys
 import threading
 import time
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -39,6 +44,80 @@ def _now() -> str:
 
 def _micro_now() -> str:
     return datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%dT%H:%M:%S.%fZ")
+
+
+class ContainerConfigError(Exception):
+    """The container environment cannot be built (kubelet: ``CreateContainerConfigError``)."""
+
+
+_FIELD_PATHS = {
+    "metadata.name": lambda pod: pod.metadata.name,
+    "metadata.namespace": lambda pod: pod.metadata.namespace,
+    "metadata.uid": lambda pod: pod.metadata.uid,
+    "spec.nodeName": lambda pod: pod.spec.node_name,
+    "spec.serviceAccountName": lambda pod: pod.spec.service_account_name,
+}
+
+
+def resolve_env(core: client.CoreV1Api, pod: client.V1Pod, env: Any) -> dict[str, str]:
+    """The container's environment as a kubelet builds it: literal values, and ``valueFrom``
+    references to Secret and ConfigMap keys (read from the API server now) and to a few pod
+    fields. A missing object or key of a non-optional reference raises
+    :class:`ContainerConfigError` with the kubelet's message."""
+    namespace = pod.metadata.namespace
+    cache: dict[tuple[str, str], Mapping[str, str] | None] = {}
+
+    def data(kind: str, name: str) -> Mapping[str, str] | None:
+        if (kind, name) not in cache:
+            cache[(kind, name)] = _read(core, kind, namespace, name)
+        return cache[(kind, name)]
+
+    resolved: dict[str, str] = {}
+    for item in env or []:
+        if item.value_from is None:
+            resolved[item.name] = item.value or ""
+            continue
+        source = item.value_from
+        if source.secret_key_ref is not None or source.config_map_key_ref is not None:
+            ref = source.secret_key_ref or source.config_map_key_ref
+            kind = "Secret" if source.secret_key_ref is not None else "ConfigMap"
+            values = data(kind, ref.name)
+            if values is None:
+                if ref.optional:
+                    continue
+                raise ContainerConfigError(f'{kind.lower()} "{ref.name}" not found')
+            if ref.key not in values:
+                if ref.optional:
+                    continue
+                raise ContainerConfigError(
+                    f"couldn't find key {ref.key} in {kind} {namespace}/{ref.name}"
+                )
+            resolved[item.name] = values[ref.key]
+        elif source.field_ref is not None and source.field_ref.field_path in _FIELD_PATHS:
+            resolved[item.name] = str(_FIELD_PATHS[source.field_ref.field_path](pod) or "")
+        else:
+            raise ContainerConfigError(
+                f"env {item.name}: this valueFrom is not emulated by the local node agent"
+            )
+    return resolved
+
+
+def _read(core: client.CoreV1Api, kind: str, namespace: str, name: str) -> Mapping[str, str] | None:
+    """The decoded data of a Secret or ConfigMap, or None when it does not exist."""
+    try:
+        if kind == "Secret":
+            secret = core.read_namespaced_secret(name, namespace)
+            return {k: base64.b64decode(v).decode("utf-8") for k, v in (secret.data or {}).items()}
+        config_map = core.read_namespaced_config_map(name, namespace)
+        binary = {
+            k: base64.b64decode(v).decode("utf-8")
+            for k, v in (config_map.binary_data or {}).items()
+        }
+        return {**binary, **(config_map.data or {})}
+    except ApiException as exc:
+        if exc.status == 404:
+            return None
+        raise
 
 
 @dataclasses.dataclass
@@ -61,6 +140,8 @@ class LocalNodeAgent:
         self.running: dict[tuple[str, str], _Running] = {}
         self.finished: set[tuple[str, str]] = set()
         self.started_pods: list[str] = []
+        self.config_errors: dict[tuple[str, str], str] = {}
+        """Pods waiting in ``CreateContainerConfigError``, with the kubelet's message."""
         self._stop = threading.Event()
         self._threads: list[threading.Thread] = []
 
@@ -201,15 +282,20 @@ class LocalNodeAgent:
     def _launch(self, pod: client.V1Pod) -> None:
         key = (pod.metadata.namespace, pod.metadata.name)
         container = pod.spec.containers[0]
+        try:
+            pod_env = resolve_env(self.core, pod, container.env)
+        except (ContainerConfigError, ApiException) as exc:
+            message = str(exc) if isinstance(exc, ContainerConfigError) else f"API: {exc.reason}"
+            self._config_error(pod, message)
+            return
+        self.config_errors.pop(key, None)
         folder = self.workdir / pod.metadata.namespace / pod.metadata.name
         folder.mkdir(parents=True, exist_ok=True)
         message_file = folder / "termination-log"
         message_file.write_text("")
         log_file = folder / "runner.log"
-        env = {k: v for k, v in os.environ.items() if not k.startswith("SIMTEST_")}
-        for item in container.env or []:
-            if item.value is not None:
-                env[item.name] = item.value
+        env = {k: v for k, v in os.environ.items() if not k.startswith(("SIMTEST_", "AWS_"))}
+        env.update(pod_env)
         env["HOME"] = str(folder)
         env["SIMTEST_CACHE_DIR"] = str(self.workdir / "cache")  # shared, like a node-local cache
         command = [
@@ -245,6 +331,43 @@ class LocalNodeAgent:
                         "restartCount": 0,
                         "started": True,
                         "state": {"running": {"startedAt": started}},
+                    }
+                ],
+            },
+        )
+
+    def _config_error(self, pod: client.V1Pod, message: str) -> None:
+        """What a kubelet reports while it cannot build the container's config: the pod stays
+        Pending, its container waits with ``CreateContainerConfigError`` (written once per
+        message; the watch's resync retries the start)."""
+        key = (pod.metadata.namespace, pod.metadata.name)
+        if self.config_errors.get(key) == message:
+            return
+        self.config_errors[key] = message
+        container = pod.spec.containers[0]
+        self._patch_status(
+            key,
+            {
+                "phase": "Pending",
+                "conditions": [
+                    {
+                        "type": "Ready",
+                        "status": "False",
+                        "reason": "ContainersNotReady",
+                        "lastTransitionTime": _now(),
+                    }
+                ],
+                "containerStatuses": [
+                    {
+                        "name": container.name,
+                        "image": container.image,
+                        "imageID": "",
+                        "ready": False,
+                        "restartCount": 0,
+                        "started": False,
+                        "state": {
+                            "waiting": {"reason": "CreateContainerConfigError", "message": message}
+                        },
                     }
                 ],
             },

@@ -170,6 +170,24 @@ def _attempt_state(
     )
 
 
+def unstored_by_environment(
+    newly_folded: Iterable[ScenarioState], envs: Iterable[EnvironmentView]
+) -> tuple[tuple[str, tuple[str, ...]], ...]:
+    """(environment name, scenario ids) of results folded now whose pod could not store them in
+    the results database: one entry per environment, for one Warning event each. A scenario
+    whose environment is already gone (an operator restart in between) is listed under ``""``."""
+    unstored = {(s.id, s.attempt) for s in newly_folded if s.result and not s.result.results_stored}
+    out: list[tuple[str, tuple[str, ...]]] = []
+    for env in sorted(envs, key=lambda e: e.name):
+        ids = tuple(i for i in env.scenario_ids if (i, env.attempt) in unstored)
+        if ids:
+            out.append((env.name, ids))
+            unstored -= {(i, env.attempt) for i in ids}
+    if unstored:
+        out.append(("", tuple(sorted(i for i, _ in unstored))))
+    return tuple(out)
+
+
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
 class Unit:
     """Work for one SimEnvironment: one scenario, or a queue of them on a warm simulator."""

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import datetime
+import hashlib
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -116,7 +117,10 @@ def event(
 ) -> dict[str, Any]:
     """A core/v1 Event about ``involved`` (apiVersion, kind, name, namespace, uid)."""
     stamp = conditions.rfc3339(now)
-    moment = now.strftime("%Y%m%d%H%M%S%f")
+    # Two events about one object in one step (a batch's phase and a warning) differ in reason or
+    # message: a digest of both keeps their names apart.
+    digest = hashlib.sha256(f"{reason}\n{message}".encode()).hexdigest()[:6]
+    moment = now.strftime("%Y%m%d%H%M%S%f") + digest
     return {
         "apiVersion": "v1",
         "kind": "Event",

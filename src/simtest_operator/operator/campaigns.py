@@ -51,6 +51,7 @@ from simtest_operator.operator.batches import (
     cluster_slots,
     scenario_states,
     select,
+    unstored_by_environment,
 )
 from simtest_operator.operator.configuration import OperatorConfig
 from simtest_operator.operator.environments import Assessment, Limits
@@ -361,13 +362,28 @@ class _Step:
             if not patch:
                 continue
             known = {r.id for r in batch.results}
-            new = tuple(
-                s.result
+            folding = [
+                s
                 for s in mine
                 if s.result is not None
                 and s.id not in known
                 and (s.state is State.FOLDED or (s.state is State.DONE and s.durable))
-            )
+            ]
+            new = tuple(s.result for s in folding if s.result is not None)
+            for env_name, ids in unstored_by_environment(folding, self.envs):
+                self.actions.append(
+                    Emit(
+                        kind=Kind.BATCH,
+                        name=batch.name,
+                        uid=batch.uid,
+                        reason="ResultsNotStored",
+                        message=f"{env_name or 'a finished environment'}: the results database "
+                        f"did not take {', '.join(ids)} (verdicts kept in status; see the pod "
+                        "log)",
+                        warning=True,
+                        terminal=True,  # once per environment: not rate limited
+                    )
+                )
             self.actions.append(
                 PatchStatus(
                     kind=Kind.BATCH,

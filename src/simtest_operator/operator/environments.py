@@ -3,7 +3,8 @@
 Pure: one environment's view, its pod's view (or None), the nodes and the clock in; an
 :class:`Assessment` out. Every way a simulator pod can end maps to verdicts here:
 
-* the runner's termination message -> the runner's verdicts (Passed, Failed, Timeout, Invalid...);
+* the runner's termination message -> the runner's verdicts (Passed, Failed, Timeout, Invalid...),
+  with the entries' ``resultsStored: false`` (the results database did not take the row) kept;
 * ``DeadlineExceeded`` (activeDeadlineSeconds) or the operator's backstop -> ``Timeout``;
 * OOMKilled, eviction, deletion, a lost node, image errors, a crash without a result, Pending
   beyond ``pendingTimeoutSeconds`` -> ``Error`` with a reason (retried per spec as a new attempt).
@@ -14,6 +15,7 @@ from __future__ import annotations
 import dataclasses
 import datetime
 import enum
+import json
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -35,6 +37,8 @@ IMAGE_ERRORS = frozenset(
     }
 )
 """Waiting reasons that mean the container will not start without someone fixing something."""
+RESULTS_STORED = "resultsStored"
+"""Flag of a termination-message entry (the runner's ``entrypoint.RESULTS_STORED``)."""
 
 
 class Phase(enum.StrEnum):
@@ -276,7 +280,8 @@ def _terminated(
     except messages.MessageError:
         outcomes = ()
     if outcomes:
-        return _from_outcomes(env, outcomes, started=timings.started, end=end)
+        unstored = unstored_ids(container.message, default_id=default_id)
+        return _from_outcomes(env, outcomes, unstored, started=timings.started, end=end)
     tail = (
         clip(container.message.strip().splitlines()[-1], 300) if container.message.strip() else ""
     )
@@ -290,9 +295,26 @@ def _terminated(
     return _fail(env, Verdict.ERROR, reason, started=timings.started, end=end), reason
 
 
+def unstored_ids(message: str, *, default_id: str | None = None) -> frozenset[str]:
+    """Scenario ids whose termination-message entry says ``"resultsStored": false``."""
+    try:
+        data = json.loads(message)
+    except ValueError:
+        return frozenset()
+    entries = data.get("results") if isinstance(data, Mapping) and "results" in data else [data]
+    if not isinstance(entries, list):
+        return frozenset()
+    return frozenset(
+        str(entry.get("scenarioId", default_id))
+        for entry in entries
+        if isinstance(entry, Mapping) and entry.get(RESULTS_STORED) is False
+    )
+
+
 def _from_outcomes(
     env: EnvironmentView,
     outcomes: tuple[ScenarioOutcome, ...],
+    unstored: frozenset[str] = frozenset(),
     *,
     started: datetime.datetime | None,
     end: datetime.datetime,
@@ -313,7 +335,10 @@ def _from_outcomes(
             )
             continue
         duration = outcome.wall_seconds if outcome.wall_seconds > 0 else fallback
-        records.append(ResultRecord.from_outcome(outcome, attempts=env.attempt, duration=duration))
+        record = ResultRecord.from_outcome(outcome, attempts=env.attempt, duration=duration)
+        if scenario.id in unstored:
+            record = dataclasses.replace(record, results_stored=False)
+        records.append(record)
     last = records[-1]
     return tuple(records), last.reason
 

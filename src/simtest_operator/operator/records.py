@@ -33,6 +33,8 @@ class ResultRecord:
     duration_seconds: float = 0.0
     attempts: int = 1
     artifacts: tuple[tuple[str, str], ...] = ()
+    results_stored: bool = True
+    """False when the pod could not store the attempt in the results database."""
 
     def to_wire(self) -> dict[str, Any]:
         """``ScenarioResult`` wire form."""
@@ -47,6 +49,8 @@ class ResultRecord:
             wire["metrics"] = dict(self.metrics)
         if self.artifacts:
             wire["artifacts"] = dict(self.artifacts)
+        if not self.results_stored:
+            wire["resultsStored"] = False
         return wire
 
     @classmethod
@@ -64,6 +68,7 @@ class ResultRecord:
             artifacts=tuple(
                 sorted((str(k), str(v)) for k, v in (data.get("artifacts") or {}).items())
             ),
+            results_stored=data.get("resultsStored") is not False,
         )
 
     @classmethod

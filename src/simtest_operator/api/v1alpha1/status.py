@@ -75,6 +75,9 @@ class ScenarioResult(ApiModel):
     """Attempts made (more than one only after infrastructure errors)."""
     artifacts: dict[str, str] = Field(default_factory=dict)
     """Artifact name to URI (recording, log, result)."""
+    results_stored: bool | None = None
+    """``false`` when the pod could not store this attempt in the results database (down,
+    misconfigured, no time left); absent otherwise. The verdict stands either way."""
 
 
 class CommonStatus(Counters):
