@@ -1,0 +1,293 @@
+"""Results and artifacts flow from simulator pods on the real control plane (issue 5).
+
+Real SUMO smoke scenarios run as ``simtest-runner`` processes of the local node agent (which
+resolves the pod's ``secretKeyRef`` variables from the API server like a kubelet), a throw-away
+PostgreSQL server holds the results database and moto's S3 server the artifacts bucket; the
+operator is the real ``simtest operator`` process.
+
+Covers:
+
+* a campaign with ``spec.results.databaseSecretRef`` and ``spec.artifacts.s3``: ScenarioBatch
+  status and the database rows agree (one row per scenario attempt, under the run key
+  ``recording_results.run_key`` gives), the operator marks the run finished with the campaign's
+  final phase and counters, artifact URIs in status are ``s3://`` and name objects that exist
+  (the recording is a readable MCAP, ``result.json`` carries the same URIs), and ``simtest
+  report`` over that database names every scenario;
+* a database that is down (DSN at a closed port): the verdicts are unchanged, each result in
+  ScenarioBatch status says ``resultsStored: false`` and the batch has a ``ResultsNotStored``
+  Warning event;
+* a DSN Secret that does not exist: the agent reports ``CreateContainerConfigError`` as a kubelet
+  would, and the scenario ends as ``Error`` naming the Secret.
+"""
+
+from __future__ import annotations
+
+import base64
+import json
+import subprocess
+import sys
+import time
+from collections.abc import Callable, Iterator, Sequence
+from pathlib import Path
+from typing import Any, TypeVar
+
+import pytest
+from kubernetes import client
+
+from simtest_operator import recording, results
+from simtest_operator.operator import observed, recording_results
+from tests.e2e import support
+from tests.e2e.local_node_agent import LocalNodeAgent
+from tests.results.s3server import BUCKET, CREDENTIALS, S3Server, free_port, s3
+
+__all__ = ["s3"]  # the fixture, used by name
+
+FAILING = "cut-in_highway_v30_gap8_dv12.xosc"
+"""The smoke suite's failure by design: the cut-in vehicle collides with the ego."""
+PASSING = ("cut-in_highway_v25_gap30_dv5.xosc", "hard-braking_rural_v15_thw2_d4.xosc")
+PREFIX = "nightly/team-a"
+T = TypeVar("T")
+
+
+@pytest.fixture
+def agent(
+    k8s_api_client: client.ApiClient, k8s_namespace: str, tmp_path: Path
+) -> Iterator[LocalNodeAgent]:
+    node = f"simtest-local-{k8s_namespace}"
+    running = LocalNodeAgent(k8s_api_client, node=node, workdir=tmp_path / "agent", slots=2)
+    running.start()
+    try:
+        yield running
+    finally:
+        running.stop()
+
+
+def _smoke(operator: support.OperatorProcess) -> None:
+    """The operator serves the repository's scenarios (the smoke files refer to its roads)."""
+    operator.sources = support.REPO / "scenarios"
+
+
+def _secret(cluster: support.Cluster, name: str, data: dict[str, str]) -> None:
+    cluster.core.create_namespaced_secret(
+        cluster.namespace,
+        {
+            "apiVersion": "v1",
+            "kind": "Secret",
+            "metadata": {"name": name},
+            "data": {k: base64.b64encode(v.encode()).decode() for k, v in data.items()},
+        },
+    )
+
+
+def _campaign(
+    name: str,
+    node: str,
+    names: Sequence[str],
+    *,
+    database: str,
+    s3: S3Server | None = None,
+) -> dict[str, Any]:
+    body = support.campaign(
+        name,
+        path="smoke",
+        template="default",
+        execution={
+            "maxParallel": 2,
+            "batchSize": 2,
+            "retries": 0,
+            "timeoutSeconds": 60,
+            "nodeSelector": {"kubernetes.io/hostname": node},
+        },
+    )
+    spec = body["spec"]
+    spec["scenarios"]["include"] = list(names)
+    spec["evaluation"] = {"criteria": {"minTtc": 1.0}}
+    spec["results"] = {"databaseSecretRef": {"name": database, "key": "dsn"}}
+    if s3 is not None:
+        spec["artifacts"] = {
+            "s3": {
+                "endpoint": s3.endpoint,
+                "bucket": BUCKET,
+                "prefix": PREFIX,
+                "secretRef": "artifacts-s3",
+            }
+        }
+    return body
+
+
+def _wait_for(what: str, probe: Callable[[], T | None], *, timeout: float) -> T:
+    """Poll ``probe`` until it returns something (no fixed sleeps: a loaded machine is slow)."""
+    deadline = time.monotonic() + timeout
+    while True:
+        value = probe()
+        if value is not None:
+            return value
+        if time.monotonic() > deadline:
+            raise AssertionError(f"{what} not seen after {timeout:.0f}s")
+        time.sleep(0.5)
+
+
+def _run_key(cluster: support.Cluster, name: str) -> results.RunKey:
+    return recording_results.run_key(observed.campaign_view(cluster.get("testcampaigns", name)))
+
+
+def _check_verdicts(found: dict[str, dict[str, Any]], names: Sequence[str]) -> None:
+    assert sorted(found) == sorted(names)
+    assert found[FAILING]["verdict"] == "Failed"
+    assert "collided" in found[FAILING]["reason"]
+    assert all(found[n]["verdict"] == "Passed" for n in names if n != FAILING), found
+
+
+@pytest.mark.postgres
+@pytest.mark.slow
+@pytest.mark.timeout(900)
+def test_results_and_artifacts_flow_from_the_pods(
+    operator: support.OperatorProcess,
+    cluster: support.Cluster,
+    agent: LocalNodeAgent,
+    postgres_dsn: str,
+    s3: S3Server,
+    tmp_path: Path,
+) -> None:
+    names = (FAILING, *PASSING)
+    _smoke(operator)
+    _secret(cluster, "results-db", {"dsn": postgres_dsn})
+    _secret(
+        cluster,
+        "artifacts-s3",
+        {
+            "AWS_ACCESS_KEY_ID": CREDENTIALS["access_key_id"],
+            "AWS_SECRET_ACCESS_KEY": CREDENTIALS["secret_access_key"],
+        },
+    )
+    with support.running(operator):
+        cluster.create(_campaign("results", agent.node, names, database="results-db", s3=s3))
+        status = cluster.wait_complete("results", timeout=600, alive=operator.alive)
+        key = _run_key(cluster, "results")
+
+        def finished() -> results.CampaignRecord | None:
+            with results.open_store(postgres_dsn) as store:
+                record = store.campaign(key)
+            return record if record is not None and record.finished else None
+
+        # The operator's recorder works in the background: wait for the run's end record.
+        run = _wait_for("the finished campaign record", finished, timeout=120)
+    found = cluster.results("results")
+    _check_verdicts(found, names)
+    assert all("resultsStored" not in r for r in found.values())
+    assert status["phase"] == "Failed" and status["total"] == 3
+
+    # The database: one row per scenario attempt under the campaign's run key, same verdicts.
+    with results.open_store(postgres_dsn) as store:
+        rows = store.outcomes(key)
+        listed = [s.scenario_id for s in store.scenarios(key)]
+    assert sorted(r.scenario.scenario_id for r in rows) == sorted(names)
+    for row in rows:
+        result = found[row.scenario.scenario_id]
+        assert row.outcome.verdict.value == result["verdict"]
+        assert row.outcome.attempts == 1 == result["attempts"]
+        assert row.outcome.artifacts == result["artifacts"]
+        assert row.content_hashes["recording"]
+    assert sorted(listed) == sorted(names)
+    assert run.phase == status["phase"] == "Failed"
+    assert run.info.namespace == cluster.namespace
+    counts = {k: run.counts[k] for k in ("total", "passed", "failed", "errored")}
+    assert counts == {"total": 3, "passed": 2, "failed": 1, "errored": 0}
+    assert counts == {k: status[k] for k in counts}
+
+    # The artifacts: s3:// URIs in status naming objects that exist in the bucket.
+    keys = set(s3.keys())
+    for scenario_id, result in found.items():
+        artifacts = result["artifacts"]
+        assert set(artifacts) >= {"recording", "log", "result"}, artifacts
+        for uri in artifacts.values():
+            assert uri.startswith(f"s3://{BUCKET}/{PREFIX}/results/"), uri
+            assert uri.removeprefix(f"s3://{BUCKET}/") in keys, uri
+        uploaded = json.loads(s3.read(artifacts["result"].removeprefix(f"s3://{BUCKET}/")))
+        assert uploaded["artifacts"] == artifacts
+        assert uploaded["verdict"] == result["verdict"]
+        mcap = tmp_path / f"{scenario_id}.mcap"
+        mcap.write_bytes(s3.read(artifacts["recording"].removeprefix(f"s3://{BUCKET}/")))
+        trajectories = recording.read_trajectories(mcap)
+        assert len(trajectories) >= 2 and all(len(s) > 10 for s in trajectories.values())
+
+    # The report over that database names every scenario.
+    report = tmp_path / "report.html"
+    (tmp_path / "report-out").mkdir()
+    done = subprocess.run(
+        [
+            sys.executable,
+            "-c",
+            "from simtest_operator.cli.main import main; main()",
+            "report",
+            str(tmp_path / "report-out"),
+            "--database",
+            postgres_dsn,
+            "--run",
+            key,
+            "--out",
+            str(report),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr
+    html = report.read_text(encoding="utf-8")
+    assert all(name in html for name in names)
+
+
+@pytest.mark.postgres
+@pytest.mark.slow
+@pytest.mark.timeout(900)
+def test_a_database_that_is_down_costs_the_rows_not_the_verdicts(
+    operator: support.OperatorProcess,
+    cluster: support.Cluster,
+    agent: LocalNodeAgent,
+) -> None:
+    names = (FAILING, PASSING[0])
+    _smoke(operator)
+    _secret(cluster, "results-db", {"dsn": f"postgresql://simtest@127.0.0.1:{free_port()}/none"})
+    with support.running(operator):
+        cluster.create(_campaign("dbdown", agent.node, names, database="results-db"))
+        status = cluster.wait_complete("dbdown", timeout=600, alive=operator.alive)
+        batches = {b["metadata"]["name"] for b in cluster.items("scenariobatches")}
+
+        def warnings() -> list[Any] | None:
+            events = cluster.core.list_namespaced_event(cluster.namespace).items
+            found = [
+                e
+                for e in events
+                if e.reason == "ResultsNotStored"
+                and e.type == "Warning"
+                and e.involved_object.kind == "ScenarioBatch"
+            ]
+            return found if len(found) >= len(names) else None
+
+        events = _wait_for("ResultsNotStored events", warnings, timeout=60)
+    found = cluster.results("dbdown")
+    _check_verdicts(found, names)
+    assert status["phase"] == "Failed" and status["failed"] == 1 and status["passed"] == 1
+    assert all(r["resultsStored"] is False for r in found.values()), found
+    assert {e.involved_object.name for e in events} <= batches
+    messages = " ".join(e.message for e in events)
+    assert all(name in messages for name in names), messages
+
+
+def test_a_missing_dsn_secret_is_a_container_config_error(
+    operator: support.OperatorProcess,
+    cluster: support.Cluster,
+    agent: LocalNodeAgent,
+) -> None:
+    _smoke(operator)
+    with support.running(operator):
+        cluster.create(_campaign("nosecret", agent.node, [PASSING[0]], database="no-such-secret"))
+        status = cluster.wait_complete("nosecret", timeout=180, alive=operator.alive)
+    found = cluster.results("nosecret")
+    result = found[PASSING[0]]
+    assert result["verdict"] == "Error"
+    assert "CreateContainerConfigError" in result["reason"]
+    assert 'secret "no-such-secret" not found' in result["reason"]
+    assert status["phase"] == "Error"
+    assert agent.started_pods == []  # the runner never started
