@@ -70,17 +70,20 @@ def environment_request(
 
 def _artifacts(spec: TestCampaignSpec, campaign: str) -> ArtifactTarget:
     pvc, s3 = spec.artifacts.pvc, spec.artifacts.s3
+    keep = spec.artifacts.keep_recordings
     if s3 is not None:
         return ArtifactTarget(
             s3=S3Target(endpoint=s3.endpoint, secret_name=s3.secret_ref),
             uri_prefix=f"s3://{s3.bucket}/" + "/".join(p for p in (s3.prefix, campaign) if p),
+            keep_recordings=keep,
         )
     if pvc is None:
-        return ArtifactTarget()
+        return ArtifactTarget(keep_recordings=keep)
     sub = "/".join(p for p in (pvc.sub_path, campaign) if p)
     return ArtifactTarget(
         pvc=PvcVolume(claim_name=pvc.claim_name, sub_path=sub),
         uri_prefix=f"pvc://{pvc.claim_name}/{sub}",
+        keep_recordings=keep,
     )
 
 

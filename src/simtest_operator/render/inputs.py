@@ -73,6 +73,8 @@ class ArtifactTarget:
     uri_prefix: str = ""
     """Prefix of the artifact URIs the runner reports (``pvc://claim/sub/campaign`` or
     ``s3://bucket/prefix/campaign``); the environment's name is appended."""
+    keep_recordings: bool = True
+    """False: the runner drops each recording after the run (``spec.artifacts.keepRecordings``)."""
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)

@@ -65,6 +65,7 @@ def run_spec_for(request: EnvironmentRequest) -> RunSpec:
         evaluation=request.evaluation,
         sut=request.sut,
         simulator=request.simulator,
+        keep_recordings=request.artifacts.keep_recordings,
     )
 
 

@@ -37,9 +37,13 @@ class RunSpec:
     evaluation: Mapping[str, Any] = dataclasses.field(default_factory=dict)
     sut: Mapping[str, Any] = dataclasses.field(default_factory=dict)
     simulator: Mapping[str, Any] = dataclasses.field(default_factory=dict)
+    keep_recordings: bool = True
+    """``spec.artifacts.keepRecordings``: False drops each recording once the run is delivered
+    (not uploaded, no URI; its digest is still stored). On the wire only when False."""
 
     def to_json(self) -> dict[str, Any]:
         """JSON-compatible dict."""
+        extra: dict[str, Any] = {} if self.keep_recordings else {"keepRecordings": False}
         return {
             "version": FORMAT_VERSION,
             "campaign": self.campaign,
@@ -53,6 +57,7 @@ class RunSpec:
             "evaluation": dict(self.evaluation),
             "sut": dict(self.sut),
             "simulator": dict(self.simulator),
+            **extra,
         }
 
     def dumps(self) -> str:
@@ -92,6 +97,7 @@ class RunSpec:
                 evaluation=dict(data.get("evaluation", {})),
                 sut=dict(data.get("sut", {})),
                 simulator=dict(data.get("simulator", {})),
+                keep_recordings=data.get("keepRecordings", True) is not False,
             )
         except (KeyError, TypeError, ValueError) as exc:
             raise RenderError(f"malformed run spec: {exc}") from exc

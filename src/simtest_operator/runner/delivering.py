@@ -14,6 +14,10 @@ and an outcome. Delivery, in this order per scenario:
    the scenario is listed in :attr:`Delivered.unstored` and the termination message says
    ``resultsStored: false``.
 
+With ``keep_recordings`` off (``spec.artifacts.keepRecordings: false``) each recording is deleted
+first -- after the run computed its metrics and after its digest was taken for the results row --
+so it is neither uploaded nor reported (no ``recording`` URI, also not in ``result.json``).
+
 Everything respects the pod's deadline (``remaining``): no upload or connection starts without the
 time to finish, so delivery can never turn a verdict into a deadline ``Timeout``.
 """
@@ -100,17 +104,22 @@ class Deliverer:
     results_problem: str | None = None
     """Why attempts cannot be stored although a database is configured (e.g. no run key)."""
     open_store: OpenStore = _open_store
+    keep_recordings: bool = True
+    """False: recordings are dropped before delivery (their digest is still recorded)."""
 
     def deliver(self, attempts: Sequence[Attempt]) -> Delivered:
         """Deliver every attempt; never raises for storage problems."""
         notes: list[str] = []
+        hashes = [content_hashes(a) for a in attempts]  # before a recording is dropped
+        if not self.keep_recordings:
+            attempts = [drop_recording(a, notes) for a in attempts]
         outcomes = [self._artifacts(a, notes) for a in attempts]
         unstored: set[str] = set()
         if self.results_problem is not None:
             unstored = {o.scenario_id for o in outcomes}
             notes.append(f"results not stored: {self.results_problem}")
         elif self.results_target is not None:
-            unstored = self._store(attempts, outcomes, notes)
+            unstored = self._store(attempts, outcomes, hashes, notes)
         return Delivered(outcomes=tuple(outcomes), unstored=frozenset(unstored), notes=tuple(notes))
 
     # --- artifacts -------------------------------------------------------------------------
@@ -176,7 +185,11 @@ class Deliverer:
     # --- results database ------------------------------------------------------------------
 
     def _store(
-        self, attempts: Sequence[Attempt], outcomes: Sequence[ScenarioOutcome], notes: list[str]
+        self,
+        attempts: Sequence[Attempt],
+        outcomes: Sequence[ScenarioOutcome],
+        hashes: Sequence[Mapping[str, str]],
+        notes: list[str],
     ) -> set[str]:
         target = self.results_target
         assert target is not None
@@ -191,7 +204,7 @@ class Deliverer:
             return ids
         unstored: set[str] = set()
         with store:
-            for attempt, outcome in zip(attempts, outcomes, strict=True):
+            for attempt, outcome, digests in zip(attempts, outcomes, hashes, strict=True):
                 try:
                     results.record_pod_attempt(
                         store,
@@ -199,7 +212,7 @@ class Deliverer:
                         campaign=self.campaign,
                         scenario=storing.scenario_info(attempt.scenario, attempt.path),
                         outcome=outcome,
-                        content_hashes=content_hashes(attempt),
+                        content_hashes=digests,
                         now=self.now(),
                         sut_name=str(self.sut.get("name", "")),
                         sut_version=str(self.sut.get("version", "")),
@@ -208,6 +221,29 @@ class Deliverer:
                     unstored.add(outcome.scenario_id)
                     notes.append(f"{outcome.scenario_id}: result not stored: {exc}")
         return unstored
+
+
+def drop_recording(attempt: Attempt, notes: list[str]) -> Attempt:
+    """The attempt without its recording: the file deleted, its URI gone from the outcome and
+    from the local ``result.json``."""
+    outcome = attempt.outcome
+    paths = {attempt.folder / RECORDING_FILE}
+    if "recording" in outcome.artifacts:
+        paths.add(Path(outcome.artifacts["recording"]))
+    for path in paths:
+        try:
+            path.unlink(missing_ok=True)
+        except OSError as exc:
+            notes.append(f"{outcome.scenario_id}: recording not deleted: {exc.strerror or exc}")
+    if "recording" not in outcome.artifacts:
+        return attempt
+    artifacts = {k: v for k, v in outcome.artifacts.items() if k != "recording"}
+    outcome = dataclasses.replace(outcome, artifacts=artifacts)
+    result = artifacts.get("result")
+    if result:
+        with contextlib.suppress(OSError):
+            _rewrite_result(Path(result), outcome)
+    return dataclasses.replace(attempt, outcome=outcome)
 
 
 def content_hashes(attempt: Attempt) -> dict[str, str]:

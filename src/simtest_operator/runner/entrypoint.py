@@ -17,8 +17,10 @@ After the run the results are delivered (:mod:`simtest_operator.runner.deliverin
 ``s3://`` artifacts URI the files are uploaded (endpoint and keys from ``AWS_ENDPOINT_URL_S3`` or
 ``AWS_ENDPOINT_URL``, ``AWS_ACCESS_KEY_ID``, ``AWS_SECRET_ACCESS_KEY``), and with
 ``SIMTEST_RESULTS_DSN`` plus ``SIMTEST_RESULTS_RUN_KEY`` every attempt becomes a row of the
-results database. Neither can change a verdict: the termination message stays the source of
-truth, an entry whose row was not stored says ``"resultsStored": false``.
+results database; with ``keepRecordings: false`` in the run spec each recording is deleted
+before that (metrics computed, digest kept). Neither can change a verdict: the termination
+message stays the source of truth, an entry whose row was not stored says
+``"resultsStored": false``.
 
 Exit status: 0 once a result is written (the verdict is in the message, not the exit code); 2
 for a malformed run spec. A crash leaves the traceback in the log, which the kubelet uses as the
@@ -245,6 +247,7 @@ def deliverer_for(
         uri_prefix=spec.artifacts_uri,
         sut={k: str(v) for k, v in spec.sut.items() if k in ("name", "version")},
         remaining=None if deadline is None else (lambda: deadline - time.monotonic()),
+        keep_recordings=spec.keep_recordings,
     )
     if spec.artifacts_uri.startswith(uploading.SCHEME):
         try:
