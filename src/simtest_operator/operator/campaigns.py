@@ -16,14 +16,13 @@ from __future__ import annotations
 import dataclasses
 import datetime
 from collections.abc import Callable, Mapping, Sequence
-from typing import Any
 
 from simtest_operator.api.v1alpha1 import TestCampaignSpec
 from simtest_operator.errors import RenderError
 from simtest_operator.operator import (
     bodies,
+    campaignstatus,
     cancelling,
-    conditions,
     environments,
     names,
     observed,
@@ -104,50 +103,10 @@ def plan(inputs: Inputs, *, config: OperatorConfig, render: Renderer) -> Plan:
 
 
 def _halt(inputs: Inputs, phase: str, reason: str, message: str, *, final: bool = True) -> Plan:
-    campaign = inputs.campaign
-    now = inputs.now
-    resolved = None if not final else False
-    desired: dict[str, Any] = {
-        "phase": phase,
-        "observedGeneration": campaign.generation,
-        "conditions": conditions.merge(
-            campaign.status.get("conditions"),
-            [
-                conditions.Desired(
-                    type="Resolved", status=resolved, reason=reason, message=message
-                ),
-                conditions.Desired(type="Running", status=False, reason=reason, message=message),
-                conditions.Desired(
-                    type="Complete",
-                    status=final,
-                    reason=reason if final else "InProgress",
-                    message=message,
-                ),
-                conditions.Desired(type="Degraded", status=final, reason=reason, message=message),
-            ],
-            now=now,
-            generation=campaign.generation,
-        ),
-    }
-    if final:
-        desired["completionTime"] = campaign.status.get("completionTime") or conditions.rfc3339(now)
-    patch = statuses.changed_fields(desired, campaign.status)
-    actions: list[Action] = []
-    if patch:
-        actions.append(PatchStatus(kind=Kind.CAMPAIGN, name=campaign.name, patch=patch))
-    if campaign.status.get("phase") != phase:
-        actions.append(
-            Emit(
-                kind=Kind.CAMPAIGN,
-                name=campaign.name,
-                uid=campaign.uid,
-                reason=reason,
-                message=message,
-                warning=final,
-                terminal=final,
-            )
-        )
-    return Plan(actions=tuple(actions), finished=final)
+    actions = campaignstatus.halted(
+        inputs.campaign, phase, reason, message, final=final, now=inputs.now
+    )
+    return Plan(actions=actions, finished=final)
 
 
 class _Step:
@@ -224,7 +183,20 @@ class _Step:
             limit = cancelling.deadline(self.spec, self.campaign.status)
             if limit is not None:
                 self.wakes.append(limit)
-        self._campaign_status(states, complete=complete, cancellation=cancellation)
+        update = campaignstatus.progressed(
+            self.campaign,
+            self.spec,
+            statuses.counters(states),
+            batches=len(self.batches),
+            complete=complete,
+            cancellation=cancellation,
+            now=self.now,
+            last_write=self.inputs.last_status_write,
+            status_interval=self.config.status_interval,
+        )
+        self.actions.extend(update.actions)
+        if update.due is not None:
+            self.wakes.append(update.due)
         counts = statuses.counters(states)
         return Plan(
             actions=tuple(self.actions),
@@ -504,127 +476,3 @@ class _Step:
             return set()
         started = all(states[p].state is not State.PENDING for p in self.layout.positions(newest))
         return {following} if started else set()
-
-    # --- campaign status -------------------------------------------------------------------
-
-    def _campaign_status(
-        self,
-        states: Sequence[ScenarioState],
-        *,
-        complete: bool,
-        cancellation: cancelling.Cancellation | None,
-    ) -> None:
-        campaign = self.campaign
-        status = campaign.status
-        counts = statuses.counters(states)
-        total = counts["total"]
-        if total == 0:
-            phase, reason, message = "Error", "NoScenarios", "the selection matched no scenarios"
-            complete = True
-        elif cancellation is not None:
-            phase = cancelling.CANCELLED_PHASE
-            reason, message = cancellation.reason.value, cancellation.message
-        elif complete:
-            phase = statuses.final_phase(counts)
-            reason, message = phase, _summary(counts)
-        elif self.spec.suspend:
-            phase, reason, message = "Suspended", "Suspended", "spec.suspend is true"
-        else:
-            phase, reason, message = "Running", "Running", _summary(counts)
-        start = status.get("startTime") or conditions.rfc3339(self.now)
-        finished = statuses.finished_count(counts)
-        desired: dict[str, Any] = {
-            **counts,
-            "phase": phase,
-            "observedGeneration": campaign.generation,
-            "progress": statuses.progress(counts),
-            "startTime": start,
-            "scenarioList": names.scenario_list(campaign.name),
-            "batches": len(self.batches),
-        }
-        started_at = observed.timestamp(start) or self.now
-        minutes = (self.now - started_at).total_seconds() / 60.0
-        if minutes > 0 and finished:
-            desired["throughput"] = round(finished / minutes, 2)
-        if complete:
-            desired["completionTime"] = status.get("completionTime") or conditions.rfc3339(self.now)
-        degraded = counts["errored"] + counts["invalid"]
-        desired["conditions"] = conditions.merge(
-            status.get("conditions"),
-            [
-                conditions.Desired(
-                    type="Resolved",
-                    status=True,
-                    reason="Frozen",
-                    message=f"{total} scenarios frozen in ConfigMap "
-                    f"{names.scenario_list(campaign.name)}",
-                ),
-                conditions.Desired(
-                    type="Running", status=phase == "Running", reason=reason, message=message
-                ),
-                conditions.Desired(
-                    type="Complete",
-                    status=complete,
-                    reason=reason
-                    if complete
-                    else "Cancelling"
-                    if cancellation is not None
-                    else "InProgress",
-                    message=message,
-                ),
-                conditions.Desired(
-                    type="Degraded",
-                    status=degraded > 0 or total == 0,
-                    reason="ScenarioErrors" if degraded else reason if total == 0 else "AsExpected",
-                    message=f"{degraded} scenarios ended with Error or Invalid" if degraded else "",
-                ),
-            ],
-            now=self.now,
-            generation=campaign.generation,
-        )
-        patch = statuses.changed_fields(desired, status)
-        if not patch:
-            return
-        if "conditions" in patch and _same_conditions(
-            patch["conditions"], status.get("conditions")
-        ):
-            patch.pop("conditions")
-        last = self.inputs.last_status_write
-        if statuses.only_progress(patch) and last is not None:
-            due = last + datetime.timedelta(seconds=self.config.status_interval)
-            if self.now < due:
-                self.wakes.append(due)
-                return
-        if patch:
-            self.actions.append(PatchStatus(kind=Kind.CAMPAIGN, name=campaign.name, patch=patch))
-        if status.get("phase") != phase:
-            self.actions.append(
-                Emit(
-                    kind=Kind.CAMPAIGN,
-                    name=campaign.name,
-                    uid=campaign.uid,
-                    reason=reason if cancellation is not None else phase,
-                    message=message,
-                    warning=phase == "Error" or reason == cancelling.Reason.DEADLINE_EXCEEDED,
-                    terminal=complete or cancellation is not None,
-                )
-            )
-
-
-def _same_conditions(new: Sequence[Mapping[str, Any]], old: Any) -> bool:
-    """Conditions equal except for message text of counters (avoid a write per scenario)."""
-    if not isinstance(old, list) or len(old) != len(new):
-        return False
-
-    def key(c: Mapping[str, Any]) -> tuple[Any, ...]:
-        return (c.get("type"), c.get("status"), c.get("reason"), c.get("observedGeneration"))
-
-    return sorted(map(key, new)) == sorted(map(key, old))
-
-
-def _summary(counts: Mapping[str, int]) -> str:
-    return (
-        f"{statuses.progress(counts)} finished: {counts['passed']} passed, {counts['failed']} "
-        f"failed, {counts['errored']} errored, {counts['timedOut']} timed out, "
-        f"{counts['invalid']} invalid"
-    )

@@ -1,0 +1,221 @@
+"""The TestCampaign's own status: phase, counters, conditions, and the event of a phase change.
+
+Pure: from the campaign's current status and what the step found, the smallest status patch
+(unchanged fields are left out, counter-only changes are coalesced to one write per
+``statusInterval``) and at most one event. The planner (:mod:`campaigns`) decides, this module
+words it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import datetime
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+from simtest_operator.api.v1alpha1 import TestCampaignSpec
+from simtest_operator.operator import cancelling, conditions, names, observed, statuses
+from simtest_operator.operator.actions import Action, Emit, Kind, PatchStatus
+from simtest_operator.operator.observed import CampaignView
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Update:
+    """What to write: status patch and event actions, and when to write a coalesced patch."""
+
+    actions: tuple[Action, ...] = ()
+    due: datetime.datetime | None = None
+    """A counters-only patch was held back until then (``statusInterval``)."""
+
+
+def halted(
+    campaign: CampaignView,
+    phase: str,
+    reason: str,
+    message: str,
+    *,
+    final: bool,
+    now: datetime.datetime,
+) -> tuple[Action, ...]:
+    """Status of a campaign that cannot run (yet): invalid spec, resolving, resolution failed."""
+    resolved = None if not final else False
+    desired: dict[str, Any] = {
+        "phase": phase,
+        "observedGeneration": campaign.generation,
+        "conditions": conditions.merge(
+            campaign.status.get("conditions"),
+            [
+                conditions.Desired(
+                    type="Resolved", status=resolved, reason=reason, message=message
+                ),
+                conditions.Desired(type="Running", status=False, reason=reason, message=message),
+                conditions.Desired(
+                    type="Complete",
+                    status=final,
+                    reason=reason if final else "InProgress",
+                    message=message,
+                ),
+                conditions.Desired(type="Degraded", status=final, reason=reason, message=message),
+            ],
+            now=now,
+            generation=campaign.generation,
+        ),
+    }
+    if final:
+        desired["completionTime"] = campaign.status.get("completionTime") or conditions.rfc3339(now)
+    patch = statuses.changed_fields(desired, campaign.status)
+    actions: list[Action] = []
+    if patch:
+        actions.append(PatchStatus(kind=Kind.CAMPAIGN, name=campaign.name, patch=patch))
+    if campaign.status.get("phase") != phase:
+        actions.append(
+            Emit(
+                kind=Kind.CAMPAIGN,
+                name=campaign.name,
+                uid=campaign.uid,
+                reason=reason,
+                message=message,
+                warning=final,
+                terminal=final,
+            )
+        )
+    return tuple(actions)
+
+
+def progressed(
+    campaign: CampaignView,
+    spec: TestCampaignSpec,
+    counts: Mapping[str, int],
+    *,
+    batches: int,
+    complete: bool,
+    cancellation: cancelling.Cancellation | None,
+    now: datetime.datetime,
+    last_write: datetime.datetime | None,
+    status_interval: float,
+) -> Update:
+    """Status of a resolved campaign from its scenario counters."""
+    status = campaign.status
+    total = counts["total"]
+    if total == 0:
+        phase, reason, message = "Error", "NoScenarios", "the selection matched no scenarios"
+        complete = True
+    elif cancellation is not None:
+        phase = cancelling.CANCELLED_PHASE
+        reason, message = cancellation.reason.value, cancellation.message
+    elif complete:
+        phase = statuses.final_phase(counts)
+        reason, message = phase, _summary(counts)
+    elif spec.suspend:
+        phase, reason, message = "Suspended", "Suspended", "spec.suspend is true"
+    else:
+        phase, reason, message = "Running", "Running", _summary(counts)
+    start = status.get("startTime") or conditions.rfc3339(now)
+    finished = statuses.finished_count(counts)
+    desired: dict[str, Any] = {
+        **counts,
+        "phase": phase,
+        "observedGeneration": campaign.generation,
+        "progress": statuses.progress(counts),
+        "startTime": start,
+        "scenarioList": names.scenario_list(campaign.name),
+        "batches": batches,
+    }
+    started_at = observed.timestamp(start) or now
+    minutes = (now - started_at).total_seconds() / 60.0
+    if minutes > 0 and finished:
+        desired["throughput"] = round(finished / minutes, 2)
+    if complete:
+        desired["completionTime"] = status.get("completionTime") or conditions.rfc3339(now)
+    desired["conditions"] = _conditions(
+        campaign, counts, phase=phase, reason=reason, message=message, complete=complete,
+        cancelling_=cancellation is not None, now=now,
+    )  # fmt: skip
+    patch = statuses.changed_fields(desired, status)
+    if not patch:
+        return Update()
+    if "conditions" in patch and _same_conditions(patch["conditions"], status.get("conditions")):
+        patch.pop("conditions")
+    if statuses.only_progress(patch) and last_write is not None:
+        due = last_write + datetime.timedelta(seconds=status_interval)
+        if now < due:
+            return Update(due=due)
+    actions: list[Action] = []
+    if patch:
+        actions.append(PatchStatus(kind=Kind.CAMPAIGN, name=campaign.name, patch=patch))
+    if status.get("phase") != phase:
+        actions.append(
+            Emit(
+                kind=Kind.CAMPAIGN,
+                name=campaign.name,
+                uid=campaign.uid,
+                reason=reason if cancellation is not None else phase,
+                message=message,
+                warning=phase == "Error" or reason == cancelling.Reason.DEADLINE_EXCEEDED,
+                terminal=complete or cancellation is not None,
+            )
+        )
+    return Update(actions=tuple(actions))
+
+
+def _conditions(
+    campaign: CampaignView,
+    counts: Mapping[str, int],
+    *,
+    phase: str,
+    reason: str,
+    message: str,
+    complete: bool,
+    cancelling_: bool,
+    now: datetime.datetime,
+) -> list[dict[str, Any]]:
+    total = counts["total"]
+    degraded = counts["errored"] + counts["invalid"]
+    return conditions.merge(
+        campaign.status.get("conditions"),
+        [
+            conditions.Desired(
+                type="Resolved",
+                status=True,
+                reason="Frozen",
+                message=f"{total} scenarios frozen in ConfigMap "
+                f"{names.scenario_list(campaign.name)}",
+            ),
+            conditions.Desired(
+                type="Running", status=phase == "Running", reason=reason, message=message
+            ),
+            conditions.Desired(
+                type="Complete",
+                status=complete,
+                reason=reason if complete else "Cancelling" if cancelling_ else "InProgress",
+                message=message,
+            ),
+            conditions.Desired(
+                type="Degraded",
+                status=degraded > 0 or total == 0,
+                reason="ScenarioErrors" if degraded else reason if total == 0 else "AsExpected",
+                message=f"{degraded} scenarios ended with Error or Invalid" if degraded else "",
+            ),
+        ],
+        now=now,
+        generation=campaign.generation,
+    )
+
+
+def _same_conditions(new: Sequence[Mapping[str, Any]], old: Any) -> bool:
+    """Conditions equal except for message text of counters (avoid a write per scenario)."""
+    if not isinstance(old, list) or len(old) != len(new):
+        return False
+
+    def key(c: Mapping[str, Any]) -> tuple[Any, ...]:
+        return (c.get("type"), c.get("status"), c.get("reason"), c.get("observedGeneration"))
+
+    return sorted(map(key, new)) == sorted(map(key, old))
+
+
+def _summary(counts: Mapping[str, int]) -> str:
+    return (
+        f"{statuses.progress(counts)} finished: {counts['passed']} passed, {counts['failed']} "
+        f"failed, {counts['errored']} errored, {counts['timedOut']} timed out, "
+        f"{counts['invalid']} invalid"
+    )
