@@ -15,7 +15,7 @@ from typing import Any
 
 import pytest
 
-from simtest_operator.operator import environments, observed
+from simtest_operator.operator import environments, environmentstatus, observed
 from simtest_operator.operator.environments import Limits, Phase
 from simtest_operator.verdicts import Verdict
 
@@ -286,7 +286,7 @@ def test_running_phases() -> None:
     assert assess(env(), pod(phase="Pending", node="n0")).phase is Phase.SCHEDULED
     started = assess(env(), pod(state={"running": {"startedAt": iso(2)}}))
     assert started.phase is Phase.RUNNING and started.timings.started == at(2)
-    status = environments.desired_status(env(), started)
+    status = environmentstatus.desired_status(env(), started)
     assert status["phase"] == "Running" and status["node"] == "n0"
     assert status["timings"]["started"] == "2030-01-01T00:00:02.000Z"
     assert "verdict" not in status

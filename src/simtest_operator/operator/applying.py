@@ -17,7 +17,7 @@ from collections.abc import Callable, Mapping
 from typing import Any
 
 from simtest_operator.errors import ClusterError, RenderError
-from simtest_operator.operator import bodies, environments, names, observed
+from simtest_operator.operator import bodies, environmentstatus, names, observed
 from simtest_operator.operator.actions import (
     Action,
     Create,
@@ -177,7 +177,7 @@ class Applier:
         provision = Provision(
             environment=env.name,
             pod=rendered.pod,
-            status=environments.provisioned_status(
+            status=environmentstatus.provisioned_status(
                 env, pod=env.name, rendered_hash=rendered.content_hash, now=now
             ),
             scenario_ids=env.scenario_ids,
@@ -245,7 +245,7 @@ class Applier:
                 raise
             # Refused for good (RBAC, admission, an invalid spec): every attempt would be refused
             # the same way, so the environment ends as Error with the server's words.
-            status = environments.failed_status(
+            status = environmentstatus.failed_status(
                 action.scenario_ids,
                 attempt=action.attempt,
                 reason=f"the API server refused the helmfile Job {job_name}: {exc}",
@@ -276,7 +276,7 @@ class Applier:
     async def _rejected(self, action: Provision, exc: ApiError, *, now: datetime.datetime) -> None:
         """The API server refuses the pod (admission, invalid spec): every attempt would be
         refused the same way, so the environment ends as Error with the server's words."""
-        status = environments.failed_status(
+        status = environmentstatus.failed_status(
             action.scenario_ids,
             attempt=action.attempt,
             reason=f"the API server rejected the simulator pod: {exc}",

@@ -23,7 +23,7 @@ from simtest_operator.operator import (
     bodies,
     campaignstatus,
     cancelling,
-    environments,
+    environmentstatus,
     names,
     observed,
     provisioning,
@@ -244,7 +244,7 @@ class _Step:
         if assessment.needs_pod:
             self._provision(env)
             return
-        desired = environments.desired_status(env, assessment)
+        desired = environmentstatus.desired_status(env, assessment)
         patch = statuses.changed_fields(desired, env.status)
         if patch:
             self.actions.append(PatchStatus(kind=Kind.ENVIRONMENT, name=env.name, patch=patch))
@@ -275,7 +275,7 @@ class _Step:
         try:
             rendered = self.render(request)
         except RenderError as exc:
-            status = environments.failed_status(
+            status = environmentstatus.failed_status(
                 env.scenario_ids,
                 attempt=env.attempt,
                 reason=f"cannot render the pod: {exc}",
@@ -299,7 +299,7 @@ class _Step:
             Provision(
                 environment=env.name,
                 pod=rendered.pod,
-                status=environments.provisioned_status(
+                status=environmentstatus.provisioned_status(
                     env, pod=env.name, rendered_hash=rendered.content_hash, now=self.now
                 ),
                 scenario_ids=env.scenario_ids,

@@ -16,10 +16,8 @@ import dataclasses
 import datetime
 import enum
 import json
-from collections.abc import Mapping, Sequence
-from typing import Any
+from collections.abc import Mapping
 
-from simtest_operator.operator import conditions
 from simtest_operator.operator.observed import EnvironmentView, NodeView, PodView, Timings
 from simtest_operator.operator.records import ResultRecord, clip
 from simtest_operator.render import messages
@@ -107,7 +105,7 @@ def assess(
             phase=Phase.FINISHED,
             node=env.node,
             timings=env.timings,
-            results=env.results or _fail(env, Verdict.ERROR, env.reason or "no result"),
+            results=env.results or failed_records(env, Verdict.ERROR, env.reason or "no result"),
             reason=env.reason,
             delete_pod=pod is not None and not pod.deleting,
         )
@@ -117,7 +115,7 @@ def assess(
             phase=Phase.FINISHED,
             node=env.node,
             timings=dataclasses.replace(env.timings, finished=now),
-            results=_fail(env, Verdict.ERROR, reason),
+            results=failed_records(env, Verdict.ERROR, reason),
             reason=reason,
         )
     if pod is None:
@@ -148,7 +146,7 @@ def assess(
             phase=Phase.FINISHED,
             node=node,
             timings=dataclasses.replace(timings, finished=now),
-            results=_fail(env, verdict, reason, started=timings.started, end=now),
+            results=failed_records(env, verdict, reason, started=timings.started, end=now),
             reason=reason,
             delete_pod=not pod.deleting or force,
             force_delete=force,
@@ -188,7 +186,7 @@ def _without_pod(
         phase=Phase.FINISHED,
         node=env.node,
         timings=dataclasses.replace(timings, finished=now),
-        results=_fail(env, Verdict.ERROR, reason, started=timings.started, end=now),
+        results=failed_records(env, Verdict.ERROR, reason, started=timings.started, end=now),
         reason=reason,
     )
 
@@ -267,13 +265,15 @@ def _terminated(
     )
     if pod.reason == "DeadlineExceeded":
         reason = clip(f"exceeded its deadline (activeDeadlineSeconds): {pod.message}".rstrip(": "))
-        return _fail(env, Verdict.TIMEOUT, reason, started=timings.started, end=end), reason
+        return failed_records(
+            env, Verdict.TIMEOUT, reason, started=timings.started, end=end
+        ), reason
     if pod.reason == "Evicted":
         reason = clip(f"evicted: {pod.message}".rstrip(": "))
-        return _fail(env, Verdict.ERROR, reason, started=timings.started, end=end), reason
+        return failed_records(env, Verdict.ERROR, reason, started=timings.started, end=end), reason
     if container.reason == "OOMKilled":
         reason = f"simulator killed for exceeding its memory limit (OOMKilled, {exit_text})"
-        return _fail(env, Verdict.ERROR, reason, started=timings.started, end=end), reason
+        return failed_records(env, Verdict.ERROR, reason, started=timings.started, end=end), reason
     default_id = env.scenarios[0].id if len(env.scenarios) == 1 else None
     try:
         outcomes = messages.decode(container.message, default_id=default_id)
@@ -292,7 +292,7 @@ def _terminated(
         reason = f"runner ended with {exit_text}{cause} and no result" + (
             f": {tail}" if tail else ""
         )
-    return _fail(env, Verdict.ERROR, reason, started=timings.started, end=end), reason
+    return failed_records(env, Verdict.ERROR, reason, started=timings.started, end=end), reason
 
 
 def unstored_ids(message: str, *, default_id: str | None = None) -> frozenset[str]:
@@ -356,18 +356,6 @@ def failed_records(
     end: datetime.datetime | None = None,
 ) -> tuple[ResultRecord, ...]:
     """The same non-runner verdict for every scenario of the environment that has none yet."""
-    return _fail(env, verdict, reason, started=started, end=end)
-
-
-def _fail(
-    env: EnvironmentView,
-    verdict: Verdict,
-    reason: str,
-    *,
-    started: datetime.datetime | None = None,
-    end: datetime.datetime | None = None,
-) -> tuple[ResultRecord, ...]:
-    """The same non-runner verdict for every scenario of the environment that has none yet."""
     known = {r.id: r for r in env.results}
     duration = _elapsed(started, end) if end is not None else 0.0
     return tuple(
@@ -381,96 +369,3 @@ def _fail(
         )
         for s in env.scenarios
     )
-
-
-def _stamp(moment: datetime.datetime | None) -> str | None:
-    return conditions.rfc3339(moment) if moment is not None else None
-
-
-def desired_status(env: EnvironmentView, assessment: Assessment) -> dict[str, Any]:
-    """The status fields the assessment implies (a merge patch over the observed status)."""
-    timings = {
-        key: value
-        for key, value in (
-            ("queued", _stamp(assessment.timings.queued)),
-            ("scheduled", _stamp(assessment.timings.scheduled)),
-            ("started", _stamp(assessment.timings.started)),
-            ("finished", _stamp(assessment.timings.finished)),
-        )
-        if value is not None
-    }
-    status: dict[str, Any] = {
-        "phase": assessment.phase.value,
-        "observedGeneration": 1,
-        "scenario": env.scenarios[-1].id if assessment.results else env.scenarios[0].id,
-        "timings": timings,
-    }
-    if assessment.node:
-        status["node"] = assessment.node
-    if assessment.results is not None:
-        last = assessment.results[-1]
-        status["verdict"] = last.verdict.value
-        status["reason"] = clip(assessment.reason or last.reason)
-        status["results"] = [r.to_wire() for r in assessment.results]
-    return status
-
-
-def provisioned_status(
-    env: EnvironmentView,
-    *,
-    pod: str,
-    rendered_hash: str,
-    now: datetime.datetime,
-    provisioner: str = "Pod",
-    sync_job: str | None = None,
-) -> dict[str, Any]:
-    """Status recorded right after the pod (``Pod``) or its helmfile sync Job (``Helmfile``) was
-    created."""
-    queued = env.timings.queued or env.created or now
-    if sync_job is not None:
-        reason, message = "HelmfileJobCreated", f"helmfile sync Job {sync_job} created"
-    else:
-        reason, message = "PodCreated", f"pod {pod} created"
-    extra: dict[str, Any] = {"jobs": {"sync": sync_job}} if sync_job is not None else {}
-    return {
-        "phase": Phase.PROVISIONING.value,
-        "observedGeneration": 1,
-        "scenario": env.scenarios[0].id,
-        "pod": pod,
-        "renderedHash": rendered_hash,
-        "provisioner": provisioner,
-        **extra,
-        "timings": {"queued": conditions.rfc3339(queued)},
-        "conditions": conditions.merge(
-            env.status.get("conditions"),
-            [
-                conditions.Desired(
-                    type="Provisioned",
-                    status=True,
-                    reason=reason,
-                    message=message,
-                )
-            ],
-            now=now,
-        ),
-    }
-
-
-def failed_status(
-    scenario_ids: Sequence[str], *, attempt: int, reason: str, now: datetime.datetime
-) -> dict[str, Any]:
-    """Status of an environment whose pod cannot be made (render failure, pod refused by the
-    API server): an Error for each of its scenarios."""
-    records = [
-        ResultRecord(id=i, verdict=Verdict.ERROR, reason=clip(reason), attempts=attempt)
-        for i in scenario_ids
-    ]
-    return {
-        "phase": Phase.FINISHED.value,
-        "observedGeneration": 1,
-        "scenario": scenario_ids[-1],
-        "verdict": Verdict.ERROR.value,
-        "reason": clip(reason),
-        "results": [r.to_wire() for r in records],
-        "timings": {"finished": conditions.rfc3339(now)},
-    }

@@ -31,7 +31,7 @@ from typing import Any
 
 from simtest_operator.api.v1alpha1 import API_VERSION, Provisioner, TestCampaignSpec
 from simtest_operator.errors import RenderError
-from simtest_operator.operator import bodies, environments, names, requests
+from simtest_operator.operator import bodies, environments, environmentstatus, names, requests
 from simtest_operator.operator.actions import Action, Delete, Emit, Kind, PatchStatus, RunHelmfile
 from simtest_operator.operator.configuration import OperatorConfig
 from simtest_operator.operator.environments import Assessment, Limits, Phase
@@ -301,7 +301,7 @@ def provision(
             campaign_uid=campaign_uid,
             role=config.helmfile_role,
         ),
-        status=environments.provisioned_status(
+        status=environmentstatus.provisioned_status(
             env,
             pod=env.name,
             rendered_hash=rendered.content_hash,
@@ -315,7 +315,7 @@ def provision(
 
 
 def _failed(env: EnvironmentView, reason: str, *, now: datetime.datetime) -> PatchStatus:
-    status = environments.failed_status(
+    status = environmentstatus.failed_status(
         env.scenario_ids, attempt=env.attempt, reason=reason, now=now
     )
     return PatchStatus(kind=Kind.ENVIRONMENT, name=env.name, patch=status)
