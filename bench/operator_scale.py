@@ -226,13 +226,13 @@ def _campaign(
         idle_cpu, idle_rss, _ = proc_usage(operator.pid)
         api_before = latency_buckets(scraper.apiserver())
         api_previous = api_before
-        ops_before = operator_metrics(port)
+        ops_before = ops_previous = operator_metrics(port)
         components_before = cpu_seconds(pids)
         custom.create_namespaced_custom_object(GROUP, VERSION, namespace, "testcampaigns", body)
         started = time.monotonic()
         last_cpu, last_at = idle_cpu, started
         status: dict[str, Any] = {}
-        tick = 0
+        tick = 1  # the first full sample after ~1.5 s (a CPU rate needs an interval)
         complete = False
         while time.monotonic() - started < budget:
             sent = time.perf_counter()
@@ -270,6 +270,7 @@ def _campaign(
                         metric_total(etcd, "etcd_mvcc_db_total_size_in_use_in_bytes") / 2**20, 2
                     ),
                     "in_flight": metric_total(ops, "simtest_scenarios_in_flight"),
+                    "plan_ms_mean": _window_mean_ms(ops, ops_previous, "simtest_plan_seconds"),
                     "load1": round(os.getloadavg()[0], 2),
                 }
                 if (tick // SAMPLE_EVERY) % APISERVER_EVERY == 0:
@@ -279,7 +280,7 @@ def _campaign(
                     sample["apiserver_p99_ms"] = round(1000 * bucket_quantile(window, 0.99), 2)
                     api_previous = current
                 samples.append(sample)
-                last_cpu, last_at = cpu, now
+                last_cpu, last_at, ops_previous = cpu, now, ops
             tick += 1
             time.sleep(max(PROBE_SECONDS - (time.perf_counter() - sent), 0.0))
         makespan = time.monotonic() - started
@@ -306,6 +307,26 @@ def _campaign(
         final_live=final_live,
         event_sources=sources_of_events,
     )
+
+
+def _window_mean_ms(after: str, before: str, name: str) -> float:
+    """Mean of a Prometheus histogram between two scrapes, in ms (NaN without observations)."""
+    count = metric_total(after, f"{name}_count") - metric_total(before, f"{name}_count")
+    total = metric_total(after, f"{name}_sum") - metric_total(before, f"{name}_sum")
+    return round(1000 * total / count, 3) if count else math.nan
+
+
+def _histogram(after: str, before: str, name: str) -> dict[str, float]:
+    """Mean, p50 and p99 in ms of a histogram between two scrapes."""
+    window = bucket_delta(
+        histogram_buckets(after, name, "").get("", {}),
+        histogram_buckets(before, name, "").get("", {}),
+    )
+    return {
+        "mean_ms": _window_mean_ms(after, before, name),
+        "p50_ms": round(1000 * bucket_quantile(window, 0.5), 3),
+        "p99_ms": round(1000 * bucket_quantile(window, 0.99), 3),
+    }
 
 
 def summarize(
@@ -339,15 +360,10 @@ def summarize(
             "p99_ms": round(1000 * bucket_quantile(window, 0.99), 2),
         }
     ops_before, ops_after = operator_metrics_text
-    reconcile = bucket_delta(
-        histogram_buckets(ops_after, "simtest_reconcile_seconds", "").get("", {}),
-        histogram_buckets(ops_before, "simtest_reconcile_seconds", "").get("", {}),
-    )
+    reconcile = _histogram(ops_after, ops_before, "simtest_reconcile_seconds")
+    planning = _histogram(ops_after, ops_before, "simtest_plan_seconds")
     steps = metric_total(ops_after, "simtest_reconcile_seconds_count") - metric_total(
         ops_before, "simtest_reconcile_seconds_count"
-    )
-    step_seconds = metric_total(ops_after, "simtest_reconcile_seconds_sum") - metric_total(
-        ops_before, "simtest_reconcile_seconds_sum"
     )
     overhead = histogram_buckets(ops_after, "simtest_orchestration_overhead_seconds", "").get(
         "", {}
@@ -387,9 +403,13 @@ def summarize(
         else math.nan,
         "api_requests_per_scenario": round(requests / len(seconds), 2),
         "reconcile_steps": int(steps),
-        "reconcile_mean_ms": round(1000 * step_seconds / steps, 2) if steps else math.nan,
-        "reconcile_p50_ms": round(1000 * bucket_quantile(reconcile, 0.5), 2),
-        "reconcile_p99_ms": round(1000 * bucket_quantile(reconcile, 0.99), 2),
+        "reconcile_mean_ms": reconcile["mean_ms"],
+        "reconcile_p50_ms": reconcile["p50_ms"],
+        "reconcile_p99_ms": reconcile["p99_ms"],
+        "plan_mean_ms": planning["mean_ms"],
+        "plan_p50_ms": planning["p50_ms"],
+        "plan_p99_ms": planning["p99_ms"],
+        "plan_mean_ms_last_quarter": _late_mean(samples, "plan_ms_mean"),
         "overhead_p50_s": round(bucket_quantile(overhead, 0.5), 3),
         "overhead_p95_s": round(bucket_quantile(overhead, 0.95), 3),
         "apiserver": apiserver,
@@ -402,6 +422,12 @@ def summarize(
         "load1_max": max(loads, default=math.nan),
         "samples": samples,
     }
+
+
+def _late_mean(samples: Sequence[dict[str, Any]], key: str) -> float:
+    """Median of a per-sample figure over the last quarter of the run (growth shows here)."""
+    values = [s[key] for s in samples[3 * len(samples) // 4 :] if not math.isnan(s[key])]
+    return round(statistics.median(values), 3) if values else math.nan
 
 
 def main(argv: Sequence[str] | None = None) -> None:

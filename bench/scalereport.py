@@ -24,9 +24,16 @@ ROWS: tuple[tuple[str, Callable[[Run], float]], ...] = (
     ("makespan s", lambda r: r["makespan"]),
     ("lower bound s", lambda r: r["bound"]),
     ("slot efficiency (bound / makespan)", lambda r: r["bound_efficiency"]),
+    ("zero-overhead makespan s (list order)", lambda r: r["ideal"]),
+    ("efficiency vs zero overhead", lambda r: r["ideal"] / r["makespan"]),
     ("peak in flight (operator gauge)", lambda r: r["window"]),
     ("peak live SimEnvironments", _live("simenvironments")),
+    (
+        "peak live SimEnvironments / window",
+        lambda r: r["live_peak"]["simenvironments"] / r["window"],
+    ),
     ("peak live Pods", _live("pods")),
+    ("peak live Pods / window", lambda r: r["live_peak"]["pods"] / r["window"]),
     ("peak live ScenarioBatches", _live("scenariobatches")),
     ("peak live ConfigMaps", _live("configmaps")),
     ("Events at the end", _live("events", "live_final")),
@@ -38,14 +45,17 @@ ROWS: tuple[tuple[str, Callable[[Run], float]], ...] = (
     ("operator API requests / scenario", lambda r: r["api_requests_per_scenario"]),
     ("reconcile step mean ms", lambda r: r["reconcile_mean_ms"]),
     ("reconcile step p99 ms", lambda r: r["reconcile_p99_ms"]),
+    ("plan (cache read + planning) mean ms", lambda r: r["plan_mean_ms"]),
+    ("plan p99 ms", lambda r: r["plan_p99_ms"]),
+    ("plan mean ms, last quarter of the run", lambda r: r["plan_mean_ms_last_quarter"]),
     ("orchestration overhead p50 s", lambda r: r["overhead_p50_s"]),
     ("API server latency p50 ms (all verbs)", _api("ALL", "p50_ms")),
     ("API server latency p99 ms (all verbs)", _api("ALL", "p99_ms")),
-    ("  p99 ms GET", _api("GET", "p99_ms")),
-    ("  p99 ms LIST", _api("LIST", "p99_ms")),
-    ("  p99 ms POST", _api("POST", "p99_ms")),
-    ("  p99 ms PATCH", _api("PATCH", "p99_ms")),
-    ("  p99 ms DELETE", _api("DELETE", "p99_ms")),
+    ("API server p99 ms GET", _api("GET", "p99_ms")),
+    ("API server p99 ms LIST", _api("LIST", "p99_ms")),
+    ("API server p99 ms POST", _api("POST", "p99_ms")),
+    ("API server p99 ms PATCH", _api("PATCH", "p99_ms")),
+    ("API server p99 ms DELETE", _api("DELETE", "p99_ms")),
     (
         "API server requests / s (all clients)",
         lambda r: r["apiserver"]["ALL"]["requests"] / r["makespan"],
@@ -54,6 +64,12 @@ ROWS: tuple[tuple[str, Callable[[Run], float]], ...] = (
     ("probe GET p99 ms (client side)", lambda r: r["probe_p99_ms"]),
     ("etcd DB peak MiB", lambda r: r["etcd_db_peak_mib"]),
     ("control plane CPU s", lambda r: sum(r["component_cpu_seconds"].values())),
+    (
+        "control plane CPU ms per API request",
+        lambda r: (
+            1000 * sum(r["component_cpu_seconds"].values()) / r["apiserver"]["ALL"]["requests"]
+        ),
+    ),
     ("load average (1 min) median", lambda r: r["load1_median"]),
 )
 
@@ -159,6 +175,13 @@ def plot(runs: Sequence[Run], path: Path) -> None:
                 color="black",
                 marker=".",
                 label=f"API server p99 {name}",
+            )
+        plans = [
+            (s["t"], s["plan_ms_mean"]) for s in samples if s["plan_ms_mean"] == s["plan_ms_mean"]
+        ]
+        if plans:
+            latency.plot(
+                *zip(*plans, strict=True), style, color="tab:green", label=f"plan step mean {name}"
             )
         total = run["config"]["scenarios"]
         progress.plot(
