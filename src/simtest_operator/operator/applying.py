@@ -208,14 +208,7 @@ class Applier:
         applied.expectations.append(
             Expectation(kind=Kind.POD, name=action.environment, want=Want.PRESENT)
         )
-        applied.expectations.append(
-            Expectation(
-                kind=Kind.ENVIRONMENT,
-                name=action.environment,
-                want=Want.VERSION,
-                version=str((reply.get("metadata") or {}).get("resourceVersion", "")),
-            )
-        )
+        applied.expectations.append(_written(action.environment, reply))
 
     async def _create(self, kind: Kind, body: Mapping[str, Any]) -> dict[str, Any] | None:
         """Create; None when it exists already."""
@@ -264,14 +257,7 @@ class Applier:
             )
         except NotFoundError:
             return  # the environment went meanwhile; its destroy Job runs on regardless
-        applied.expectations.append(
-            Expectation(
-                kind=Kind.ENVIRONMENT,
-                name=action.environment,
-                want=Want.VERSION,
-                version=str((reply.get("metadata") or {}).get("resourceVersion", "")),
-            )
-        )
+        applied.expectations.append(_written(action.environment, reply))
 
     async def _rejected(self, action: Provision, exc: ApiError, *, now: datetime.datetime) -> None:
         """The API server refuses the pod (admission, invalid spec): every attempt would be
@@ -336,3 +322,9 @@ def _owned_by_job(config_map: Mapping[str, Any], job: Mapping[str, Any]) -> dict
     body = dict(config_map)
     body["metadata"] = {**dict(config_map["metadata"]), "ownerReferences": [reference]}
     return body
+
+
+def _written(environment: str, reply: Mapping[str, Any]) -> Expectation:
+    """Expect the cache to catch up with the environment version a status write returned."""
+    version = str((reply.get("metadata") or {}).get("resourceVersion", ""))
+    return Expectation(kind=Kind.ENVIRONMENT, name=environment, want=Want.VERSION, version=version)

@@ -36,7 +36,13 @@ from simtest_operator.operator.actions import Action, Delete, Emit, Kind, PatchS
 from simtest_operator.operator.configuration import OperatorConfig
 from simtest_operator.operator.environments import Assessment, Limits, Phase
 from simtest_operator.operator.jobviews import JobView
-from simtest_operator.operator.observed import BatchView, EnvironmentView, NodeView, PodView
+from simtest_operator.operator.observed import (
+    BatchView,
+    EnvironmentView,
+    NodeView,
+    PodView,
+    Timings,
+)
 from simtest_operator.operator.records import clip
 from simtest_operator.packaging import helmfilejobs
 from simtest_operator.packaging.helmfilejobs import Action as JobAction
@@ -93,13 +99,7 @@ def assess(
         since = env.provisioned_at or queued or now
         grace_end = since + datetime.timedelta(seconds=limits.missing_grace)
         if now < grace_end:
-            return Assessment(
-                phase=Phase.PROVISIONING,
-                node=None,
-                timings=timings,
-                results=None,
-                wake_at=grace_end,
-            )
+            return _provisioning(timings, until=grace_end)
         return _error(
             env,
             f"helmfile sync Job {sync_job(env)} disappeared before the simulator pod appeared",
@@ -111,13 +111,7 @@ def assess(
         since = job.finished_at or now
         grace_end = since + datetime.timedelta(seconds=limits.missing_grace)
         if now < grace_end:
-            return Assessment(
-                phase=Phase.PROVISIONING,
-                node=None,
-                timings=timings,
-                results=None,
-                wake_at=grace_end,
-            )
+            return _provisioning(timings, until=grace_end)
         return _error(
             env,
             f"helmfile sync Job {job.name} succeeded but installed no simulator pod "
@@ -163,6 +157,13 @@ def _failure(job: JobView, pods: Mapping[str, PodView]) -> str:
     cause = f" ({job.reason})" if job.reason else ""
     action = job.action or "sync"
     return clip(f"helmfile {action} Job {job.name} failed{cause}{detail}")
+
+
+def _provisioning(timings: Timings, *, until: datetime.datetime) -> Assessment:
+    """Still provisioning: look again at ``until`` (the end of a grace period)."""
+    return Assessment(
+        phase=Phase.PROVISIONING, node=None, timings=timings, results=None, wake_at=until
+    )
 
 
 def _error(
