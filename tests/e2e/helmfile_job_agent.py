@@ -23,7 +23,6 @@ from __future__ import annotations
 import dataclasses
 import os
 import re
-import subprocess
 import time
 from pathlib import Path
 from typing import Any
@@ -32,7 +31,7 @@ import yaml
 from kubernetes import client
 from kubernetes.client.exceptions import ApiException
 
-from tests.e2e.local_node_agent import LocalNodeAgent, _now, _Running
+from tests.e2e.local_node_agent import LocalNodeAgent
 
 IMAGE_CHARTS_DIR = "/opt/simtest/charts"
 
@@ -65,7 +64,6 @@ class HelmfileJobAgent(LocalNodeAgent):
         self.ran: list[Ran] = []
 
     def _launch(self, pod: client.V1Pod) -> None:
-        key = (pod.metadata.namespace, pod.metadata.name)
         container = pod.spec.containers[0]
         folder = self.workdir / pod.metadata.namespace / pod.metadata.name
         folder.mkdir(parents=True, exist_ok=True)
@@ -86,37 +84,8 @@ class HelmfileJobAgent(LocalNodeAgent):
         env["KUBECONFIG"] = str(self._identity(pod, folder))
         binary = str(self.toolchain_bin / container.command[0])
         args = [_mapped(a, paths) for a in (container.args or [])]
-        message_file = folder / "termination-log"
-        message_file.write_text("")
-        log_file = folder / "helmfile.log"
-        started = _now()
-        with log_file.open("wb") as handle:
-            process = subprocess.Popen(
-                [binary, *args], env=env, stdout=handle, stderr=subprocess.STDOUT, cwd=folder
-            )
-        self.running[key] = _Running(
-            process=process, started=started, message_file=message_file, log_file=log_file
-        )
-        self.started_pods.append(pod.metadata.name)
         self.ran.append(Ran(pod=pod.metadata.name, args=tuple(container.args or ())))
-        self._patch_status(
-            key,
-            {
-                "phase": "Running",
-                "startTime": started,
-                "containerStatuses": [
-                    {
-                        "name": container.name,
-                        "image": container.image,
-                        "imageID": "",
-                        "ready": True,
-                        "restartCount": 0,
-                        "started": True,
-                        "state": {"running": {"startedAt": started}},
-                    }
-                ],
-            },
-        )
+        self._start_process(pod, [binary, *args], env=env, folder=folder, log_name="helmfile.log")
 
     def _config_map(self, namespace: str, name: str) -> dict[str, str]:
         """The ConfigMap's data; a kubelet waits for a missing one too (the destroy Job's

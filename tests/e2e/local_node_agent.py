@@ -292,8 +292,6 @@ class LocalNodeAgent:
         folder = self.workdir / pod.metadata.namespace / pod.metadata.name
         folder.mkdir(parents=True, exist_ok=True)
         message_file = folder / "termination-log"
-        message_file.write_text("")
-        log_file = folder / "runner.log"
         env = {k: v for k, v in os.environ.items() if not k.startswith(("SIMTEST_", "AWS_"))}
         env.update(pod_env)
         env["HOME"] = str(folder)
@@ -307,10 +305,27 @@ class LocalNodeAgent:
             "--artifacts",
             str(folder / "artifacts"),
         ]
+        self._start_process(pod, command, env=env, folder=folder, log_name="runner.log")
+
+    def _start_process(
+        self,
+        pod: client.V1Pod,
+        command: list[str],
+        *,
+        env: Mapping[str, str],
+        folder: Path,
+        log_name: str,
+    ) -> None:
+        """Run the pod's container as a local process and report the pod Running."""
+        key = (pod.metadata.namespace, pod.metadata.name)
+        container = pod.spec.containers[0]
+        message_file = folder / "termination-log"
+        message_file.write_text("")
+        log_file = folder / log_name
         started = _now()
         with log_file.open("wb") as handle:
             process = subprocess.Popen(
-                command, env=env, stdout=handle, stderr=subprocess.STDOUT, cwd=folder
+                command, env=dict(env), stdout=handle, stderr=subprocess.STDOUT, cwd=folder
             )
         self.running[key] = _Running(
             process=process, started=started, message_file=message_file, log_file=log_file
