@@ -1,8 +1,9 @@
-"""Hand-rolled OSI wire encoding against betterosi: a GroundTruth built by the encoder decodes with
-betterosi to the same values (ids, type, classification, dimension, pose, velocity,
-acceleration, version, timestamp, host id, country code, map reference, projection offset) and
-is byte-identical to betterosi's own serialisation; the MapAsamOpenDrive message; varints; the
-trimmed descriptor set keeps exactly GroundTruth's and MapAsamOpenDrive's dependencies."""
+"""Hand-rolled OSI wire encoding against betterosi: a GroundTruth packed through a precompiled
+frame layout decodes with betterosi to the same values (ids, type, classification, dimension,
+pose, velocity, acceleration, version, timestamp, host id, country code, map reference, projection
+offset) and is byte-identical to betterosi's own serialisation, also for a frame without objects
+or host; the MapAsamOpenDrive message; varints of one to six bytes; the trimmed descriptor set
+keeps exactly GroundTruth's and MapAsamOpenDrive's dependencies."""
 
 from __future__ import annotations
 
@@ -50,20 +51,25 @@ def build_with_betterosi() -> bytes:
 
 
 def build_by_hand() -> bytes:
-    entries = b""
-    for object_id in (0, 300):
-        layout = osiwire.object_layout(
+    layouts = [
+        osiwire.object_layout(
             object_id=object_id,
             object_type=2,
             dimension=(4.5, 1.8, 1.5),
             classification_type=7,
             classification_role=2,
         )
-        entries += layout.encode(
-            (1.5 + object_id, -2.25, 0.75), -3.0, (12.0, -0.5, 0.0), (0.0, 0.0, 0.0), 0.01, 0.0
-        )
-    head = osiwire.ground_truth_head(nanos=12_350_000_000, host_id=0)
-    return head + entries + osiwire.ground_truth_tail(country_code=276, map_reference="road")
+        for object_id in (0, 300)
+    ]
+    tail = osiwire.ground_truth_tail(country_code=276, map_reference="road")
+    frame = osiwire.frame_layout(layouts, host_id=0, tail=tail)
+    values = [
+        value
+        for object_id in (0, 300)
+        for value in (1.5 + object_id, -2.25, 0.75, 0.0, 0.01, -3.0, 12.0, -0.5, 0.0, 0.0)
+    ]
+    assert len(values) == frame.objects * osiwire.DYNAMIC_VALUES
+    return frame.encode(12_350_000_000, values)
 
 
 def test_ground_truth_is_byte_identical_to_betterosi() -> None:
@@ -98,13 +104,36 @@ def test_ground_truth_decodes_with_betterosi() -> None:
     assert truck.base.dimension.height == 1.5
 
 
+def test_frame_without_objects_or_host() -> None:
+    tail = osiwire.ground_truth_tail(country_code=276, map_reference="road")
+    data = osiwire.frame_layout((), host_id=None, tail=tail).encode(2_000_000_123, [])
+    gt = osi.GroundTruth.from_binary(data)
+    assert (gt.timestamp.seconds, gt.timestamp.nanos) == (2, 123)
+    assert gt.moving_object == []
+    assert gt.map_reference == "road"
+    assert data == bytes(
+        osi.GroundTruth(
+            version=osi.InterfaceVersion(version_major=3, version_minor=7, version_patch=0),
+            timestamp=osi.Timestamp(seconds=2, nanos=123),
+            country_code=276,
+            map_reference="road",
+            proj_frame_offset=osi.GroundTruth.ProjFrameOffset(
+                position=osi.Vector3d(x=0.0, y=0.0, z=0.0), yaw=0.0
+            ),
+        ).to_binary()
+    )
+
+
 def test_map_message_decodes() -> None:
     message = osi.MapAsamOpenDrive.from_binary(osiwire.map_message("road", "<OpenDRIVE/>"))
     assert message.map_reference == "road"
     assert message.open_drive_xml_content == "<OpenDRIVE/>"
 
 
-@pytest.mark.parametrize(("value", "encoded"), [(0, b"\x00"), (1, b"\x01"), (300, b"\xac\x02")])
+@pytest.mark.parametrize(
+    ("value", "encoded"),
+    [(0, b"\x00"), (1, b"\x01"), (300, b"\xac\x02"), (2**35, b"\x80" * 5 + b"\x01")],
+)
 def test_varint(value: int, encoded: bytes) -> None:
     assert osiwire.varint(value) == encoded
     assert osiwire.read_varint(encoded, 0) == (value, len(encoded))

@@ -7,13 +7,17 @@ metadata records and channel metadata; and the write cost per frame with 20 obje
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 import warnings
 from pathlib import Path
 
 import pytest
+from mcap.exceptions import EndOfFile
 from mcap.reader import make_reader
+from mcap.records import Message
+from mcap.stream_reader import StreamReader
 
 from simtest_operator.errors import ResultsError
 from simtest_operator.recording import Recorder, RecordingInfo, read_metadata, read_trajectories
@@ -189,6 +193,82 @@ def test_write_cost_per_frame(tmp_path: Path) -> None:
     print(f"recording cost: {per_frame * 1e6:.0f} us per frame of 20 objects")
     # Budget: 10% of a 100x real-time run at 10 frames per simulated second = 1 ms per frame.
     assert per_frame < 1e-3
+
+
+def test_frame_layout_follows_order_box_and_category_changes(tmp_path: Path) -> None:
+    """The cached frame layout is rebuilt whenever the order, a box or a category changes (equal
+    new box objects keep it); every frame decodes to its own snapshot's values."""
+    import betterosi
+
+    osi = betterosi.v3_7_0
+    long_box = BoundingBox(center_x=2.0, center_y=-0.3, center_z=1.0, length=9.0, width=2.5)
+
+    def state(entity_id: int, k: int, **changes: object) -> EntityState:
+        base = EntityState(
+            id=entity_id, name=f"e{entity_id}", kind=EntityKind.VEHICLE, category="car",
+            x=5.0 * k + entity_id, y=float(entity_id), heading=0.3 * k, pitch=4.0, roll=-0.1,
+            speed=10.0 + k, lateral_speed=0.2, acceleration=1.5, box=CAR_BOX,
+        )  # fmt: skip
+        return dataclasses.replace(base, **changes)  # type: ignore[arg-type]
+
+    snapshots = [
+        WorldSnapshot(time=0.0, entities=(state(0, 0), state(1, 0), state(2, 0))),
+        WorldSnapshot(time=0.1, entities=(state(0, 1), state(1, 1), state(2, 1))),
+        WorldSnapshot(time=0.2, entities=(state(2, 2), state(0, 2), state(1, 2))),
+        WorldSnapshot(
+            time=0.3,
+            entities=(state(2, 3), state(0, 3, box=dataclasses.replace(CAR_BOX)), state(1, 3)),
+        ),
+        WorldSnapshot(time=0.4, entities=(state(2, 4), state(0, 4, box=long_box), state(1, 4))),
+        WorldSnapshot(
+            time=0.5,
+            entities=(state(2, 5), state(0, 5, box=long_box), state(1, 5, category="bus")),
+        ),
+    ]
+    path = tmp_path / "changes.mcap"
+    with Recorder(path, info=RecordingInfo(scenario_id="s", seed=0), host_id=1) as recorder:
+        for snapshot in snapshots:
+            assert recorder.write(snapshot)
+    with path.open("rb") as stream:
+        frames = [
+            osi.GroundTruth.from_binary(message.data)
+            for _, _, message in make_reader(stream).iter_messages(topics=["ground_truth"])
+        ]
+    assert len(frames) == len(snapshots)
+    for frame, snapshot in zip(frames, snapshots, strict=True):
+        assert frame.host_vehicle_id.value == 1
+        assert [obj.id.value for obj in frame.moving_object] == [e.id for e in snapshot.entities]
+        for obj, expected in zip(frame.moving_object, snapshot.entities, strict=True):
+            base = obj.base
+            assert (base.position.x, base.position.y, base.position.z) == pytest.approx(
+                expected.box_center()
+            )
+            assert (base.velocity.x, base.velocity.y) == pytest.approx(expected.velocity())
+            assert base.orientation.yaw == pytest.approx(math.remainder(expected.heading, math.tau))
+            assert base.orientation.pitch == pytest.approx(4.0 - math.tau)
+            assert base.orientation.roll == -0.1
+            dimension = (base.dimension.length, base.dimension.width, base.dimension.height)
+            assert dimension == (expected.box.length, expected.box.width, expected.box.height)
+            expected_class = 13 if expected.category == "bus" else 4
+            assert obj.vehicle_classification.type == expected_class
+
+
+def test_unclosed_recording_keeps_its_finished_chunks(tmp_path: Path) -> None:
+    """A run killed before ``close`` leaves every chunk finished so far readable by a streaming
+    reader (chunks are written as they fill; nothing is held back for later)."""
+    path = tmp_path / "killed.mcap"
+    recorder = Recorder(path, info=RecordingInfo(scenario_id="s", seed=0), opendrive="<OpenDRIVE/>")
+    for k in range(1500):  # about 1.9 MB of GroundTruth: at least one finished 1 MiB chunk
+        recorder.write(world(k * 0.05))
+    read: list[float] = []
+    with path.open("rb") as stream, pytest.raises(EndOfFile):
+        for record in StreamReader(stream).records:
+            if isinstance(record, Message):
+                read.append(record.log_time * 1e-9)
+    recorder.close()
+    assert len(read) > 300
+    assert read == sorted(read)
+    assert len(read_trajectories(path)[0]) == recorder.frames
 
 
 def test_force_and_closed_recorder(tmp_path: Path) -> None:

@@ -2,19 +2,20 @@
 
 Recording must add at most 10% to a run that is 100x faster than real time, which leaves a few
 microseconds per object and frame. Building betterosi message objects costs about 20 us per object,
-so the recorder writes the protobuf wire format directly: an object's constant parts (id, type,
-classification, dimensions) are encoded once, and each frame packs only its 12 changing doubles
-with one precompiled ``struct`` call. Every field of every sub-message is written, including
-zeros, as the omega-prime specification requires (proto2 presence). Field numbers come from
-``osi_groundtruth.proto``/``osi_object.proto``/``osi_common.proto`` of OSI 3.7.0; the tests decode
-the bytes with betterosi and compare them field by field.
+so the recorder writes the protobuf wire format directly: the constant parts of a frame (tags,
+lengths, ids, types, classifications, dimensions, the trailing fields) are encoded once per set of
+objects, and each frame packs only its 10 changing doubles per object between them with one
+precompiled ``struct`` call (:class:`FrameLayout`). Every field of every sub-message is written,
+including zeros, as the omega-prime specification requires (proto2 presence). Field numbers come
+from ``osi_groundtruth.proto``/``osi_object.proto``/``osi_common.proto`` of OSI 3.7.0; the tests
+decode the bytes with betterosi and compare them field by field.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import struct
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 
 OSI_VERSION = (3, 7, 0)
 
@@ -26,6 +27,8 @@ def varint(value: int) -> bytes:
     """Unsigned LEB128 varint (protobuf uint32/uint64/enum/bool)."""
     if value < 0:
         raise ValueError(f"varint of negative value {value}")
+    if value < 0x80:
+        return bytes((value,))
     out = bytearray()
     while True:
         byte = value & 0x7F
@@ -71,37 +74,40 @@ def map_message(map_reference: str, xml_content: str) -> bytes:
 # 27-byte triple of tagged doubles; dimension is constant per object and sits in the prefix.
 _TRIPLE_LEN = 27
 _BASE_LEN = 5 * (2 + _TRIPLE_LEN)
-_TRIPLE_TAGS = (0x09, 0x11, 0x19)
-_DYNAMIC_FORMAT = "".join("BB" + "Bd" * 3 for _ in range(4))
+_ZERO_DOUBLE = bytes(8)
+DYNAMIC_VALUES = 10
+"""Doubles written per object and frame: position x/y/z, roll, pitch, yaw, velocity x/y and
+acceleration x/y; vertical velocity and acceleration are written as constant zeros."""
+
+
+def _dynamic_gaps() -> tuple[bytes, ...]:
+    """The constant bytes around an object's ``DYNAMIC_VALUES`` doubles: one run before each
+    double and one after the last (the tags, lengths and the two constant zero doubles)."""
+    tags = [key(field, _FIXED64) for field in (1, 2, 3)]
+    gaps: list[bytes] = []
+    pending = b""
+    for field, constant_z in ((2, False), (3, False), (4, True), (5, True)):
+        pending += key(field, _LENGTH) + varint(_TRIPLE_LEN)
+        gaps += [pending + tags[0], tags[1]]
+        if constant_z:
+            pending = tags[2] + _ZERO_DOUBLE
+        else:
+            gaps.append(tags[2])
+            pending = b""
+    return (*gaps, pending)
+
+
+_GAPS = _dynamic_gaps()
 
 
 @dataclasses.dataclass(frozen=True, slots=True)
 class ObjectLayout:
-    """Precompiled encoding of one moving object; only the kinematics change per frame."""
+    """The constant parts of one moving object's encoding; only the kinematics change per frame."""
 
-    struct: struct.Struct
     prefix: bytes
+    """GroundTruth field 5's tag and length, the id, BaseMoving's tag and length, dimension."""
     suffix: bytes
-
-    def encode(
-        self,
-        position: tuple[float, float, float],
-        yaw: float,
-        velocity: tuple[float, float, float],
-        acceleration: tuple[float, float, float],
-        pitch: float = 0.0,
-        roll: float = 0.0,
-    ) -> bytes:
-        """The complete ``moving_object`` entry (GroundTruth field 5, tag included)."""
-        t1, t2, t3 = _TRIPLE_TAGS
-        return self.struct.pack(
-            self.prefix,
-            0x12, _TRIPLE_LEN, t1, position[0], t2, position[1], t3, position[2],
-            0x1A, _TRIPLE_LEN, t1, roll, t2, pitch, t3, yaw,
-            0x22, _TRIPLE_LEN, t1, velocity[0], t2, velocity[1], t3, velocity[2],
-            0x2A, _TRIPLE_LEN, t1, acceleration[0], t2, acceleration[1], t3, acceleration[2],
-            self.suffix,
-        )  # fmt: skip
+    """Object type and vehicle classification."""
 
 
 def object_layout(
@@ -123,8 +129,7 @@ def object_layout(
     base_head = key(2, _LENGTH) + varint(_BASE_LEN) + length_delimited(1, triple(*dimension))
     body_len = len(head) + len(base_head) + (_BASE_LEN - 2 - _TRIPLE_LEN) + len(suffix)
     prefix = key(5, _LENGTH) + varint(body_len) + head + base_head
-    packer = struct.Struct(f"<{len(prefix)}s{_DYNAMIC_FORMAT}{len(suffix)}s")
-    return ObjectLayout(struct=packer, prefix=prefix, suffix=suffix)
+    return ObjectLayout(prefix=prefix, suffix=suffix)
 
 
 _VERSION_FIELD = length_delimited(
@@ -133,12 +138,57 @@ _VERSION_FIELD = length_delimited(
     + varint_field(2, OSI_VERSION[1])
     + varint_field(3, OSI_VERSION[2]),
 )
+_TIMESTAMP_KEY = key(2, _LENGTH)
 
 
-def ground_truth_head(*, nanos: int, host_id: int | None) -> bytes:
+@dataclasses.dataclass(frozen=True, slots=True)
+class FrameLayout:
+    """Precompiled encoding of a whole GroundTruth for one ordered set of objects.
+
+    Constant byte runs and changing doubles alternate through the message, so one ``struct``
+    packs a frame: ``template`` holds the runs at even positions, each frame fills the odd ones
+    with its doubles (one slice assignment) and packs. Only the timestamp is encoded apart,
+    being a variable-length varint.
+    """
+
+    packer: struct.Struct
+    template: tuple[bytes | None, ...]
+    host_field: bytes
+    objects: int
+
+    def encode(self, nanos: int, values: list[float]) -> bytes:
+        """The GroundTruth at ``nanos``; ``values`` holds ``DYNAMIC_VALUES`` doubles per object,
+        in the objects' order."""
+        args: list[bytes | float | None] = list(self.template)
+        args[1::2] = values
+        return ground_truth_head(nanos=nanos) + self.host_field + self.packer.pack(*args)
+
+
+def frame_layout(
+    objects: Sequence[ObjectLayout], *, host_id: int | None, tail: bytes
+) -> FrameLayout:
+    """The frame layout of ``objects`` (in that order) followed by ``tail``."""
+    runs: list[bytes] = []
+    pending = b""
+    for layout in objects:
+        runs.append(pending + layout.prefix + _GAPS[0])
+        runs += _GAPS[1:-1]
+        pending = _GAPS[-1] + layout.suffix
+    runs.append(pending + tail)
+    template: list[bytes | None] = [None] * (2 * len(runs) - 1)
+    template[0::2] = runs
+    packer = struct.Struct("<" + "d".join(f"{len(run)}s" for run in runs))
+    host_field = b"" if host_id is None else length_delimited(3, identifier(host_id))
+    return FrameLayout(
+        packer=packer, template=tuple(template), host_field=host_field, objects=len(objects)
+    )
+
+
+def ground_truth_head(*, nanos: int, host_id: int | None = None) -> bytes:
     """GroundTruth version(1), timestamp(2), host_vehicle_id(3): what precedes moving objects."""
-    timestamp = varint_field(1, nanos // 1_000_000_000) + varint_field(2, nanos % 1_000_000_000)
-    head = _VERSION_FIELD + length_delimited(2, timestamp)
+    seconds, nanos = divmod(nanos, 1_000_000_000)
+    timestamp = b"\x08" + varint(seconds) + b"\x10" + varint(nanos)
+    head = _VERSION_FIELD + _TIMESTAMP_KEY + bytes((len(timestamp),)) + timestamp
     if host_id is not None:
         head += length_delimited(3, identifier(host_id))
     return head

@@ -18,6 +18,7 @@ from __future__ import annotations
 import dataclasses
 import datetime
 import math
+import operator
 from collections.abc import Mapping
 from pathlib import Path
 from types import TracebackType
@@ -46,6 +47,7 @@ _VEHICLE_CLASSES = {
     "bicycle": 12, "bus": 13, "tram": 14, "train": 15, "wheelchair": 16,
 }  # fmt: skip
 _ROLE_UNKNOWN, _ROLE_CIVIL = 0, 2
+_SIGNATURE = operator.attrgetter("id", "box", "kind", "category")
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
@@ -109,6 +111,8 @@ class Recorder:
         self._previous: set[int] = set()
         self._seen: set[int] = set()
         self._reissued = 0
+        self._signature: tuple[tuple[object, ...], ...] | None = None
+        self._frame = osiwire.frame_layout((), host_id=None, tail=self._tail)
         self._layouts: dict[int, tuple[EntityKind, str, BoundingBox, osiwire.ObjectLayout]] = {}
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
@@ -208,6 +212,16 @@ class Recorder:
         self._layouts[osi_id] = (state.kind, state.category, box, layout)
         return layout
 
+    def _relayout(self, entities: tuple[EntityState, ...]) -> osiwire.FrameLayout:
+        """The frame layout for a new set of entities (or changed boxes or categories); keeps
+        OSI ids stable and reissues the id of an entity that is back after a gap."""
+        layouts = [self._layout(self._osi_id(state.id), state) for state in entities]
+        self._previous = {state.id for state in entities}
+        if self._host_id is None and entities:
+            self._host_id = min(state.id for state in entities)
+        host = self._ids.get(self._host_id) if self._host_id is not None else None
+        return osiwire.frame_layout(layouts, host_id=host, tail=self._tail)
+
     def write(self, snapshot: WorldSnapshot, *, force: bool = False) -> bool:
         """Record the snapshot if it is due (always with ``force``); returns whether it was.
 
@@ -226,41 +240,40 @@ class Recorder:
             self._due_ns = (nanos // self._period_ns + 1) * self._period_ns
         if self._frames == 0:
             self._write_map(nanos)
-        remainder, cos, sin, two_pi = math.remainder, math.cos, math.sin, 2.0 * math.pi
-        previous, ids = self._previous, self._ids
-        entries = []
-        present = set()
-        for state in snapshot.entities:
-            entity_id = state.id
-            osi_id = ids[entity_id] if entity_id in previous else self._osi_id(entity_id)
-            present.add(entity_id)
-            heading = state.heading
+        entities = snapshot.entities
+        # The frame layout stays valid while the same entities come in the same order with the
+        # same boxes and categories: then neither ids nor constant bytes change.
+        signature = tuple(map(_SIGNATURE, entities))
+        if signature != self._signature:
+            self._frame = self._relayout(entities)
+            self._signature = signature
+        # Per object: bounding-box centre, roll/pitch/yaw in [-pi, pi] (math.remainder is exact,
+        # so angles already in range are kept as they are), world-frame velocity and acceleration.
+        cos, sin, remainder, pi, two_pi = math.cos, math.sin, math.remainder, math.pi, 2 * math.pi
+        values: list[float] = []
+        extend = values.extend
+        for state in entities:
+            heading, pitch, roll = state.heading, state.pitch, state.roll
             c, s = cos(heading), sin(heading)
             box = state.box
+            bx, by = box.center_x, box.center_y
             speed, lateral, acceleration = state.speed, state.lateral_speed, state.acceleration
-            entries.append(
-                self._layout(osi_id, state).encode(
-                    (
-                        state.x + box.center_x * c - box.center_y * s,
-                        state.y + box.center_x * s + box.center_y * c,
-                        state.z + box.center_z,
-                    ),
-                    remainder(heading, two_pi),
-                    (speed * c - lateral * s, speed * s + lateral * c, 0.0),
-                    (acceleration * c, acceleration * s, 0.0),
-                    remainder(state.pitch, two_pi),
-                    remainder(state.roll, two_pi),
-                )
-            )
-        self._previous = present
-        if self._host_id is None and snapshot.entities:
-            self._host_id = min(state.id for state in snapshot.entities)
-        host = self._ids.get(self._host_id) if self._host_id is not None else None
-        head = osiwire.ground_truth_head(nanos=nanos, host_id=host)
+            extend((
+                state.x + bx * c - by * s,
+                state.y + bx * s + by * c,
+                state.z + box.center_z,
+                roll if -pi <= roll <= pi else remainder(roll, two_pi),
+                pitch if -pi <= pitch <= pi else remainder(pitch, two_pi),
+                heading if -pi <= heading <= pi else remainder(heading, two_pi),
+                speed * c - lateral * s,
+                speed * s + lateral * c,
+                acceleration * c,
+                acceleration * s,
+            ))  # fmt: skip
         self._writer.add_message(
             self._gt_channel,
             log_time=nanos,
-            data=head + b"".join(entries) + self._tail,
+            data=self._frame.encode(nanos, values),
             publish_time=nanos,
             sequence=self._frames,
         )
