@@ -1,7 +1,8 @@
 """Distance keeping (LongitudinalDistanceAction): without acceleration limits the actor is held
 rigidly at the gap; with limits it closes the gap like a critically damped spring, its
 acceleration inside the limits and built up no faster than the allowed rate (released at once,
-as the reference player does); ``any`` displacement keeps the side the actor starts on."""
+as the reference player does); ``any`` displacement keeps the side the actor starts on; the gap
+is measured between both entities at the same instant, also when the reference moves first."""
 
 from __future__ import annotations
 
@@ -75,3 +76,17 @@ def test_any_displacement_keeps_the_side_the_actor_starts_on() -> None:
     b.start("Car", keep(20.0, displacement="any"))
     b.step(2)
     assert b.actor("Car").x - b.actor("Lead").x == pytest.approx(20.0, abs=1e-6)
+
+
+def test_gap_is_measured_at_one_instant_when_the_reference_moves_first() -> None:
+    limits = model.DynamicConstraints(max_acceleration=2.0, max_deceleration=5.0, max_speed=40.0)
+    b = Bench("Lead", "Car")  # the reference moves before the follower in each step
+    b.start("Lead", teleport(lane(-1, 100.0)))
+    b.start("Lead", speed(25.0))
+    b.start("Car", teleport(lane(-1, 40.0)))
+    b.start("Car", speed(25.0))
+    b.start("Car", keep(30.0, limits=limits))
+    b.step(int(25.0 / DT))  # the reference stays short of the road's end (1000 m)
+    # measured against the reference's next pose the gap would settle one step short (1.25 m)
+    assert b.actor("Lead").x - b.actor("Car").x == pytest.approx(30.0, abs=0.01)
+    assert b.actor("Car").speed == pytest.approx(25.0, abs=0.01)

@@ -3,7 +3,8 @@
 here that exercises it (clothoid and clothoid-spline trajectories with jumps, offsets and
 per-segment timing; NURBS timing; follow-mode timed polylines with a stop; reversing along a
 trajectory and road-position headings in a parking lot; jerk-limited follow-mode speed
-profiles; spring-model distance keeping with jerk limits; lane changes on a circle with a
+profiles; spring-model distance keeping with jerk limits; time-gap distance keeping in free
+space behind a reference that moves first in the step; lane changes on a circle with a
 headway trigger; end-of-road teleports restarting acts; lateral distance keeping; lane
 clearance on a 2+1 road; traffic signal states with edge-triggered events)."""
 
@@ -51,6 +52,7 @@ def compare(relative: str, tmp_path: Path) -> references.Comparison:
         "xosc/parking_demo.xosc",
         "xosc/speed-profile.xosc",
         "xosc/long_dist_action_with_jerk.xosc",
+        "xosc/highway_merge.xosc",
         "xosc/light_state.xosc",
         "xosc/lane_change_simple.xosc",
         "xosc/keep_lateral_distance.xosc",

@@ -49,7 +49,7 @@ class Bench:
     def step(self, count: int = 1) -> None:
         world = self.world
         for _ in range(count):
-            world.refresh()
+            world.freeze()
             for actor in world.actors.values():
                 if not actor.placed:
                     continue
@@ -63,6 +63,7 @@ class Bench:
                     isinstance(lateral, PathRun) and lateral.finished and not lateral.stopped
                 )
                 motion.move(world, actor, DT, before=before, start=start, placed=placed)
+            world.refresh()
             for run in self.dispatcher.active():
                 run.after_motion(world)
             self.steps += 1

@@ -8,7 +8,8 @@ model for the ego) because that is what makes reference-player behaviour reachab
 entities in the snapshots.
 
 Each :meth:`Simulation.step`: storyboard triggers are evaluated on the world at time t, actions
-and the driver model update speeds and lateral offsets, motion advances poses to t + dt,
+and the driver model update speeds and lateral offsets reading every other entity as it was at
+t (whichever moved first), motion advances poses to t + dt,
 completions propagate through the storyboard, the backend is synchronised, and a
 :class:`~simtest_operator.snapshots.WorldSnapshot` at t + dt comes out.
 """
@@ -181,9 +182,13 @@ class Simulation:
         # Triggers see the world as it is (time and poses of the previous step); then actions and
         # motion take it one step further.
         self._storyboard.update(world.time)
+        # Every action measures the others at time t, whichever of them moved first this step
+        # (the reference player moves entities only after all actions stepped).
+        world.freeze()
         for actor in world.actors.values():
             if actor.placed:
                 self._advance(actor, dt)
+        world.refresh()
         for run in self._dispatcher.active():
             run.after_motion(world)
         self._steps += 1

@@ -66,7 +66,8 @@ class World:
             raise ScenarioError(f"entity {name!r} is not declared", element="EntityRef") from None
 
     def state(self, name: str) -> EntityState:
-        """Frozen state of ``name`` as of the last :meth:`refresh`."""
+        """Frozen state of ``name``: as of the last :meth:`freeze`, or as of its first read
+        after the last :meth:`refresh`."""
         state = self._states.get(name)
         if state is None:
             state = self.actor(name).state()
@@ -79,6 +80,12 @@ class World:
     def refresh(self) -> None:
         """Forget cached states after actors moved."""
         self._states.clear()
+
+    def freeze(self) -> None:
+        """Cache every placed actor's state as it is now: until the next refresh, whatever
+        reads states sees this one instant, whichever actor has moved on meanwhile."""
+        self._states.clear()
+        self.states()
 
     # --- roads --------------------------------------------------------------------------------
 
