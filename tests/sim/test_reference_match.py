@@ -4,7 +4,8 @@ here that exercises it (clothoid and clothoid-spline trajectories with jumps, of
 per-segment timing; NURBS timing; follow-mode timed polylines with a stop; reversing along a
 trajectory and road-position headings in a parking lot; jerk-limited follow-mode speed
 profiles; spring-model distance keeping with jerk limits; time-gap distance keeping in free
-space behind a reference that moves first in the step; lane changes on a circle with a
+space behind a reference that moves first in the step, and synchronizing with a master that
+moves first (within 0.1 m); lane changes on a circle with a
 headway trigger; end-of-road teleports restarting acts; lateral distance keeping; lane
 clearance on a 2+1 road; traffic signal states with edge-triggered events)."""
 
@@ -64,3 +65,11 @@ def test_matches_the_reference_player(relative: str, tmp_path: Path) -> None:
     comparison = compare(relative, tmp_path)
     assert not comparison.intended
     assert comparison.match, comparison
+
+
+def test_synchronize_reads_the_master_as_it_was_at_the_step_start(tmp_path: Path) -> None:
+    # the master (Ego) is declared first and moves first in each step; read after its move it
+    # seems one step closer to its target and the follower arrives early (median 0.23 m)
+    comparison = compare("xosc/synch_with_steady_state.xosc", tmp_path)
+    assert comparison.match, comparison
+    assert comparison.worst_median < 0.1, comparison

@@ -7,9 +7,10 @@ the reference player's critically damped spring towards the gap, its acceleratio
 limits and changed no faster than the allowed rates (jerk).
 
 Synchronize re-plans every step: given the time the master needs to reach its target at its
-current speed, the actor picks the acceleration of a cubic position profile that arrives at its
-own target at that time with the requested final speed (or, without one, the constant
-acceleration that arrives on time). A steady-state part shortens the planned distance and time.
+current speed (from where it was at the start of the step, also when it moved first), the actor
+picks the acceleration of a cubic position profile that arrives at its own target at that time
+with the requested final speed (or, without one, the constant acceleration that arrives on
+time). A steady-state part shortens the planned distance and time.
 """
 
 from __future__ import annotations
@@ -179,7 +180,8 @@ class SynchronizeRun(Run):
         actor = self.actor
         assert actor is not None
         master = self._master
-        dm = math.hypot(self._master_target[0] - master.x, self._master_target[1] - master.y)
+        seen = world.state(master.name)  # as it was at time t, also when it moved first
+        dm = math.hypot(self._master_target[0] - seen.x, self._master_target[1] - seen.y)
         tolerance = self._action.target_tolerance_master or MASTER_TOLERANCE
         final = self._final_speed()
         if dm <= tolerance or (dm > self._last_master + 1e-6 and dm < 5.0 * tolerance):
