@@ -13,6 +13,11 @@ from typing import Any
 
 import yaml
 
+# libyaml's C loader and dumper when PyYAML was built with it (the wheels are): same documents,
+# 5-6x faster, and rendering runs on the operator's event loop once per environment.
+_LOADER: type[yaml.SafeLoader] = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+_DUMPER: type[yaml.SafeDumper] = getattr(yaml, "CSafeDumper", yaml.SafeDumper)
+
 
 def deep_merge(base: Mapping[str, Any], override: Mapping[str, Any]) -> dict[str, Any]:
     """Merge ``override`` into ``base`` like ``helm --values``: mappings merge recursively, other
@@ -48,7 +53,17 @@ def content_hash(value: Any) -> str:
 
 def to_yaml(value: Any) -> str:
     """Block-style YAML with sorted keys (stable across runs and Python versions)."""
-    text = yaml.safe_dump(
-        _copy(value), sort_keys=True, default_flow_style=False, allow_unicode=True, width=100
+    text = yaml.dump(
+        _copy(value),
+        Dumper=_DUMPER,
+        sort_keys=True,
+        default_flow_style=False,
+        allow_unicode=True,
+        width=100,
     )
     return str(text)
+
+
+def from_yaml(text: str) -> Any:
+    """Parse one YAML document safely (no tags beyond the standard ones)."""
+    return yaml.load(text, Loader=_LOADER)

@@ -61,7 +61,7 @@ def simulator_release(
 def check_helmfile(text: str, *, pod: Mapping[str, Any], request: EnvironmentRequest) -> None:
     """Raise :class:`RenderError` listing every violated invariant of a rendered helmfile."""
     try:
-        loaded = yaml.safe_load(text)
+        loaded = documents.from_yaml(text)
     except yaml.YAMLError as exc:
         raise _error(request, [f"not valid YAML: {exc}"]) from exc
     releases = loaded.get("releases") if isinstance(loaded, Mapping) else None

@@ -217,7 +217,7 @@ def _render_mapping(
 ) -> dict[str, Any]:
     text = _render_text(template, context, what=what)
     try:
-        loaded = yaml.safe_load(text)
+        loaded = documents.from_yaml(text)
     except yaml.YAMLError as exc:
         raise RenderError(f"{what} did not render to valid YAML: {exc}") from exc
     if loaded is None:
