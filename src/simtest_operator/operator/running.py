@@ -34,6 +34,10 @@ def run(
     importlib.import_module("simtest_operator.operator.handlers")  # registers the handlers
     kopf.configure(verbose=verbose, log_format=kopf.LogFormat.PLAIN)
     logging.getLogger("aiohttp.access").setLevel(logging.WARNING)
+    if not verbose:
+        # kopf reports every handler call per object ("Handler ... succeeded"): five lines per
+        # scenario at scale; our own loggers say what matters.
+        logging.getLogger("kopf.objects").setLevel(logging.WARNING)
     config = OperatorConfig.from_env(overrides=options)
     if config.leader_election and not config.lease_namespace and namespaces:
         config = dataclasses.replace(config, lease_namespace=namespaces[0])
