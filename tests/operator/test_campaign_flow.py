@@ -14,7 +14,7 @@ from __future__ import annotations
 import json
 import random
 
-from simtest_operator.operator.actions import Kind
+from simtest_operator.operator.actions import Create, Kind
 from simtest_operator.operator.configuration import OperatorConfig
 from tests.operator.fakecluster import REPO, FakeCluster, Script, campaign_body, frozen_list
 
@@ -175,3 +175,22 @@ def test_explicit_max_parallel_is_never_exceeded_and_prefetch_needs_pending_head
     tight.start_campaign(body, frozen_list(12), batch_size=5)
     tight.run()
     assert tight.max_in_flight <= 4  # a Pending wait could trip pendingTimeoutSeconds: no prefetch
+
+
+def test_a_large_window_opens_over_several_short_steps() -> None:
+    config = OperatorConfig(templates_dir=REPO / "helm-templates", max_starts_per_step=5)
+    cluster = FakeCluster(nodes={f"n{i}": 3 for i in range(8)}, config=config)
+    cluster.start_campaign(campaign_body(batchSize=30), frozen_list(60), batch_size=30)
+    created = []
+    for _ in range(8):
+        plan = cluster.plan()
+        starts = [a for a in plan.actions if isinstance(a, Create) and a.kind is Kind.ENVIRONMENT]
+        assert len(starts) <= 5
+        if len(starts) == 5:
+            assert plan.wake_at == cluster.now  # the rest right after, not at the next event
+        created.append(len(starts))
+        cluster.apply(plan)
+    assert created[:5] == [0, 5, 5, 5, 1]  # batches first, then the 16-slot window in 4 steps
+    assert plan.observation.window == 16
+    cluster.run()
+    assert cluster.status()["passed"] == 60

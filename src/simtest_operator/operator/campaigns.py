@@ -421,6 +421,9 @@ class _Step:
                 suspended=self.spec.suspend,
             ),
         )
+        if len(units) > self.config.max_starts_per_step:
+            units = units[: self.config.max_starts_per_step]
+            self.wakes.append(self.now)  # the rest in the next step, once these are applied
         wanted_batches = {u.batch_index for u in units}
         if not execution.batch_barrier and not self.spec.suspend:
             wanted_batches |= self._lookahead(states)

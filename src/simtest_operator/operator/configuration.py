@@ -49,6 +49,10 @@ class OperatorConfig:
     """Window mode with a derived window (no maxParallel): pods created beyond the free
     simulator slots, per usable node. They wait in Pending and the scheduler starts one the
     moment a slot frees, without a round trip through the operator. 0 turns it off."""
+    max_starts_per_step: int = 64
+    """Environments one step may create; the rest start in the next step, right after. Keeps a
+    step short when a large window opens at once (a 150-slot ramp), so results that arrive
+    meanwhile are folded without waiting for hundreds of writes."""
     reuse_queue: int = 8
     """Scenarios per warm simulator with isolation ``Reuse`` (bounded by the 4 KiB termination
     message that carries their results)."""
@@ -103,6 +107,7 @@ class OperatorConfig:
             ("missing_pod_grace", "MISSING_POD_GRACE", float),
             ("backstop_grace", "BACKSTOP_GRACE", float),
             ("reuse_queue", "REUSE_QUEUE", int),
+            ("max_starts_per_step", "MAX_STARTS_PER_STEP", int),
             ("prefetch_per_node", "PREFETCH", int),
             ("metrics_port", "METRICS_PORT", int),
             ("lease_name", "LEASE_NAME", str),
