@@ -3,12 +3,16 @@ object ids and counts, bounding-box centres (rotated boxes with lateral offsets)
 [-pi, pi], velocity with lateral speed, vehicle classification per category, pedestrians and misc
 objects, an entity leaving and coming back under a fresh id (no gaps), late and early-leaving
 entities, 20 Hz input thinned to 10 Hz, the embedded OpenDRIVE map and its map_reference,
-metadata records and channel metadata; and the write cost per frame with 20 objects."""
+metadata records and channel metadata; the frame layout following order, box and category
+changes, random entity churn decoded with betterosi frame by frame against its snapshots, an
+unclosed (killed) recording keeping its finished chunks; and the write cost per frame with 20
+objects."""
 
 from __future__ import annotations
 
 import dataclasses
 import math
+import random
 import time
 import warnings
 from pathlib import Path
@@ -251,6 +255,76 @@ def test_frame_layout_follows_order_box_and_category_changes(tmp_path: Path) -> 
             assert dimension == (expected.box.length, expected.box.width, expected.box.height)
             expected_class = 13 if expected.category == "bus" else 4
             assert obj.vehicle_classification.type == expected_class
+
+
+def random_state(rng: random.Random, entity_id: int) -> EntityState:
+    boxes = (CAR_BOX, PERSON_BOX, CONE_BOX, BoundingBox(length=0.0, width=0.0, height=0.0))
+    return EntityState(
+        id=entity_id, name=f"e{entity_id}", kind=rng.choice(list(EntityKind)),
+        category=rng.choice(("car", "truck", "animal", "obstacle")),
+        x=rng.uniform(-1e4, 1e4), y=rng.uniform(-1e3, 1e3), z=rng.uniform(-5.0, 5.0),
+        heading=rng.uniform(-20.0, 20.0), pitch=rng.choice((0.0, math.pi, 4.0)),
+        roll=rng.uniform(-7.0, 7.0), speed=rng.uniform(-5.0, 50.0),
+        acceleration=rng.uniform(-9.0, 3.0), lateral_speed=rng.uniform(-1.0, 1.0),
+        box=rng.choice(boxes),
+    )  # fmt: skip
+
+
+def test_random_churn_decodes_to_every_snapshot(tmp_path: Path) -> None:
+    """Entities appearing, leaving, coming back and changing order, box, kind and category at
+    random, with angles far outside [-pi, pi]: each frame decodes with betterosi to its own
+    snapshot, and ids follow the no-gaps rule (a returning entity gets a fresh id)."""
+    import betterosi
+
+    osi = betterosi.v3_7_0
+    rng = random.Random(7)
+    snapshots = [
+        WorldSnapshot(
+            time=k * 0.1,
+            entities=tuple(
+                random_state(rng, entity_id)
+                for entity_id in rng.sample(range(0, 300, 25), rng.randint(0, 12))
+            ),
+        )
+        for k in range(120)
+    ]
+    path = tmp_path / "churn.mcap"
+    with Recorder(path, info=RecordingInfo(scenario_id="s", seed=0)) as recorder:
+        for snapshot in snapshots:
+            recorder.write(snapshot)
+    with path.open("rb") as stream:
+        frames = [
+            osi.GroundTruth.from_binary(message.data)
+            for _, _, message in make_reader(stream).iter_messages(topics=["ground_truth"])
+        ]
+    assert len(frames) == len(snapshots)
+    ids: dict[int, int] = {}
+    previous: set[int] = set()
+    reissued = 0
+    for frame, snapshot in zip(frames, snapshots, strict=True):
+        assert len(frame.moving_object) == len(snapshot.entities)
+        for obj, state in zip(frame.moving_object, snapshot.entities, strict=True):
+            if state.id in ids and state.id not in previous:  # back after a gap
+                reissued += 1
+                assert obj.id.value >= 1_000_000_000
+                assert obj.id.value not in ids.values()
+            else:
+                assert obj.id.value == ids.get(state.id, state.id)
+            ids[state.id] = obj.id.value
+            base = obj.base
+            position = (base.position.x, base.position.y, base.position.z)
+            assert position == pytest.approx(state.box_center(), abs=1e-9)
+            assert (base.velocity.x, base.velocity.y) == pytest.approx(state.velocity())
+            orientation = (base.orientation.roll, base.orientation.pitch, base.orientation.yaw)
+            assert all(-math.pi <= angle <= math.pi for angle in orientation)
+            angles = (state.roll, state.pitch, state.heading)
+            assert orientation == pytest.approx([math.remainder(a, math.tau) for a in angles])
+            assert base.dimension.length == max(state.box.length, 0.01)
+            animal = state.kind is EntityKind.PEDESTRIAN and state.category == "animal"
+            kinds = {EntityKind.VEHICLE: 2, EntityKind.PEDESTRIAN: 3, EntityKind.MISC_OBJECT: 1}
+            assert obj.type == (4 if animal else kinds[state.kind])
+        previous = {state.id for state in snapshot.entities}
+    assert reissued > 10
 
 
 def test_unclosed_recording_keeps_its_finished_chunks(tmp_path: Path) -> None:

@@ -102,7 +102,8 @@ _GAPS = _dynamic_gaps()
 
 @dataclasses.dataclass(frozen=True, slots=True)
 class ObjectLayout:
-    """The constant parts of one moving object's encoding; only the kinematics change per frame."""
+    """The constant parts of one moving object's encoding; the kinematics that change every frame
+    are packed between them by :class:`FrameLayout`."""
 
     prefix: bytes
     """GroundTruth field 5's tag and length, the id, BaseMoving's tag and length, dimension."""
@@ -139,6 +140,7 @@ _VERSION_FIELD = length_delimited(
     + varint_field(3, OSI_VERSION[2]),
 )
 _TIMESTAMP_KEY = key(2, _LENGTH)
+_SECONDS_KEY, _NANOS_KEY = key(1, _VARINT), key(2, _VARINT)
 
 
 @dataclasses.dataclass(frozen=True, slots=True)
@@ -184,14 +186,11 @@ def frame_layout(
     )
 
 
-def ground_truth_head(*, nanos: int, host_id: int | None = None) -> bytes:
-    """GroundTruth version(1), timestamp(2), host_vehicle_id(3): what precedes moving objects."""
+def ground_truth_head(*, nanos: int) -> bytes:
+    """GroundTruth version(1) and timestamp(2); host_vehicle_id(3) follows from the layout."""
     seconds, nanos = divmod(nanos, 1_000_000_000)
-    timestamp = b"\x08" + varint(seconds) + b"\x10" + varint(nanos)
-    head = _VERSION_FIELD + _TIMESTAMP_KEY + bytes((len(timestamp),)) + timestamp
-    if host_id is not None:
-        head += length_delimited(3, identifier(host_id))
-    return head
+    timestamp = _SECONDS_KEY + varint(seconds) + _NANOS_KEY + varint(nanos)
+    return _VERSION_FIELD + _TIMESTAMP_KEY + varint(len(timestamp)) + timestamp
 
 
 def ground_truth_tail(*, country_code: int, map_reference: str) -> bytes:
