@@ -22,7 +22,7 @@ from typing import Any
 
 import pytest
 
-from simtest_operator.operator import jobviews, observed, provisioning, requests
+from simtest_operator.operator import helmfileteardown, jobviews, observed, provisioning, requests
 from simtest_operator.operator.actions import Delete, Emit, Kind, PatchStatus, RunHelmfile
 from simtest_operator.operator.configuration import OperatorConfig
 from simtest_operator.operator.environments import Limits, Phase
@@ -388,7 +388,7 @@ def batch() -> observed.BatchView:
 def teardown(view: observed.EnvironmentView, *jobs: jobviews.JobView) -> tuple[Any, ...]:
     spec = campaign().spec
     assert spec is not None
-    return provisioning.teardown(
+    return helmfileteardown.teardown(
         spec,
         view,
         jobs={j.name: j for j in jobs},
@@ -400,7 +400,7 @@ def teardown(view: observed.EnvironmentView, *jobs: jobviews.JobView) -> tuple[A
 
 def test_finished_environment_gets_a_destroy_job_owned_by_its_batch() -> None:
     view = env(FINISHED)
-    assert not provisioning.torn_down(view, {})
+    assert not helmfileteardown.torn_down(view, {})
     (action,) = teardown(view, job(state="complete"))
     assert isinstance(action, RunHelmfile) and action.config_map_owned_by_job
     assert action.job["metadata"]["name"] == f"{NAME}-hf-destroy"
@@ -411,7 +411,7 @@ def test_finished_environment_gets_a_destroy_job_owned_by_its_batch() -> None:
     recorded = env(
         {**FINISHED, "jobs": {"sync": f"{NAME}-hf-sync", "destroy": f"{NAME}-hf-destroy"}}
     )
-    assert provisioning.torn_down(recorded, {})
+    assert helmfileteardown.torn_down(recorded, {})
     assert teardown(recorded) == ()
 
 
@@ -424,7 +424,7 @@ def test_running_sync_is_stopped_before_destroying() -> None:
 def test_nothing_to_destroy_when_nothing_was_applied() -> None:
     failed = env({"phase": "Finished", "verdict": "Error", "reason": "x"})
     assert teardown(failed) == ()
-    assert provisioning.torn_down(failed, {})
+    assert helmfileteardown.torn_down(failed, {})
     assert teardown(env(PROVISIONED)) == ()  # still running: no teardown yet
 
 
@@ -437,7 +437,7 @@ def test_finished_destroy_jobs_are_deleted_failed_ones_reported() -> None:
     done = job("destroy", state="complete")
     broken = job("destroy", state="failed", name="other-hf-destroy")
     running = job("destroy", name="third-hf-destroy")
-    actions = provisioning.collect(
+    actions = helmfileteardown.collect(
         (done, broken, running),
         pods={"p": job_pod("other-hf-destroy", "Error: uninstall: timed out")},
         batches=(batch(),),

@@ -24,6 +24,7 @@ from simtest_operator.operator import (
     campaignstatus,
     cancelling,
     environmentstatus,
+    helmfileteardown,
     names,
     observed,
     provisioning,
@@ -159,7 +160,7 @@ class _Step:
         for env in self.envs:
             self._environment(env, assessments[env.name])
         self.actions.extend(
-            provisioning.teardowns(
+            helmfileteardown.teardowns(
                 self.spec,
                 self.envs,
                 jobs=self.inputs.jobs,
@@ -311,7 +312,7 @@ class _Step:
         if env.deleting or not env.finished or self.config.keep_finished_environments:
             return
         if all(scenario_id in folded for scenario_id in env.scenario_ids) and (
-            provisioning.torn_down(env, self.inputs.jobs)
+            helmfileteardown.torn_down(env, self.inputs.jobs)
         ):
             self.actions.append(Delete(kind=Kind.ENVIRONMENT, name=env.name, uid=env.uid))
             timings = assessment.timings

@@ -19,25 +19,25 @@ Lifecycle of a Helmfile environment (names from ``packaging.helmfilejobs``)::
     Finished      Job <env>-hf-destroy (owned by the ScenarioBatch, so it outlives the
                   environment) and its ConfigMap (owned by that Job); status: jobs.destroy.
                   Only then may the environment be deleted. A finished destroy Job is deleted
-                  (with its pod and ConfigMap); a failed one is reported as a Warning event.
+                  (with its pod and ConfigMap); a failed one is reported as a Warning event
+                  (the teardown half lives in :mod:`helmfileteardown`).
 """
 
 from __future__ import annotations
 
 import dataclasses
 import datetime
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Mapping
 from typing import Any
 
 from simtest_operator.api.v1alpha1 import API_VERSION, Provisioner, TestCampaignSpec
 from simtest_operator.errors import RenderError
-from simtest_operator.operator import bodies, environments, environmentstatus, names, requests
-from simtest_operator.operator.actions import Action, Delete, Emit, Kind, PatchStatus, RunHelmfile
+from simtest_operator.operator import bodies, environments, environmentstatus, names
+from simtest_operator.operator.actions import Action, Kind, PatchStatus, RunHelmfile
 from simtest_operator.operator.configuration import OperatorConfig
 from simtest_operator.operator.environments import Assessment, Limits, Phase
 from simtest_operator.operator.jobviews import JobView
 from simtest_operator.operator.observed import (
-    BatchView,
     EnvironmentView,
     NodeView,
     PodView,
@@ -92,7 +92,7 @@ def assess(
         if judged.ended or job is None or not job.failed:
             return judged
         # The simulator started but the rest of the stack did not install: not a usable run.
-        return _error(env, _failure(job, pods), now=now, delete_pod=True, node=pod.node_name)
+        return _error(env, job_failure(job, pods), now=now, delete_pod=True, node=pod.node_name)
     queued = env.timings.queued or env.created
     timings = dataclasses.replace(env.timings, queued=queued)
     if job is None:
@@ -106,7 +106,7 @@ def assess(
             now=now,
         )
     if job.failed:
-        return _error(env, _failure(job, pods), now=now)
+        return _error(env, job_failure(job, pods), now=now)
     if job.succeeded:
         since = job.finished_at or now
         grace_end = since + datetime.timedelta(seconds=limits.missing_grace)
@@ -136,7 +136,7 @@ def assess(
     )
 
 
-def _failure(job: JobView, pods: Mapping[str, PodView]) -> str:
+def job_failure(job: JobView, pods: Mapping[str, PodView]) -> str:
     """Why a Job failed: its condition and the termination message of its last pod (helmfile's
     output tail, through ``FallbackToLogsOnError``)."""
     ran = sorted(
@@ -233,7 +233,7 @@ def identities(
     )
 
 
-def _request(
+def job_request(
     env: EnvironmentView,
     *,
     action: JobAction,
@@ -279,7 +279,7 @@ def provision(
     if problem:
         return _failed(env, problem, now=now)
     assert rendered.helmfile is not None
-    request = _request(
+    request = job_request(
         env,
         action=JobAction.SYNC,
         helmfile=rendered.helmfile,
@@ -320,125 +320,3 @@ def _failed(env: EnvironmentView, reason: str, *, now: datetime.datetime) -> Pat
         env.scenario_ids, attempt=env.attempt, reason=reason, now=now
     )
     return PatchStatus(kind=Kind.ENVIRONMENT, name=env.name, patch=status)
-
-
-# --- teardown ----------------------------------------------------------------------------------
-
-
-def _applied(env: EnvironmentView, jobs: Mapping[str, JobView]) -> bool:
-    """Whether a sync Job was (possibly) created, so there may be releases to destroy."""
-    return env.sync_job is not None or sync_job(env) in jobs
-
-
-def torn_down(env: EnvironmentView, jobs: Mapping[str, JobView]) -> bool:
-    """Whether the environment object may go: nothing to destroy, or the destroy Job exists
-    (it is owned by the batch and runs on without the environment)."""
-    return env.destroy_job is not None or not _applied(env, jobs)
-
-
-def teardown(
-    spec: TestCampaignSpec,
-    env: EnvironmentView,
-    *,
-    jobs: Mapping[str, JobView],
-    batch: BatchView | None,
-    render: Renderer,
-    config: OperatorConfig,
-) -> tuple[Action, ...]:
-    """Actions that destroy the releases of an ended (or deleted) Helmfile environment."""
-    if not (env.finished or env.deleting) or not _applied(env, jobs):
-        return ()
-    if env.destroy_job is not None or destroy_job(env) in jobs:
-        return ()
-    sync = jobs.get(sync_job(env))
-    if sync is not None and not sync.done and not sync.deleting and not env.deleting:
-        # helm must not install while it uninstalls: stop the sync first (its pod goes with it).
-        return (Delete(kind=Kind.JOB, name=sync.name, uid=sync.uid),)
-    if sync is not None and not sync.done:
-        return ()
-    if batch is None or not config.helmfile_image:
-        return ()
-    request = requests.environment_request(spec, env, config=config)
-    try:
-        rendered = render(request)
-        if rendered.helmfile is None:
-            return ()
-        job_request = _request(
-            env,
-            action=JobAction.DESTROY,
-            helmfile=rendered.helmfile,
-            owner=Owner(
-                api_version=API_VERSION, kind="ScenarioBatch", name=batch.name, uid=batch.uid
-            ),
-            spec=spec,
-            config=config,
-        )
-        job = helmfilejobs.job(job_request)
-        config_map = helmfilejobs.config_map(job_request)
-    except RenderError:
-        return ()
-    return (
-        RunHelmfile(
-            environment=env.name,
-            job=job,
-            config_map=config_map,
-            config_map_owned_by_job=True,
-            status=None if env.deleting else {"jobs": {"destroy": job["metadata"]["name"]}},
-            scenario_ids=env.scenario_ids,
-            attempt=env.attempt,
-        ),
-    )
-
-
-def teardowns(
-    spec: TestCampaignSpec,
-    envs: Iterable[EnvironmentView],
-    *,
-    jobs: Mapping[str, JobView],
-    pods: Mapping[str, PodView],
-    batches: Iterable[BatchView],
-    render: Renderer,
-    config: OperatorConfig,
-) -> tuple[Action, ...]:
-    """Every teardown action of one planning step: destroy Jobs for ended environments, and the
-    clean-up of finished destroy Jobs."""
-    by_name = {b.name: b for b in batches}
-    actions: list[Action] = []
-    for env in envs:
-        actions.extend(
-            teardown(
-                spec, env, jobs=jobs, batch=by_name.get(env.batch), render=render, config=config
-            )
-        )
-    actions.extend(collect(jobs.values(), pods=pods, batches=by_name.values()))
-    return tuple(actions)
-
-
-def collect(
-    jobs: Iterable[JobView], *, pods: Mapping[str, PodView], batches: Iterable[BatchView]
-) -> tuple[Action, ...]:
-    """Delete finished destroy Jobs (their pods and ConfigMaps go with them); a failed one is
-    reported on its batch first, with helmfile's output tail, since the Job's pod goes too."""
-    by_name = {b.name: b for b in batches}
-    actions: list[Action] = []
-    for job in jobs:
-        if job.action != JobAction.DESTROY.value or not job.done or job.deleting:
-            continue
-        if job.failed:
-            batch = by_name.get(job.batch)
-            if batch is not None:
-                actions.append(
-                    Emit(
-                        kind=Kind.BATCH,
-                        name=batch.name,
-                        uid=batch.uid,
-                        reason="HelmfileDestroyFailed",
-                        message=_failure(job, pods)
-                        + f"; releases of {job.environment} may remain (helm list -n "
-                        f"{job.namespace})",
-                        warning=True,
-                        terminal=True,
-                    )
-                )
-        actions.append(Delete(kind=Kind.JOB, name=job.name, uid=job.uid))
-    return tuple(actions)
