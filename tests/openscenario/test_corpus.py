@@ -17,7 +17,6 @@ from simtest_operator.errors import ScenarioError
 from simtest_operator.openscenario import FileKind, expand_distribution, file_kind, load_scenario
 
 EXPECTED_UNSUPPORTED = {
-    "TrafficAction": "swarm.xosc",
     "Trailer": "trailers.xosc",
     "TrailerAction": "trailer_connect.xosc",
 }

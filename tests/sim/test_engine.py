@@ -49,9 +49,9 @@ def test_open_space_scenario_runs(tmp_path: Path) -> None:
 
 
 def test_unsupported_element_is_invalid_with_element_and_line(tmp_path: Path) -> None:
-    outcome = run("swarm.xosc", tmp_path).outcome
+    outcome = run("trailer_connect.xosc", tmp_path).outcome
     assert outcome.verdict is Verdict.INVALID
-    assert "<TrafficAction>" in outcome.reason and "line 33" in outcome.reason
+    assert "<TrailerAction>" in outcome.reason and "line 109" in outcome.reason
 
 
 def test_ignored_elements_are_listed(tmp_path: Path) -> None:

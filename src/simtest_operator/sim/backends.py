@@ -15,7 +15,7 @@ SUMO adapter.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Protocol
 
@@ -80,6 +80,52 @@ class ActorState:
     front_offset: float
     external: bool = False
     """True for traffic the backend itself drives (not added by the engine)."""
+    category: str = "car"
+    """OpenSCENARIO vehicle category (meaningful for external traffic)."""
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class LaneSlot:
+    """A point on a lane where traffic can be inserted (sampled from the backend's network)."""
+
+    lane: str
+    """Backend lane id (SUMO ``<edge>_<index>``)."""
+    pos: float
+    """Distance along the lane (m)."""
+    x: float
+    y: float
+    heading: float
+    """Driving direction of the lane here (radians, OpenDRIVE convention)."""
+    max_speed: float
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class TrafficVehicle:
+    """A vehicle the engine asks the backend to insert and then drive on its own."""
+
+    name: str
+    category: str
+    slot: LaneSlot
+    speed: float | None
+    """Initial and desired speed (m/s); None: the lane's speed limit (with the backend's usual
+    spread). The backend inserts at most as fast as is safe behind the vehicle ahead."""
+
+
+class TrafficHost(Protocol):
+    """The part of a backend that drives traffic of its own (SUMO's driver models)."""
+
+    def slots(self) -> Sequence[LaneSlot]:
+        """Insertion points along every lane, a few metres apart (computed once per run)."""
+
+    def allows(self, lane: str, category: str) -> bool:
+        """Whether vehicles of ``category`` may drive on ``lane``."""
+
+    def spawn(self, vehicle: TrafficVehicle) -> None:
+        """Insert ``vehicle`` for the coming step; it appears in :meth:`Backend.states` (as
+        external) after the step if the insertion succeeded, and is dropped otherwise."""
+
+    def remove(self, name: str) -> None:
+        """Take external vehicle ``name`` out of the world for the coming step."""
 
 
 class Backend(Protocol):
@@ -102,3 +148,6 @@ class Backend(Protocol):
 
     def close(self) -> None:
         """Release the simulator; safe to call twice."""
+
+    def traffic(self) -> TrafficHost | None:
+        """The backend's traffic control, or None when it cannot drive traffic itself."""

@@ -19,10 +19,12 @@ from simtest_operator.errors import ScenarioError
 from simtest_operator.openscenario import model
 from simtest_operator.sim import positions, routes, routing
 from simtest_operator.sim.actors import Actor, Domain, Mode
+from simtest_operator.sim.backends import TrafficHost
 from simtest_operator.sim.following import DistanceRun, SynchronizeRun
 from simtest_operator.sim.lateral import LaneChangeRun, LaneOffsetRun, LateralDistanceRun
 from simtest_operator.sim.runs import Done, Run
 from simtest_operator.sim.speeds import SpeedProfileRun, SpeedRun, target_speed
+from simtest_operator.sim.traffic import Traffic
 from simtest_operator.sim.trajectories import PathRun
 from simtest_operator.sim.world import World
 
@@ -39,10 +41,20 @@ _SUT_LONGITUDINAL = (
 class Dispatcher:
     """Starts actions on actors and keeps the per-actor, per-domain registry of runs."""
 
-    __slots__ = ("_active", "_ego", "_switch", "_world", "assigned")
+    __slots__ = ("_active", "_ego", "_host", "_switch", "_traffic", "_world", "assigned")
 
-    def __init__(self, world: World, *, ego: str | None, switch: ControllerSwitch) -> None:
+    def __init__(
+        self,
+        world: World,
+        *,
+        ego: str | None,
+        switch: ControllerSwitch,
+        traffic: Traffic | None = None,
+        host: TrafficHost | None = None,
+    ) -> None:
         self._world = world
+        self._traffic = traffic if traffic is not None else Traffic(seed=0)
+        self._host = host
         self._ego = ego
         self._switch = switch
         self._active: dict[str, dict[Domain, Run]] = {}
@@ -105,6 +117,16 @@ class Dispatcher:
             return Done()
         if isinstance(body, model.TrafficSignalStateAction):
             world.signals[body.name] = body.state
+            return Done()
+        if isinstance(
+            body,
+            model.TrafficSwarmAction
+            | model.TrafficSourceAction
+            | model.TrafficSinkAction
+            | model.TrafficStopAction,
+        ):
+            # Traffic persists after its action completes, until a TrafficStopAction.
+            self._traffic.start(world, self._host, body)
             return Done()
         if isinstance(body, model.IgnoredAction):
             self._ignore(body.kind)

@@ -26,6 +26,7 @@ from simtest_operator.sim.conditions import Conditions
 from simtest_operator.sim.dispatch import Dispatcher
 from simtest_operator.sim.storyboard import Storyboard
 from simtest_operator.sim.sut import DriverModel, SutConfig, Takeover
+from simtest_operator.sim.traffic import Traffic
 from simtest_operator.sim.trajectories import PathRun
 from simtest_operator.sim.world import World
 from simtest_operator.snapshots import BoundingBox, EntityKind, EntityState, WorldSnapshot
@@ -61,6 +62,7 @@ class Simulation:
         "_storyboard",
         "_sut",
         "_sut_engaged",
+        "_traffic",
         "ego",
         "world",
     )
@@ -88,7 +90,14 @@ class Simulation:
             parameters={p.name: p.value for p in scenario.parameters},
             variables={v.name: v.value for v in scenario.variables},
         )
-        self._dispatcher = Dispatcher(self.world, ego=self.ego, switch=self._switch_driver)
+        self._traffic = Traffic(seed=backend_config.seed)
+        self._dispatcher = Dispatcher(
+            self.world,
+            ego=self.ego,
+            switch=self._switch_driver,
+            traffic=self._traffic,
+            host=backend.traffic(),
+        )
         header = scenario.header
         self._conditions = Conditions(
             self.world,
@@ -270,19 +279,25 @@ class Simulation:
             backend.place(
                 state.name, x=state.x, y=state.y, heading=state.heading, speed=state.speed
             )
+        host = backend.traffic()
+        if self._traffic.active and host is not None:
+            self._traffic.update(self.world, host, entities, backend.states())
         backend.step()
+        traffic: list[EntityState] = []
         for other in backend.states().values():
             if not other.external:
                 continue
+            # Ids follow first appearance and are never reused: a vehicle that leaves retires
+            # its id, so every id's frames are contiguous.
             ident = self._external_ids.setdefault(
                 other.name, len(self.world.actors) + len(self._external_ids)
             )
-            entities.append(
+            traffic.append(
                 EntityState(
                     id=ident,
                     name=other.name,
                     kind=EntityKind.VEHICLE,
-                    category="car",
+                    category=other.category,
                     x=other.x,
                     y=other.y,
                     heading=other.heading,
@@ -294,7 +309,8 @@ class Simulation:
                     ),
                 )
             )
-        return WorldSnapshot(time=self.world.time, entities=tuple(entities))
+        self.world.traffic = tuple(traffic)
+        return WorldSnapshot(time=self.world.time, entities=(*entities, *traffic))
 
 
 __all__ = ["Simulation", "pick_ego"]

@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 from simtest_operator.errors import SimulationError
-from simtest_operator.sim.backends import ActorSpec, ActorState, BackendConfig
+from simtest_operator.sim.backends import ActorSpec, ActorState, BackendConfig, TrafficHost
 
 
 class MemoryBackend:
@@ -55,3 +55,7 @@ class MemoryBackend:
 
     def close(self) -> None:
         self._config = None
+
+    def traffic(self) -> TrafficHost | None:
+        """None: nothing here drives vehicles of its own (traffic actions become Invalid)."""
+        return None

@@ -2,7 +2,8 @@
 
 On the same road the gap is measured along the road (so curves do not hide the leader) and
 "in path" means the lateral footprints overlap; elsewhere the straight corridor ahead of the ego
-(shared geometry) decides. Only entities within the sensor range count.
+(shared geometry) decides. Only entities within the sensor range count. Anonymous traffic (driven
+by the backend) is perceived like any other road user, through the straight corridor.
 """
 
 from __future__ import annotations
@@ -51,5 +52,15 @@ def leader(world: World, ego: Actor, sensor_range: float) -> Leader | None:
         if gap > sensor_range or (best is not None and gap >= best.gap):
             continue
         speed = other.speed * math.cos(other.heading - ego.heading)
+        best = Leader(gap=max(gap, 0.0), speed=speed)
+    for vehicle in world.traffic:
+        if not geometry.in_path(ego_state, vehicle):
+            continue
+        if geometry.longitudinal_gap(ego_state, vehicle, freespace=False) <= 0.0:
+            continue
+        gap = geometry.longitudinal_gap(ego_state, vehicle, freespace=True)
+        if gap > sensor_range or (best is not None and gap >= best.gap):
+            continue
+        speed = vehicle.speed * math.cos(vehicle.heading - ego.heading)
         best = Leader(gap=max(gap, 0.0), speed=speed)
     return best

@@ -23,13 +23,21 @@ import contextlib
 import io
 import math
 import re
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from types import ModuleType
 from typing import Any
 
 from simtest_operator.errors import SimulationError
-from simtest_operator.sim.backends import ActorSpec, ActorState, BackendConfig
+from simtest_operator.sim.backends import (
+    ActorSpec,
+    ActorState,
+    BackendConfig,
+    LaneSlot,
+    TrafficHost,
+    TrafficVehicle,
+)
+from simtest_operator.sim.sumotraffic import SumoTraffic, category_of_vclass
 from simtest_operator.snapshots import EntityKind
 
 _ROUTE_ID = "simtest_route"
@@ -83,11 +91,13 @@ class SumoBackend:
         "_external",
         "_lib",
         "_mirror",
+        "_mirror_setting",
         "_offset",
         "_placed",
         "_specs",
         "_speeds",
         "_started",
+        "_traffic",
     )
 
     def __init__(self) -> None:
@@ -95,7 +105,10 @@ class SumoBackend:
         self._specs: dict[str, ActorSpec] = {}
         self._placed: dict[str, ActorState] = {}
         self._speeds: dict[str, float] = {}
-        self._external: dict[str, tuple[float, float]] = {}
+        self._external: dict[str, tuple[float, float, str]] = {}
+        """External vehicles: name -> (length, width, category)."""
+        self._traffic: SumoTraffic | None = None
+        self._mirror_setting: bool | None = None
         self._offset = (0.0, 0.0)
         self._started = False
         self._mirror = False
@@ -147,9 +160,11 @@ class SumoBackend:
             raise SimulationError(f"SUMO failed to start: {exc}") from exc
         self._lib = lib
         self._offset = read_net_offset(net) if net is not None else (0.0, 0.0)
+        self._mirror_setting = config.mirror
         self._mirror = (
             config.mirror if config.mirror is not None else config.sumo_config is not None
         )
+        self._traffic = SumoTraffic(lib, offset=self._offset, seed=config.seed)
         self._started = True
 
     def add(self, spec: ActorSpec) -> None:
@@ -210,13 +225,21 @@ class SumoBackend:
         if self._mirror:
             self._push()
         try:
+            if self._traffic is not None:
+                self._traffic.flush()
             lib.simulationStep()
-            for vid in lib.simulation.getDepartedIDList():
+            departed = lib.simulation.getDepartedIDList()
+            spawned = self._traffic.settle(departed) if self._traffic is not None else {}
+            for vid in departed:
                 if vid not in self._added:
                     lib.vehicle.subscribe(vid, _SUBSCRIBED)
+                    category = spawned.get(vid) or category_of_vclass(
+                        lib.vehicle.getVehicleClass(vid)
+                    )
                     self._external[vid] = (
                         lib.vehicle.getLength(vid),
                         lib.vehicle.getWidth(vid),
+                        category,
                     )
             for vid in lib.simulation.getArrivedIDList():
                 self._external.pop(vid, None)
@@ -233,7 +256,7 @@ class SumoBackend:
             dims = self._external.get(vid)
             if dims is None:
                 continue
-            length, width = dims
+            length, width, category = dims
             heading = odr_heading(values[_ANGLE])
             front_x, front_y = values[_POSITION]
             half = length / 2.0
@@ -247,6 +270,7 @@ class SumoBackend:
                 width=width,
                 front_offset=half,
                 external=True,
+                category=category,
             )
         return result
 
@@ -254,11 +278,39 @@ class SumoBackend:
         if self._started and self._lib is not None:
             self._close_quietly(self._lib)
         self._started = False
+        self._traffic = None
         self._specs.clear()
         self._added.clear()
         self._placed.clear()
         self._external.clear()
         self._speeds.clear()
+
+    # --- traffic (TrafficHost) -----------------------------------------------------------------
+
+    def traffic(self) -> TrafficHost | None:
+        """This backend: SUMO drives traffic on the network (usable once started)."""
+        return self
+
+    def slots(self) -> Sequence[LaneSlot]:
+        return self._require_traffic().slots()
+
+    def allows(self, lane: str, category: str) -> bool:
+        return self._require_traffic().allows(lane, category)
+
+    def spawn(self, vehicle: TrafficVehicle) -> None:
+        self._require_traffic().spawn(vehicle)
+        # SUMO traffic must see the scenario entities to react to them.
+        if self._mirror_setting is None:
+            self._mirror = True
+
+    def remove(self, name: str) -> None:
+        self._require_traffic().remove(name)
+        self._external.pop(name, None)
+
+    def _require_traffic(self) -> SumoTraffic:
+        self._require()
+        assert self._traffic is not None
+        return self._traffic
 
     def _require(self) -> Any:
         if not self._started:

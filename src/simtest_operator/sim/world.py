@@ -33,6 +33,7 @@ class World:
         "roads",
         "signals",
         "time",
+        "traffic",
         "variables",
     )
 
@@ -58,6 +59,8 @@ class World:
         self.signals: dict[str, str] = {}
         """Traffic signal states by signal name (as TrafficSignalStateActions set them)."""
         self._states: dict[str, EntityState] = {}
+        self.traffic: tuple[EntityState, ...] = ()
+        """Vehicles the backend drives (anonymous traffic) as of the last step."""
 
     def actor(self, name: str) -> Actor:
         try:

@@ -25,6 +25,7 @@ from simtest_operator.openscenario.model.controls import (
     TrafficSignalStateAction,
 )
 from simtest_operator.openscenario.model.positions import Position, Route
+from simtest_operator.openscenario.model.traffic import TrafficAction
 from simtest_operator.openscenario.model.trajectories import Trajectory
 
 
@@ -345,10 +346,15 @@ PrivateAction = (
 """Private actions; OverrideControllerValue, RandomRoute and Trailer actions are Unsupported."""
 
 GlobalAction = (
-    SetValueAction | ModifyValueAction | TrafficSignalStateAction | IgnoredAction | Unsupported
+    SetValueAction
+    | ModifyValueAction
+    | TrafficSignalStateAction
+    | TrafficAction
+    | IgnoredAction
+    | Unsupported
 )
-"""Global actions; Entity, traffic signal controller, Traffic, SetMonitor and UserDefined actions
-are Unsupported."""
+"""Global actions; Entity, traffic signal controller, TrafficArea, SetMonitor and UserDefined
+actions are Unsupported."""
 
 AnyAction = PrivateAction | GlobalAction
 

@@ -6,7 +6,7 @@ from simtest_operator.openscenario import reading
 from simtest_operator.openscenario.model import actions as a
 from simtest_operator.openscenario.model import common as m
 from simtest_operator.openscenario.model import controls as ctl
-from simtest_operator.openscenario.readers import controllers, positions, trajectories
+from simtest_operator.openscenario.readers import controllers, positions, traffic, trajectories
 from simtest_operator.xmlsafe import Element
 
 _PRIVATE_UNSUPPORTED = {
@@ -14,7 +14,6 @@ _PRIVATE_UNSUPPORTED = {
 }
 _GLOBAL_UNSUPPORTED = {
     "EntityAction": "adding/deleting entities at run time is not supported",
-    "TrafficAction": "traffic sources/sinks/swarms are not supported",
     "SetMonitorAction": "monitors are not supported",
 }
 
@@ -100,6 +99,8 @@ def global_(el: Element, ctx: reading.Context) -> a.GlobalAction:
                 line=chosen.sourceline,
             )
         raise ctx.error(inner, "expected SetAction or ModifyAction")
+    if tag == "TrafficAction":
+        return traffic.traffic_action(chosen, ctx)
     if tag == "InfrastructureAction":
         signal = ctx.choice(ctx.require(chosen, "TrafficSignalAction"))
         if signal.tag == "TrafficSignalStateAction":
