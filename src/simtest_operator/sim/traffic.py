@@ -43,6 +43,8 @@ LANE_CLEARANCE = 2.5
 about 3-3.75 m apart, so a vehicle in the next lane does not block)."""
 _TRIES = 12
 """Free lane points tried per vehicle (a lane may forbid its category) before giving up."""
+_EPSILON = 1e-9
+"""Tolerance of the fractional insert/remove budgets (0.1 added ten times is not quite 1)."""
 _DEFAULT = (model.CategoryWeight(category="car", weight=1.0),)
 
 
@@ -282,7 +284,7 @@ class Traffic:
                 )
             self._points[key] = (x, y, candidates)
         budget = min(self._budget[key] + action.rate * dt, max(1.0, action.rate))
-        while budget >= 1.0:
+        while budget >= 1.0 - _EPSILON:
             speed = action.speed
             if self._insert(generator, action, host, candidates, occupancy, speed) is None:
                 break
@@ -313,7 +315,7 @@ class Traffic:
             and (wanted is None or s.category in wanted)
         )
         for _, name in near:
-            if budget < 1.0:
+            if budget < 1.0 - _EPSILON:
                 break
             host.remove(name)
             del external[name]
