@@ -14,53 +14,61 @@ from simtest_operator import geometry
 from simtest_operator.sim.actors import Actor, Mode
 from simtest_operator.sim.sut import Leader
 from simtest_operator.sim.world import World
+from simtest_operator.snapshots import EntityState
 
 
 def leader(world: World, ego: Actor, sensor_range: float) -> Leader | None:
     """The nearest entity ahead of ``ego`` in its path, or None."""
-    best: Leader | None = None
     ego_state = world.state(ego.name)
     same_road = ego.mode is Mode.ROAD and ego.road_id is not None
     ego_t = 0.0
     if same_road:
         assert ego.road_id is not None
         ego_t = world.lane_t(ego.road_id, ego.s, ego.lane_id) + ego.offset
+    # (gap, or None when not ahead in the path; speed; heading) of every other road user
+    candidates: list[tuple[float | None, float, float]] = []
     for other in world.actors.values():
         if other is ego or not other.placed:
             continue
         if same_road and other.mode is Mode.ROAD and other.road_id == ego.road_id:
             assert ego.road_id is not None
-            other_t = world.lane_t(ego.road_id, other.s, other.lane_id) + other.offset
-            if abs(other_t - ego_t) >= (ego.box.width + other.box.width) / 2.0:
-                continue
-            ds = (other.s - ego.s) * ego.direction
-            rear = (
-                other.box.length - other.front_offset
-                if other.direction == ego.direction
-                else other.front_offset
-            )
-            gap = ds - ego.front_offset - rear
-            if ds <= 0.0:
-                continue
+            gap = _gap_along_road(world, ego, other, ego_t)
         else:
-            other_state = world.state(other.name)
-            if not geometry.in_path(ego_state, other_state):
-                continue
-            if geometry.longitudinal_gap(ego_state, other_state, freespace=False) <= 0.0:
-                continue
-            gap = geometry.longitudinal_gap(ego_state, other_state, freespace=True)
-        if gap > sensor_range or (best is not None and gap >= best.gap):
-            continue
-        speed = other.speed * math.cos(other.heading - ego.heading)
-        best = Leader(gap=max(gap, 0.0), speed=speed)
+            gap = _gap_in_corridor(ego_state, world.state(other.name))
+        candidates.append((gap, other.speed, other.heading))
     for vehicle in world.traffic:
-        if not geometry.in_path(ego_state, vehicle):
+        candidates.append((_gap_in_corridor(ego_state, vehicle), vehicle.speed, vehicle.heading))
+    best: Leader | None = None
+    for gap, speed, heading in candidates:
+        if gap is None or gap > sensor_range or (best is not None and gap >= best.gap):
             continue
-        if geometry.longitudinal_gap(ego_state, vehicle, freespace=False) <= 0.0:
-            continue
-        gap = geometry.longitudinal_gap(ego_state, vehicle, freespace=True)
-        if gap > sensor_range or (best is not None and gap >= best.gap):
-            continue
-        speed = vehicle.speed * math.cos(vehicle.heading - ego.heading)
-        best = Leader(gap=max(gap, 0.0), speed=speed)
+        best = Leader(gap=max(gap, 0.0), speed=speed * math.cos(heading - ego.heading))
     return best
+
+
+def _gap_along_road(world: World, ego: Actor, other: Actor, ego_t: float) -> float | None:
+    """Bumper gap along the shared road when the lateral footprints overlap and ``other`` is
+    ahead; None otherwise."""
+    assert ego.road_id is not None
+    other_t = world.lane_t(ego.road_id, other.s, other.lane_id) + other.offset
+    if abs(other_t - ego_t) >= (ego.box.width + other.box.width) / 2.0:
+        return None
+    ds = (other.s - ego.s) * ego.direction
+    if ds <= 0.0:
+        return None
+    rear = (
+        other.box.length - other.front_offset
+        if other.direction == ego.direction
+        else other.front_offset
+    )
+    return ds - ego.front_offset - rear
+
+
+def _gap_in_corridor(ego: EntityState, other: EntityState) -> float | None:
+    """Free-space gap to ``other`` in the straight corridor ahead of the ego; None when it is
+    not in that corridor or not ahead."""
+    if not geometry.in_path(ego, other):
+        return None
+    if geometry.longitudinal_gap(ego, other, freespace=False) <= 0.0:
+        return None
+    return geometry.longitudinal_gap(ego, other, freespace=True)
