@@ -17,6 +17,7 @@ from collections.abc import Callable, Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+import yaml
 from kubernetes import client
 
 REPO = Path(__file__).resolve().parents[2]
@@ -238,3 +239,68 @@ def running(operator: OperatorProcess) -> Iterator[OperatorProcess]:
         yield operator
     finally:
         operator.stop()
+
+
+def submit(
+    manifest: Path, *, namespace: str, kubeconfig: Path, timeout: int, extra: Sequence[str] = ()
+) -> subprocess.CompletedProcess[str]:
+    """``simtest submit MANIFEST --wait`` as a CI step runs it (a separate process)."""
+    return subprocess.run(
+        [
+            sys.executable,
+            "-c",
+            "from simtest_operator.cli.main import main; main()",
+            "submit",
+            str(manifest),
+            "--namespace",
+            namespace,
+            "--kubeconfig",
+            str(kubeconfig),
+            "--wait",
+            "--timeout",
+            str(timeout),
+            *extra,
+        ],
+        capture_output=True,
+        text=True,
+        timeout=timeout + 60,
+    )
+
+
+@contextlib.contextmanager
+def identity_kubeconfig(
+    documents: Sequence[Mapping[str, Any]],
+    *,
+    kubectl: Path,
+    kubeconfig: Path,
+    api: client.ApiClient,
+    namespace: str,
+    folder: Path,
+) -> Iterator[Path]:
+    """Apply RBAC ``documents`` (with one ServiceAccount) and yield a kubeconfig that acts as
+    that ServiceAccount (a short-lived token); the documents are deleted afterwards."""
+
+    manifest = folder / "rbac.yaml"
+    manifest.write_text(yaml.safe_dump_all([dict(d) for d in documents]))
+    admin = [str(kubectl), "--kubeconfig", str(kubeconfig)]
+    subprocess.run([*admin, "apply", "-f", str(manifest)], check=True, capture_output=True)
+    account = next(d for d in documents if d["kind"] == "ServiceAccount")
+    token = (
+        client.CoreV1Api(api)
+        .create_namespaced_service_account_token(
+            str(account["metadata"]["name"]), namespace, {"spec": {"expirationSeconds": 3600}}
+        )
+        .status.token
+    )
+    config = yaml.safe_load(kubeconfig.read_text())
+    config["users"][0]["user"] = {"token": token}
+    path = folder / "operator.kubeconfig"
+    path.write_text(yaml.safe_dump(config))
+    try:
+        yield path
+    finally:
+        subprocess.run(
+            [*admin, "delete", "-f", str(manifest), "--ignore-not-found"],
+            check=False,
+            capture_output=True,
+        )

@@ -9,8 +9,6 @@ ends ``Cancelled`` (``DeadlineExceeded``) and submit exits 2 with a one-line rea
 
 from __future__ import annotations
 
-import subprocess
-import sys
 import time
 from pathlib import Path
 from typing import Any
@@ -111,24 +109,11 @@ def test_deadline_through_submit_exits_2_with_the_reason(
         encoding="utf-8",
     )
     with support.running(operator):
-        submitted = subprocess.run(
-            [
-                sys.executable,
-                "-c",
-                "from simtest_operator.cli.main import main; main()",
-                "submit",
-                str(manifest),
-                "--namespace",
-                cluster.namespace,
-                "--kubeconfig",
-                str(kubeconfig_path),
-                "--wait",
-                "--timeout",
-                "120",
-            ],
-            capture_output=True,
-            text=True,
-            timeout=180,
+        submitted = support.submit(
+            manifest,
+            namespace=cluster.namespace,
+            kubeconfig=kubeconfig_path,
+            timeout=120,
         )
         status = cluster.status("deadline")
     output = submitted.stdout + submitted.stderr

@@ -75,42 +75,15 @@ def chart_identity(
         and d["metadata"].get("labels", {}).get("app.kubernetes.io/component")
         == "helmfile-provisioner"
     )
-    manifest = tmp_path / "rbac.yaml"
-    manifest.write_text(yaml.safe_dump_all(documents))
-    kubectl = str(dev_toolchain.binary("kubectl"))
-    subprocess.run(
-        [kubectl, "--kubeconfig", str(kubeconfig_path), "apply", "-f", str(manifest)],
-        check=True,
-        capture_output=True,
-    )
-    account = next(d for d in documents if d["kind"] == "ServiceAccount")
-    token = (
-        client.CoreV1Api(k8s_api_client)
-        .create_namespaced_service_account_token(
-            account["metadata"]["name"], k8s_namespace, {"spec": {"expirationSeconds": 3600}}
-        )
-        .status.token
-    )
-    config = yaml.safe_load(kubeconfig_path.read_text())
-    config["users"][0]["user"] = {"token": token}
-    path = tmp_path / "operator.kubeconfig"
-    path.write_text(yaml.safe_dump(config))
-    try:
+    with support.identity_kubeconfig(
+        documents,
+        kubectl=dev_toolchain.binary("kubectl"),
+        kubeconfig=kubeconfig_path,
+        api=k8s_api_client,
+        namespace=k8s_namespace,
+        folder=tmp_path,
+    ) as path:
         yield path, role
-    finally:
-        subprocess.run(
-            [
-                kubectl,
-                "--kubeconfig",
-                str(kubeconfig_path),
-                "delete",
-                "-f",
-                str(manifest),
-                "--ignore-not-found",
-            ],
-            check=False,
-            capture_output=True,
-        )
 
 
 def test_helmfile_provisioner_syncs_runs_and_destroys(

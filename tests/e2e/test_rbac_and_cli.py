@@ -10,7 +10,6 @@ testcase per scenario; ``kubectl wait --for=condition=Complete`` returns when it
 from __future__ import annotations
 
 import subprocess
-import sys
 import xml.etree.ElementTree as ET
 from collections.abc import Iterator
 from pathlib import Path
@@ -78,43 +77,15 @@ def chart_kubeconfig(
         "RoleBinding",
         "ServiceAccount",
     ], kinds
-    manifest = tmp_path / "rbac.yaml"
-    manifest.write_text(yaml.safe_dump_all(documents))
-    kubectl = str(dev_toolchain.binary("kubectl"))
-    subprocess.run(
-        [kubectl, "--kubeconfig", str(kubeconfig_path), "apply", "-f", str(manifest)],
-        check=True,
-        capture_output=True,
-    )
-    account = next(d for d in documents if d["kind"] == "ServiceAccount")
-    name = str(account["metadata"]["name"])  # type: ignore[index]
-    token = (
-        client.CoreV1Api(k8s_api_client)
-        .create_namespaced_service_account_token(
-            name, k8s_namespace, {"spec": {"expirationSeconds": 3600}}
-        )
-        .status.token
-    )
-    config = yaml.safe_load(kubeconfig_path.read_text())
-    config["users"][0]["user"] = {"token": token}
-    path = tmp_path / "operator.kubeconfig"
-    path.write_text(yaml.safe_dump(config))
-    try:
+    with support.identity_kubeconfig(
+        documents,
+        kubectl=dev_toolchain.binary("kubectl"),
+        kubeconfig=kubeconfig_path,
+        api=k8s_api_client,
+        namespace=k8s_namespace,
+        folder=tmp_path,
+    ) as path:
         yield path
-    finally:
-        subprocess.run(
-            [
-                kubectl,
-                "--kubeconfig",
-                str(kubeconfig_path),
-                "delete",
-                "-f",
-                str(manifest),
-                "--ignore-not-found",
-            ],
-            check=False,
-            capture_output=True,
-        )
 
 
 def test_operator_runs_with_exactly_the_chart_rbac(
@@ -147,26 +118,12 @@ def test_submit_wait_junit_and_kubectl_wait(
     manifest.write_text(yaml.safe_dump(support.campaign("submitted", execution={"maxParallel": 3})))
     report = tmp_path / "junit.xml"
     with support.running(operator):
-        submitted = subprocess.run(
-            [
-                sys.executable,
-                "-c",
-                "from simtest_operator.cli.main import main; main()",
-                "submit",
-                str(manifest),
-                "--namespace",
-                cluster.namespace,
-                "--kubeconfig",
-                str(kubeconfig_path),
-                "--wait",
-                "--timeout",
-                "90",
-                "--junit",
-                str(report),
-            ],
-            capture_output=True,
-            text=True,
-            timeout=120,
+        submitted = support.submit(
+            manifest,
+            namespace=cluster.namespace,
+            kubeconfig=kubeconfig_path,
+            timeout=90,
+            extra=["--junit", str(report)],
         )
         waited = subprocess.run(
             [
