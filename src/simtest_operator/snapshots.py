@@ -80,6 +80,79 @@ class EntityState:
         )
 
 
+# The slot descriptors' setters, in field order (unpacking fails loudly if a field is added).
+(
+    _set_id,
+    _set_name,
+    _set_kind,
+    _set_category,
+    _set_x,
+    _set_y,
+    _set_z,
+    _set_heading,
+    _set_pitch,
+    _set_roll,
+    _set_speed,
+    _set_acceleration,
+    _set_lateral_speed,
+    _set_box,
+    _set_road_id,
+    _set_lane_id,
+    _set_s,
+    _set_t,
+) = (getattr(EntityState, field.name).__set__ for field in dataclasses.fields(EntityState))
+
+
+def fast_entity_state(
+    id: int,
+    name: str,
+    kind: EntityKind,
+    category: str,
+    x: float,
+    y: float,
+    z: float,
+    heading: float,
+    pitch: float,
+    roll: float,
+    speed: float,
+    acceleration: float,
+    lateral_speed: float,
+    box: BoundingBox,
+    road_id: str | None,
+    lane_id: int | None,
+    s: float | None,
+    t: float | None,
+    /,
+) -> EntityState:
+    """The same value as ``EntityState(id=id, name=name, ...)``, built about three times faster.
+
+    For the simulator's per-step hot path, which builds every entity's state each step: the
+    dataclass ``__init__`` of a frozen slotted class goes through ``object.__setattr__`` per
+    field with keyword arguments; this sets the slots directly. The result is an ordinary
+    :class:`EntityState` (frozen, same equality, hash and repr).
+    """
+    state: EntityState = object.__new__(EntityState)
+    _set_id(state, id)
+    _set_name(state, name)
+    _set_kind(state, kind)
+    _set_category(state, category)
+    _set_x(state, x)
+    _set_y(state, y)
+    _set_z(state, z)
+    _set_heading(state, heading)
+    _set_pitch(state, pitch)
+    _set_roll(state, roll)
+    _set_speed(state, speed)
+    _set_acceleration(state, acceleration)
+    _set_lateral_speed(state, lateral_speed)
+    _set_box(state, box)
+    _set_road_id(state, road_id)
+    _set_lane_id(state, lane_id)
+    _set_s(state, s)
+    _set_t(state, t)
+    return state
+
+
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
 class WorldSnapshot:
     """All entities at one simulated instant, ``time`` seconds after the scenario start."""

@@ -11,10 +11,11 @@ from __future__ import annotations
 
 import enum
 import math
+import operator
 
 from simtest_operator.openscenario import model
 from simtest_operator.sim.sut import DriverModel
-from simtest_operator.snapshots import BoundingBox, EntityKind, EntityState
+from simtest_operator.snapshots import BoundingBox, EntityKind, EntityState, fast_entity_state
 
 
 class Mode(enum.StrEnum):
@@ -36,6 +37,8 @@ class Actor:
     """One entity during a run (OpenDRIVE conventions, reference point)."""
 
     __slots__ = (
+        "_state",
+        "_state_inputs",
         "acceleration",
         "box",
         "category",
@@ -114,6 +117,8 @@ class Actor:
         distance driven (esmini), not added to it."""
         self.driver: DriverModel | None = None
         """Set while the system-under-test driver model controls this actor."""
+        self._state: EntityState | None = None
+        self._state_inputs: tuple[object, ...] = ()
 
     @property
     def front_offset(self) -> float:
@@ -121,24 +126,58 @@ class Actor:
         return self.box.center_x + self.box.length / 2.0
 
     def state(self) -> EntityState:
-        """A frozen snapshot of this actor."""
-        return EntityState(
-            id=self.id,
-            name=self.name,
-            kind=self.kind,
-            category=self.category,
-            x=self.x,
-            y=self.y,
-            z=self.z,
-            heading=(self.heading + math.pi) % (2.0 * math.pi) - math.pi,
-            pitch=self.pitch,
-            roll=self.roll,
-            speed=self.speed,
-            acceleration=self.acceleration,
-            lateral_speed=self.lateral_speed,
-            box=self.box,
-            road_id=self.road_id if self.mode is Mode.ROAD else None,
-            lane_id=self.lane_id if self.mode is Mode.ROAD else None,
-            s=self.s if self.mode is Mode.ROAD else None,
-            t=None,
+        """A frozen snapshot of this actor.
+
+        Built once per change: while none of the attributes it is made of has been reassigned
+        since the last call (checked by identity, so exactly, signed zeros included), that same
+        value comes back. A step asks for every state more than once (before actors advance,
+        after they moved, and again at the next step's start) but most actors only change in
+        between some of those.
+        """
+        road = self.mode is Mode.ROAD
+        road_id, lane_id, s = (self.road_id, self.lane_id, self.s) if road else (None, None, None)
+        inputs = (
+            self.x,
+            self.y,
+            self.heading,
+            self.speed,
+            self.acceleration,
+            self.lateral_speed,
+            self.z,
+            self.pitch,
+            self.roll,
+            road_id,
+            lane_id,
+            s,
+            self.box,
+            self.id,
+            self.name,
+            self.kind,
+            self.category,
         )
+        last = self._state
+        if last is not None and all(map(operator.is_, inputs, self._state_inputs)):
+            return last
+        state = fast_entity_state(
+            self.id,
+            self.name,
+            self.kind,
+            self.category,
+            self.x,
+            self.y,
+            self.z,
+            (self.heading + math.pi) % (2.0 * math.pi) - math.pi,
+            self.pitch,
+            self.roll,
+            self.speed,
+            self.acceleration,
+            self.lateral_speed,
+            self.box,
+            road_id,
+            lane_id,
+            s,
+            None,
+        )
+        self._state = state
+        self._state_inputs = inputs
+        return state

@@ -81,7 +81,8 @@ class World:
         return tuple(self.state(name) for name, actor in self.actors.items() if actor.placed)
 
     def refresh(self) -> None:
-        """Forget cached states after actors moved."""
+        """Forget cached states after actors moved (cheap: an actor that did not change
+        hands back the state it built last, see :meth:`Actor.state`)."""
         self._states.clear()
 
     def freeze(self) -> None:
