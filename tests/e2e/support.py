@@ -304,3 +304,28 @@ def identity_kubeconfig(
             check=False,
             capture_output=True,
         )
+
+
+def chart_rbac(
+    helm: Path, *, release: str, namespace: str, templates: Sequence[str]
+) -> list[dict[str, Any]]:
+    """The operator chart's RBAC documents (``templates/<name>.yaml`` each) for one namespace,
+    rendered by the real helm."""
+    shown = [arg for name in templates for arg in ("--show-only", f"templates/{name}.yaml")]
+    text = subprocess.run(
+        [
+            str(helm),
+            "template",
+            release,
+            str(REPO / "charts" / "simtest-operator"),
+            "--namespace",
+            namespace,
+            "--set",
+            f"watch.namespaces={{{namespace}}}",
+            *shown,
+        ],
+        check=True,
+        capture_output=True,
+        text=True,
+    ).stdout
+    return [d for d in yaml.safe_load_all(text) if d]

@@ -16,14 +16,12 @@ the finished Jobs and their ConfigMaps are deleted.
 from __future__ import annotations
 
 import shutil
-import subprocess
 import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import pytest
-import yaml
 from kubernetes import client
 
 from simtest_operator.devcluster.toolchain import Toolchain
@@ -31,31 +29,6 @@ from tests.e2e import support
 from tests.e2e.helmfile_job_agent import HelmfileJobAgent
 
 TEMPLATE = "helmfile-kwok"
-
-
-def _chart_rbac(helm: Path, release: str, namespace: str) -> list[dict[str, Any]]:
-    text = subprocess.run(
-        [
-            str(helm),
-            "template",
-            release,
-            str(support.REPO / "charts" / "simtest-operator"),
-            "--namespace",
-            namespace,
-            "--set",
-            f"watch.namespaces={{{namespace}}}",
-            "--show-only",
-            "templates/rbac.yaml",
-            "--show-only",
-            "templates/serviceaccount.yaml",
-            "--show-only",
-            "templates/provisioner-rbac.yaml",
-        ],
-        check=True,
-        capture_output=True,
-        text=True,
-    ).stdout
-    return [d for d in yaml.safe_load_all(text) if d]
 
 
 @pytest.fixture
@@ -67,7 +40,12 @@ def chart_identity(
     tmp_path: Path,
 ) -> Iterator[tuple[Path, str]]:
     """(kubeconfig with a token of the chart's operator ServiceAccount, provisioner role)."""
-    documents = _chart_rbac(dev_toolchain.binary("helm"), f"hf-{k8s_namespace}", k8s_namespace)
+    documents = support.chart_rbac(
+        dev_toolchain.binary("helm"),
+        release=f"hf-{k8s_namespace}",
+        namespace=k8s_namespace,
+        templates=("rbac", "serviceaccount", "provisioner-rbac"),
+    )
     role = next(
         d["metadata"]["name"]
         for d in documents

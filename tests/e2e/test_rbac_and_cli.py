@@ -36,29 +36,6 @@ def helm(dev_toolchain: Toolchain) -> Path:
     return dev_toolchain.binary("helm")
 
 
-def _rendered_rbac(helm: Path, namespace: str) -> list[dict[str, object]]:
-    text = subprocess.run(
-        [
-            str(helm),
-            "template",
-            f"rbac-{namespace}",
-            str(support.REPO / "charts" / "simtest-operator"),
-            "--namespace",
-            namespace,
-            "--set",
-            f"watch.namespaces={{{namespace}}}",
-            "--show-only",
-            "templates/rbac.yaml",
-            "--show-only",
-            "templates/serviceaccount.yaml",
-        ],
-        check=True,
-        capture_output=True,
-        text=True,
-    ).stdout
-    return [d for d in yaml.safe_load_all(text) if d]
-
-
 @pytest.fixture
 def chart_kubeconfig(
     helm: Path,
@@ -68,7 +45,12 @@ def chart_kubeconfig(
     k8s_namespace: str,
     tmp_path: Path,
 ) -> Iterator[Path]:
-    documents = _rendered_rbac(helm, k8s_namespace)
+    documents = support.chart_rbac(
+        helm,
+        release=f"rbac-{k8s_namespace}",
+        namespace=k8s_namespace,
+        templates=("rbac", "serviceaccount"),
+    )
     kinds = sorted(str(d["kind"]) for d in documents)
     assert kinds == [
         "ClusterRole",
