@@ -123,7 +123,10 @@ class _Step:
         self.render = render
         self.now = inputs.now
         self.campaign = inputs.campaign
-        self.run_key = recording_results.run_key(inputs.campaign)
+        # the results run key pods record under; only campaigns with a database have one
+        self.run_key = (
+            recording_results.run_key(inputs.campaign) if spec.results.database_secret_ref else ""
+        )
         self.frozen = inputs.stored.frozen.scenarios
         self.layout = Layout(
             ids=tuple(s.id for s in self.frozen), batch_size=inputs.stored.batch_size

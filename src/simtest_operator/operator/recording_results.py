@@ -17,8 +17,6 @@ from __future__ import annotations
 import asyncio
 import base64
 import datetime
-import hashlib
-import json
 import logging
 from collections.abc import Callable, Mapping
 from typing import Any, Protocol
@@ -28,6 +26,7 @@ from simtest_operator.errors import ResultsError, SimtestError
 from simtest_operator.operator import observed, statuses
 from simtest_operator.operator.observed import CampaignView
 from simtest_operator.operator.scenariolists import StoredList
+from simtest_operator.render import documents
 
 log = logging.getLogger(__name__)
 
@@ -63,8 +62,7 @@ def campaign_info(campaign: CampaignView, *, now: datetime.datetime) -> results.
     """What the results record says about the campaign (its creation counts as its start)."""
     spec = campaign.spec
     assert spec is not None
-    wire = spec.to_wire()
-    digest = hashlib.sha256(json.dumps(wire, sort_keys=True).encode()).hexdigest()
+    digest = documents.content_hash(spec.to_wire())
     environment = spec.environment
     return results.CampaignInfo(
         name=campaign.name,
