@@ -1,14 +1,31 @@
 #!/usr/bin/env bash
-# Set up a fresh machine for simtest-operator development: system packages (PostgreSQL for the
-# results-store tests, Chromium for the report test, git for git sources), a virtualenv with the
-# project and its dev extras. Idempotent: a second run only checks.
+# Set up this machine for simtest-operator, from the lock file (uv.lock) and Debian packages.
+#
+#   bash deploy/setup.sh run    # what running needs: git, the project and its runtime deps
+#   bash deploy/setup.sh test   # plus the test/lint tools, PostgreSQL, Chromium and the real
+#                               # node's container stack (containerd, runc, CNI plugins, buildah,
+#                               # debootstrap)
+#
+# Python packages come only from uv.lock (`uv sync --frozen`: exact versions, hashes checked);
+# uv itself is pinned below and installed from PyPI into the cache. Idempotent and quiet: a
+# second run only checks (well under a second) and prints one line. Upgrade the lock with
+# `make lock-upgrade` (docs/install.md).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
+MODE=${1:-run}
 VENV=${VENV:-.venv}
 PYTHON=${PYTHON:-python3}
-APT_PACKAGES=(postgresql chromium git)
+UV_VERSION=0.13.9
+CACHE_ROOT="${SIMTEST_CACHE_DIR:-${XDG_CACHE_HOME:-$HOME/.cache}/simtest}"
 
+case "$MODE" in
+  run) APT_PACKAGES=(git) ;;
+  test) APT_PACKAGES=(git postgresql chromium containerd runc containernetworking-plugins buildah debootstrap) ;;
+  *) echo "setup.sh: error: unknown mode '$MODE' (run or test)" >&2; exit 2 ;;
+esac
+
+# --- system packages ---------------------------------------------------------------------------
 missing=()
 for pkg in "${APT_PACKAGES[@]}"; do
   dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed" || missing+=("$pkg")
@@ -16,18 +33,32 @@ done
 if [ ${#missing[@]} -gt 0 ]; then
   echo "setup: installing system packages: ${missing[*]}"
   SUDO=""; [ "$(id -u)" -eq 0 ] || SUDO="sudo"
-  $SUDO apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
-  # The tests start their own throw-away PostgreSQL; the packaged cluster need not run.
-  $SUDO systemctl disable --now postgresql >/dev/null 2>&1 || true
+  log="$(mktemp)"
+  if ! { $SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq \
+      --no-install-recommends "${missing[@]}"; } >"$log" 2>&1; then
+    cat "$log" >&2; rm -f "$log"; echo "setup: error: apt-get failed (output above)" >&2; exit 1
+  fi
+  rm -f "$log"
+  # The tests start their own throw-away PostgreSQL and containerd; the packaged services need
+  # not run (on machines with systemd they would start at install).
+  $SUDO systemctl disable --now postgresql containerd >/dev/null 2>&1 || true
 fi
 
-stamp="$VENV/.simtest-installed"
-if [ ! -f "$stamp" ] || [ pyproject.toml -nt "$stamp" ]; then
-  echo "setup: installing the project into $VENV"
-  [ -x "$VENV/bin/python" ] || "$PYTHON" -m venv "$VENV"
-  "$VENV/bin/python" -m pip install -q --upgrade pip
-  "$VENV/bin/python" -m pip install -q -e ".[dev]"
-  touch "$stamp"
+# --- uv, pinned, from PyPI ---------------------------------------------------------------------
+UV="$CACHE_ROOT/uv/$UV_VERSION/bin/uv"
+if [ ! -x "$UV" ]; then
+  echo "setup: installing uv $UV_VERSION"
+  "$PYTHON" -m pip install -q --disable-pip-version-check --no-warn-script-location \
+    --target "$CACHE_ROOT/uv/$UV_VERSION" "uv==$UV_VERSION"
 fi
-echo "setup: ready ($("$VENV/bin/simtest" --version))"
+
+# --- the project, from the lock ----------------------------------------------------------------
+# --frozen: install exactly uv.lock (never re-resolve); `make lint` checks the lock is current.
+# run mode is --inexact so that it keeps the dev tools a `test` set-up installed.
+export UV_PROJECT_ENVIRONMENT="$VENV" UV_PYTHON_DOWNLOADS=never UV_CACHE_DIR="$CACHE_ROOT/uv/cache"
+sync=("$UV" sync --frozen --quiet --python "$PYTHON")
+if [ "$MODE" = run ]; then sync+=(--no-dev --inexact); fi
+if ! out="$("${sync[@]}" 2>&1)"; then
+  echo "$out" >&2; echo "setup: error: uv sync failed (output above)" >&2; exit 1
+fi
+echo "setup: ready ($("$VENV/bin/simtest" --version), $MODE, from uv.lock)"

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Build the dev-cluster toolchain from Go modules only (no release downloads, no containers).
+# Build the dev-cluster toolchain from Go modules only (no release downloads, no containers):
+# the control plane, the kubelet of the dev cluster's real node, kwok, helm and helmfile.
 #
 #   bash deploy/devcluster/build.sh            # everything (idempotent; seconds when cached)
 #   bash deploy/devcluster/build.sh etcd kwok  # a subset: etcd kubernetes kwok helm helmfile
@@ -136,11 +137,11 @@ K8S_STAGING="api apiextensions-apiserver apimachinery apiserver cli-runtime clie
  cri-streaming csi-translation-lib dynamic-resource-allocation endpointslice externaljwt kms kube-aggregator
  kube-controller-manager kube-proxy kube-scheduler kubectl kubelet metrics mount-utils pod-security-admission
  sample-apiserver sample-cli-plugin sample-controller streaming"
-K8S_CMDS="kube-apiserver kube-controller-manager kube-scheduler kubectl"
+K8S_CMDS="kube-apiserver kube-controller-manager kube-scheduler kubelet kubectl"
 
 k8s_cached() {
     local v="v$KUBERNETES_VERSION" dir="$TC/kubernetes-$KUBERNETES_VERSION/bin" c
-    for c in kube-apiserver kube-controller-manager kube-scheduler; do
+    for c in kube-apiserver kube-controller-manager kube-scheduler kubelet; do
         version_matches "$v" "$dir/$c" --version || return 1
     done
     version_matches "$v" "$dir/kubectl" version --client
