@@ -18,8 +18,9 @@ import time
 from importlib import resources
 from pathlib import Path
 
-from simtest_operator.devcluster import components, kubeconfig, provisioning
+from simtest_operator.devcluster import components, hostnet, kubeconfig, provisioning, realnodes
 from simtest_operator.devcluster.components import Layout, Ports
+from simtest_operator.devcluster.nodeconfig import REAL_NODE_LABEL, containerd_argv, kubelet_argv
 from simtest_operator.devcluster.nodes import NodeShape, node_names
 from simtest_operator.devcluster.pki import Pki, ensure_pki
 from simtest_operator.devcluster.processes import (
@@ -30,6 +31,7 @@ from simtest_operator.devcluster.processes import (
     stop,
 )
 from simtest_operator.devcluster.readiness import http_ok, wait_until
+from simtest_operator.devcluster.realnodes import NodeImages, RealNode
 from simtest_operator.devcluster.state import (
     ClusterInfo,
     ClusterState,
@@ -70,6 +72,8 @@ class DevCluster:
         shape: NodeShape | None = None,
         crds_dir: Path | None = None,
         apiserver_port: int | None = None,
+        real_nodes: int = 0,
+        images: NodeImages | None = None,
         timeout: float = 90.0,
     ) -> ClusterInfo:
         """Start the cluster (or return the running one) and wait until it is usable.
@@ -77,14 +81,26 @@ class DevCluster:
         Usable means: apiserver ``/readyz`` ok, controller-manager, scheduler and kwok healthy,
         the CRDs from ``crds_dir`` established (skipped when the folder is missing or empty),
         ``nodes`` fake nodes Ready with ``slots`` ``simtest.dev/simulator`` each (``shape``
-        overrides all capacities), and the ``default`` service account present.
+        overrides all capacities), the ``default`` service account present, and ``real_nodes``
+        real nodes (kubelet + containerd, at most one per machine: the kubelet's device-plugin
+        socket path is fixed) Ready with ``images`` imported.
         """
         current = self._load_state()
         if current is not None:
             if self.status().running:
                 return self._info(current)
             self.down()  # stale: something died; start over cleanly
-        missing = self.toolchain.missing(CONTROL_PLANE_BINARIES)
+        if real_nodes not in (0, 1):
+            raise ClusterError(
+                f"--real-nodes {real_nodes}: one machine runs at most one real node (every "
+                "kubelet serves device plugins at the same fixed socket path)"
+            )
+        if real_nodes and images is None:
+            raise ClusterError("a real node needs images (at least the pod sandbox image)")
+        if real_nodes:
+            realnodes.check_host()
+        needed = (*CONTROL_PLANE_BINARIES, *(("kubelet", "crictl") if real_nodes else ()))
+        missing = self.toolchain.missing(needed)
         if missing:
             raise ToolchainError(
                 f"not built: {', '.join(missing)} (in {self.toolchain.bin_dir}); "
@@ -105,6 +121,8 @@ class DevCluster:
             state = self._provision(
                 state, pki, nodes=nodes, shape=shape, crds_dir=crds_dir, timeout=timeout
             )
+            if real_nodes and images is not None:
+                state = self._start_real_node(state, pki, images, timeout=timeout)
         except BaseException:
             self.down()
             raise
@@ -121,9 +139,19 @@ class DevCluster:
         state = self._load_state()
         stopped: list[str] = []
         if state is not None:
+            by_name = {record.name: record for record in state.processes}
+            crictl = self.toolchain.bin_dir / "crictl"
+            for node in state.real_nodes:
+                # The kubelet first (it would restart pods), then the pods through containerd.
+                kubelet = by_name.get(f"kubelet-{node.name}")
+                if kubelet is not None and stop(kubelet):
+                    stopped.append(kubelet.name)
+                realnodes.remove_pods(node, crictl if crictl.exists() else None)
             for record in reversed(state.processes):
                 if stop(record):
                     stopped.append(record.name)
+            for node in state.real_nodes:
+                realnodes.clean_up(node)
             self.layout.state.unlink(missing_ok=True)
         for proc in self._procs.values():
             with contextlib.suppress(subprocess.TimeoutExpired):
@@ -284,6 +312,47 @@ class DevCluster:
         state.save(self.layout.state)
         return state
 
+    def _start_real_node(
+        self, state: ClusterState, pki: Pki, images: NodeImages, *, timeout: float
+    ) -> ClusterState:
+        """containerd, the images, the kubelet; then wait for the Node to be Ready."""
+        name = realnodes.real_node_names(1)[0]
+        node = RealNode(
+            name=name,
+            root=self.layout.root / "nodes" / name,
+            network=hostnet.pick_network(self.layout.root, 0),
+            ports=realnodes.kubelet_ports(free_ports(2)),
+        )
+        state = dataclasses.replace(state, real_nodes=(node,))
+        state.save(self.layout.state)
+        realnodes.prepare(node, pki=pki, server=state.server, sandbox_image=images.sandbox)
+        containerd = realnodes.system_binary("containerd")
+        state = self._spawn(state, f"containerd-{name}", containerd_argv(containerd, node.layout))
+        wait_until(
+            functools.partial(realnodes.containerd_ready, node),
+            what=f"containerd of {name}",
+            timeout=timeout,
+            watch=state.processes[-1:],
+            blame=state.processes[-1],
+        )
+        realnodes.import_images(node, images.archives)
+        labels = {REAL_NODE_LABEL: "true", "kubernetes.io/os": "linux"}
+        kubelet = self.toolchain.binary("kubelet")
+        argv = kubelet_argv(kubelet, node.layout, network=node.network, labels=labels)
+        state = self._spawn(state, f"kubelet-{name}", argv)
+        api = provisioning.api_client(self.layout.kubeconfig)
+        try:
+            wait_until(
+                functools.partial(provisioning.nodes_ready, api, [name]),
+                what=f"real node {name} Ready",
+                timeout=timeout,
+                watch=state.processes[-2:],
+                blame=state.processes[-1],
+            )
+        finally:
+            api.close()  # type: ignore[no-untyped-call]
+        return state
+
     # -- helpers --------------------------------------------------------------------------------
 
     def _apiserver_ready(self, server: str, pki: Pki) -> bool:
@@ -310,6 +379,7 @@ class DevCluster:
             ca_file=pki.ca_cert,
             logs_dir=self.layout.logs,
             nodes=state.nodes,
+            real_nodes=tuple(node.name for node in state.real_nodes),
             crds=state.crds,
             ports=state.ports,
             startup_seconds=state.startup_seconds,

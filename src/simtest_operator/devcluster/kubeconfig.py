@@ -15,8 +15,19 @@ import yaml
 CONTEXT = "simtest-dev"
 
 
-def render(*, server: str, ca_pem: bytes, user: str, token: str) -> dict[str, Any]:
-    """The kubeconfig document for one token user."""
+def render(
+    *,
+    server: str,
+    ca_pem: bytes,
+    user: str,
+    token: str | None = None,
+    client_cert: Path | None = None,
+    client_key: Path | None = None,
+) -> dict[str, Any]:
+    """The kubeconfig document for one user: a bearer token, or a client certificate (files)."""
+    credentials: dict[str, str] = {"token": token} if token else {}
+    if client_cert and client_key:
+        credentials = {"client-certificate": str(client_cert), "client-key": str(client_key)}
     return {
         "apiVersion": "v1",
         "kind": "Config",
@@ -29,17 +40,34 @@ def render(*, server: str, ca_pem: bytes, user: str, token: str) -> dict[str, An
                 },
             }
         ],
-        "users": [{"name": user, "user": {"token": token}}],
+        "users": [{"name": user, "user": credentials}],
         "contexts": [{"name": CONTEXT, "context": {"cluster": CONTEXT, "user": user}}],
         "current-context": CONTEXT,
         "preferences": {},
     }
 
 
-def write(path: Path, *, server: str, ca_pem: bytes, user: str, token: str) -> Path:
-    """Write a kubeconfig readable only by its owner (it holds a bearer token)."""
+def write(
+    path: Path,
+    *,
+    server: str,
+    ca_pem: bytes,
+    user: str,
+    token: str | None = None,
+    client_cert: Path | None = None,
+    client_key: Path | None = None,
+) -> Path:
+    """Write a kubeconfig readable only by its owner (it holds credentials)."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    text = yaml.safe_dump(render(server=server, ca_pem=ca_pem, user=user, token=token))
+    document = render(
+        server=server,
+        ca_pem=ca_pem,
+        user=user,
+        token=token,
+        client_cert=client_cert,
+        client_key=client_key,
+    )
+    text = yaml.safe_dump(document)
     tmp = path.with_suffix(".tmp")
     tmp.write_text(text)
     tmp.chmod(0o600)

@@ -193,3 +193,55 @@ def ensure_pki(directory: Path) -> Pki:
     if tokens is None:
         tokens = _write_tokens(pki.token_file)
     return dataclasses.replace(pki, tokens=tokens)
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class ClientCert:
+    """A client certificate signed by the cluster CA (PEM files)."""
+
+    cert: Path
+    key: Path
+
+
+def ensure_client_cert(pki: Pki, *, name: str, user: str, groups: tuple[str, ...]) -> ClientCert:
+    """A client certificate for ``user`` in ``groups`` (CN and O), made once and reused.
+
+    A kubelet authenticates as ``system:node:<node>`` in ``system:nodes`` with such a certificate,
+    exactly as on a kubeadm node, so the apiserver's Node authorizer and NodeRestriction admission
+    apply to the dev cluster's real nodes too.
+    """
+    folder = pki.directory / "clients"
+    folder.mkdir(parents=True, exist_ok=True)
+    issued = ClientCert(cert=folder / f"{name}.crt", key=folder / f"{name}.key")
+    if issued.cert.exists() and issued.key.exists():
+        return issued
+    _ec_key(issued.key)
+    subject = "".join(f"/O={group}" for group in groups) + f"/CN={user}"
+    ext = folder / f"{name}.ext"
+    ext.write_text(
+        "basicConstraints=CA:FALSE\n"
+        "keyUsage=critical,digitalSignature,keyEncipherment\n"
+        "extendedKeyUsage=clientAuth\n"
+    )
+    _openssl(
+        "req", "-new", "-key", issued.key.name, "-out", f"{name}.csr", "-subj", subject, cwd=folder
+    )
+    _openssl(
+        "x509",
+        "-req",
+        "-in",
+        f"{name}.csr",
+        "-CA",
+        str(pki.ca_cert),
+        "-CAkey",
+        str(pki.ca_key),
+        "-CAcreateserial",
+        "-out",
+        issued.cert.name,
+        "-days",
+        "3650",
+        "-extfile",
+        ext.name,
+        cwd=folder,
+    )
+    return issued

@@ -13,6 +13,7 @@ from typing import Any
 
 from simtest_operator.devcluster.components import Ports
 from simtest_operator.devcluster.processes import ProcessRecord
+from simtest_operator.devcluster.realnodes import RealNode
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
@@ -23,6 +24,8 @@ class ClusterState:
     ports: Ports
     processes: tuple[ProcessRecord, ...] = ()
     nodes: tuple[str, ...] = ()
+    real_nodes: tuple[RealNode, ...] = ()
+    """Nodes with a kubelet and containerd; ``down`` removes their pods, mounts and bridges."""
     crds: tuple[str, ...] = ()
     started_at: float = 0.0
     startup_seconds: float | None = None
@@ -37,6 +40,7 @@ class ClusterState:
                 for p in self.processes
             ],
             "nodes": list(self.nodes),
+            "real_nodes": [node.to_json() for node in self.real_nodes],
             "crds": list(self.crds),
             "started_at": self.started_at,
             "startup_seconds": self.startup_seconds,
@@ -60,6 +64,7 @@ class ClusterState:
                 for p in data["processes"]
             ),
             nodes=tuple(data["nodes"]),
+            real_nodes=tuple(RealNode.from_json(n) for n in data.get("real_nodes", ())),
             crds=tuple(data["crds"]),
             started_at=data["started_at"],
             startup_seconds=data["startup_seconds"],
@@ -87,6 +92,8 @@ class ClusterInfo:
     logs_dir: Path
     nodes: tuple[str, ...]
     crds: tuple[str, ...]
+    real_nodes: tuple[str, ...] = ()
+    """Names of the nodes with a real kubelet (after the fake ones in ``nodes``)."""
     ports: Ports
     startup_seconds: float | None
 
