@@ -13,6 +13,7 @@ from pathlib import Path
 
 import click
 
+from simtest_operator.devcluster import images as built_images
 from simtest_operator.devcluster import toolchain as toolchains
 from simtest_operator.devcluster.cluster import DevCluster
 from simtest_operator.devcluster.nodes import NodeShape
@@ -52,7 +53,7 @@ _root = click.option(
 
 @click.group("dev-cluster")
 def dev_cluster() -> None:
-    """A real Kubernetes control plane with fake (kwok) nodes, as local processes."""
+    """A real Kubernetes control plane, fake (kwok) nodes and a real node, as local processes."""
 
 
 @dev_cluster.command()
@@ -87,6 +88,13 @@ def build(components: tuple[str, ...]) -> None:
     help="Folder of CRD YAML files to install (skipped if absent).",
 )
 @click.option("--port", type=int, default=None, help="apiserver port (default: a free one).")
+@click.option(
+    "--real-nodes",
+    type=click.IntRange(0, 1),
+    default=0,
+    show_default=True,
+    help="Nodes with a real kubelet, containerd and runc (needs root; at most one per machine).",
+)
 def up(
     name: str,
     root: Path | None,
@@ -95,19 +103,29 @@ def up(
     gpus: int,
     crds_dir: Path,
     port: int | None,
+    real_nodes: int,
 ) -> None:
     """Start the cluster (or report the running one) and wait until it is usable."""
     cluster = _cluster(name, root)
+    settings = Settings.from_env()
     with _reported():
+        images = None
+        if real_nodes:
+            index = built_images.load_index(built_images.index_path(settings.cache.root))
+            images = built_images.node_images(index)
         info = cluster.up(
             nodes=nodes,
             shape=NodeShape(simulator_slots=slots, gpus=gpus),
             crds_dir=crds_dir,
             apiserver_port=port,
+            real_nodes=real_nodes,
+            images=images,
         )
     took = f" in {info.startup_seconds:.1f}s" if info.startup_seconds is not None else ""
     click.echo(f"dev cluster up{took}: {info.server}")
-    click.echo(f"  nodes: {', '.join(info.nodes)} ({slots} simulator slots each)")
+    click.echo(f"  nodes: {', '.join(info.nodes) or '(none)'} ({slots} simulator slots each)")
+    if info.real_nodes:
+        click.echo(f"  real nodes: {', '.join(info.real_nodes)} (kubelet + containerd)")
     click.echo(f"  CRDs:  {', '.join(info.crds) or '(none found in ' + str(crds_dir) + ')'}")
     click.echo(f"  logs:  {info.logs_dir}")
     click.echo(f"  export KUBECONFIG={info.kubeconfig}")
