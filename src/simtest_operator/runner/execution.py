@@ -19,7 +19,7 @@ import time
 from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
 
-from simtest_operator import __version__, evaluation, recording
+from simtest_operator import evaluation, provenance, recording
 from simtest_operator.errors import ScenarioError, SimtestError
 from simtest_operator.settings import SimulationSettings
 from simtest_operator.sim import BackendChoice, Simulation, SutConfig, open_simulation
@@ -98,7 +98,7 @@ def run_scenario(request: RunRequest) -> RunReport:
     out = request.output_dir
     log: list[str] = [f"scenario {request.scenario} id {scenario_id}"]
     artifacts: dict[str, str] = {}
-    versions = {"simtest": __version__, "sut": f"{request.sut.name} {request.sut.version}"}
+    versions = {**provenance.versions(), "sut": f"{request.sut.name} {request.sut.version}"}
     try:
         opened = open_simulation(
             request.scenario,

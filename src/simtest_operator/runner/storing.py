@@ -14,7 +14,7 @@ import datetime
 from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
 
-from simtest_operator import results
+from simtest_operator import provenance, results
 from simtest_operator.errors import SourceError
 from simtest_operator.runner import preparing
 from simtest_operator.scenarios.pinned import PinnedScenario
@@ -66,7 +66,12 @@ class ResultWriter:
             started_at=plan.started_at,
             sut_name=sut.name,
             sut_version=sut.version,
-            settings={**preparing.describe_plan(plan), "parallel": parallel},
+            simulator_version=provenance.versions()["simulator"],
+            settings={
+                **preparing.describe_plan(plan),
+                "parallel": parallel,
+                "versions": dict(provenance.versions()),
+            },
         )
         with results.open_store(target) as store:
             key = store.begin_campaign(

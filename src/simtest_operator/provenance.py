@@ -1,0 +1,75 @@
+"""What ran: the versions every result and recording carries, for reproducibility.
+
+The record names the simulator (SUMO and netconvert come from the ``eclipse-sumo`` wheel, the
+TraCI binding from ``libsumo``), the Python runtime, and the environment the run was installed
+from: the digest of the lock file (``uv.lock``) and of the installed distributions. The two
+digests answer different questions: the lock says which pinned set was *meant* (the same digest
+on a laptop, in CI and in the images), the installed set what actually *ran* (it would differ if
+someone installed without the lock).
+
+Read through ``importlib.metadata`` only: nothing here imports SUMO or any other heavy package.
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import importlib.metadata
+import platform
+import sys
+from collections.abc import Mapping
+from pathlib import Path
+
+from simtest_operator import __version__
+
+LOCK_FILE_NAME = "uv.lock"
+
+
+def lock_file(prefix: Path | None = None) -> Path | None:
+    """The lock this environment was installed from, if it sits beside the environment.
+
+    Both ways the project is installed put it there: ``make`` syncs ``.venv`` in the checkout
+    next to ``uv.lock``, and the images sync ``/opt/simtest/venv`` with ``/opt/simtest/uv.lock``.
+    """
+    candidate = (prefix or Path(sys.prefix)).parent / LOCK_FILE_NAME
+    return candidate if candidate.is_file() else None
+
+
+def _sha256(data: bytes) -> str:
+    return "sha256:" + hashlib.sha256(data).hexdigest()
+
+
+def installed_digest() -> str:
+    """Digest of the installed distributions (``name==version`` lines, sorted)."""
+    lines = sorted(
+        {
+            f"{dist.metadata['Name'].lower()}=={dist.version}"
+            for dist in importlib.metadata.distributions()
+            if dist.metadata["Name"]
+        }
+    )
+    return _sha256("\n".join(lines).encode())
+
+
+def _version_of(distribution: str) -> str:
+    try:
+        return importlib.metadata.version(distribution)
+    except importlib.metadata.PackageNotFoundError:
+        return "not installed"
+
+
+@functools.cache
+def versions() -> Mapping[str, str]:
+    """The reproducibility record of this process (computed once; the facts cannot change)."""
+    lock = lock_file()
+    sumo = _version_of("eclipse-sumo")
+    return {
+        "simtest": __version__,
+        "simulator": f"SUMO {sumo} (simtest engine {__version__})",
+        "sumo": sumo,
+        "netconvert": sumo,
+        "libsumo": _version_of("libsumo"),
+        "python": platform.python_version(),
+        "lock": _sha256(lock.read_bytes()) if lock else "unknown (no uv.lock beside the env)",
+        "installed": installed_digest(),
+    }
