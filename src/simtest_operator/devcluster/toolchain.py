@@ -24,7 +24,17 @@ CONTROL_PLANE_BINARIES = (
 )
 """What ``DevCluster.up`` starts."""
 
-ALL_BINARIES = (*CONTROL_PLANE_BINARIES, "kubectl", "kwokctl", "helm", "helmfile")
+DEVICE_PLUGIN_BINARY = "simtest-device-plugin"
+"""The simulator-slot device plugin (``deploy/deviceplugin``), run beside a real node's kubelet."""
+
+ALL_BINARIES = (
+    *CONTROL_PLANE_BINARIES,
+    "kubectl",
+    "kwokctl",
+    "helm",
+    "helmfile",
+    DEVICE_PLUGIN_BINARY,
+)
 """Everything ``build.sh`` produces."""
 
 BUILD_SCRIPT = Path("deploy/devcluster/build.sh")
