@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Build the dev-cluster toolchain from Go modules only (no release downloads, no containers):
-# the control plane, the kubelet of the dev cluster's real node, kwok, helm and helmfile.
+# the control plane, the kubelet of the dev cluster's real node, kwok, helm and helmfile, and the
+# simulator-slot device plugin of deploy/deviceplugin (the project's own Go module).
 #
 #   bash deploy/devcluster/build.sh            # everything (idempotent; seconds when cached)
 #   bash deploy/devcluster/build.sh etcd kwok  # a subset: etcd kubernetes kwok helm helmfile
@@ -9,6 +10,7 @@
 # Versions: deploy/devcluster/versions.env (the one place they are pinned).
 # Output:   ${SIMTEST_CACHE_DIR:-${XDG_CACHE_HOME:-~/.cache}/simtest}/toolchain/
 #             <tool>-<version>/bin/*   the binaries, keyed by version
+#             deviceplugin-<hash>/bin/ simtest-device-plugin, keyed by the content of its sources
 #             bin/                     symlinks to the versions pinned now (put it on PATH)
 #             gomodcache/ gocache/     Go module and build caches (shared by all versions)
 #             work/                    generated wrapper modules
@@ -25,7 +27,7 @@ if [[ "${1:-}" == --cache-dir ]]; then
     CACHE_ROOT="$2"; shift 2
 fi
 TC="$CACHE_ROOT/toolchain"
-ALL_COMPONENTS=(etcd kwok kubernetes helm helmfile)
+ALL_COMPONENTS=(etcd kwok kubernetes helm helmfile deviceplugin)
 JOBS="${SIMTEST_BUILD_JOBS:-2}"
 
 START=$(date +%s)
@@ -223,6 +225,34 @@ build_helmfile() {
     log "helmfile $v: done"
 }
 
+# The device plugin is our own module, so it is keyed by the content of its build inputs (go.mod,
+# go.sum and the non-test .go files, by relative path) instead of a pinned version.
+DP_SRC="$HERE/../deviceplugin"
+deviceplugin_hash() {
+    [[ -f "$DP_SRC/go.mod" ]] || return 1
+    (cd "$DP_SRC" && find . -type f \( -name '*.go' ! -name '*_test.go' -o -name go.mod -o -name go.sum \) -print0 \
+        | LC_ALL=C sort -z | xargs -0 sha256sum | sha256sum | cut -c1-12)
+}
+
+build_deviceplugin() {
+    local h
+    h="$(deviceplugin_hash)" || die "no Go module at $DP_SRC (deploy/deviceplugin of the checkout)"
+    local dir="$TC/deviceplugin-$h/bin"
+    if version_matches "$h" "$dir/simtest-device-plugin" --version; then log "deviceplugin $h: cached"; return; fi
+    require_go
+    log "deviceplugin $h: building simtest-device-plugin"
+    local out="$TC/work/deviceplugin-$h/out"
+    rm -rf "$out"; mkdir -p "$out"
+    (
+        cd "$DP_SRC"
+        "${GO_BUILD[@]}" -ldflags "-s -w -X main.version=$h" -o "$out/simtest-device-plugin" ./cmd/simtest-device-plugin
+    )
+    install_bins "$out" "$dir"
+    version_matches "$h" "$dir/simtest-device-plugin" --version \
+        || die "simtest-device-plugin built but its --version does not say $h"
+    log "deviceplugin $h: done"
+}
+
 # --- main ------------------------------------------------------------------------------------
 components=("$@")
 [[ ${#components[@]} -gt 0 ]] || components=("${ALL_COMPONENTS[@]}")
@@ -248,4 +278,7 @@ for pair in "etcd-$ETCD_VERSION:etcd" "kwok-$KWOK_VERSION:kwok kwokctl" \
         [[ -x "$TC/$d/bin/$b" ]] && ln -sfn "../$d/bin/$b" "$TC/bin/$b"
     done
 done
+if dp_hash="$(deviceplugin_hash)" && [[ -x "$TC/deviceplugin-$dp_hash/bin/simtest-device-plugin" ]]; then
+    ln -sfn "../deviceplugin-$dp_hash/bin/simtest-device-plugin" "$TC/bin/simtest-device-plugin"
+fi
 log "ready: $TC/bin ($(ls "$TC/bin" | tr '\n' ' '))"
