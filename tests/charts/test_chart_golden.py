@@ -2,9 +2,9 @@
 --update-golden`).
 
 Covers: the operator chart with default values equals deploy/kustomize/base/simtest-operator.yaml
-(the plain-manifest install, so it cannot drift from the chart) and with namespaced watching equals
-its golden file; the K8s-ROS base chart for several value sets equals its golden files; rendering
-twice gives identical bytes.
+(the plain-manifest install, so it cannot drift from the chart); with namespaced watching, and the
+device plugin's template when enabled, each equal their golden file; the K8s-ROS base chart for
+several value sets equals its golden files; rendering twice gives identical bytes.
 """
 
 from __future__ import annotations
@@ -81,6 +81,23 @@ def test_operator_namespaced(helm: Tool, update_golden: bool) -> None:
     values = {"watch": {"namespaces": ["team-a", "team-b"]}}
     text = template(helm, OPERATOR_CHART, values=values).stdout
     _check(GOLDEN / "simtest-operator-namespaced.yaml", text, update_golden)
+
+
+def test_operator_device_plugin(helm: Tool, update_golden: bool) -> None:
+    values = {
+        "devicePlugin": {
+            "enabled": True,
+            "namespace": "kube-system",
+            "slots": 3,
+            "nodeSelector": {"simtest.dev/simulator-node": "true"},
+            "tolerations": [
+                {"key": "simtest.dev/simulator", "operator": "Exists", "effect": "NoSchedule"}
+            ],
+        }
+    }
+    only = ("--show-only", "templates/device-plugin.yaml")
+    text = template(helm, OPERATOR_CHART, values=values, extra=only).stdout
+    _check(GOLDEN / "simtest-operator-device-plugin.yaml", text, update_golden)
 
 
 @pytest.mark.parametrize("case", sorted(ROS_CASES))

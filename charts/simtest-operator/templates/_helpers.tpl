@@ -68,3 +68,23 @@ app.kubernetes.io/part-of: simtest
 {{- end -}}
 {{- join "," $pairs -}}
 {{- end -}}
+
+{{/* The device plugin DaemonSet has its own app.kubernetes.io/name, so that no selector of the
+     operator (its Service, its pod anti-affinity) ever matches the plugin pods. */}}
+{{- define "simtest-operator.devicePlugin.name" -}}
+{{- printf "%s-device-plugin" (include "simtest-operator.fullname" .) }}
+{{- end }}
+
+{{- define "simtest-operator.devicePlugin.selectorLabels" -}}
+app.kubernetes.io/name: simtest-device-plugin
+app.kubernetes.io/instance: {{ .Release.Name }}
+{{- end }}
+
+{{- define "simtest-operator.devicePlugin.labels" -}}
+helm.sh/chart: {{ include "simtest-operator.chart" . }}
+{{ include "simtest-operator.devicePlugin.selectorLabels" . }}
+app.kubernetes.io/version: {{ .Chart.AppVersion | quote }}
+app.kubernetes.io/managed-by: {{ .Release.Service }}
+app.kubernetes.io/part-of: simtest
+app.kubernetes.io/component: device-plugin
+{{- end }}
