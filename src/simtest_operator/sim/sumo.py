@@ -1,4 +1,4 @@
-"""The libsumo backend: the only module of the project that imports libsumo.
+"""The libsumo backend: with :mod:`.sumoloading` (which loads it), the only code that uses libsumo.
 
 libsumo runs SUMO inside this process and is a per-process singleton: one simulation per process
 at a time. :meth:`SumoBackend.start` refuses to start a second one; the local executor and
@@ -20,7 +20,6 @@ collisions from bounding boxes itself.
 from __future__ import annotations
 
 import contextlib
-import io
 import math
 import re
 from collections.abc import Mapping, Sequence
@@ -29,6 +28,7 @@ from types import ModuleType
 from typing import Any
 
 from simtest_operator.errors import SimulationError
+from simtest_operator.sim import sumoloading
 from simtest_operator.sim.backends import (
     ActorSpec,
     ActorState,
@@ -52,12 +52,20 @@ _NET_FILE_RE = re.compile(rb'<net-file\s+value="([^"]+)"')
 
 
 def _load_libsumo() -> ModuleType:
-    # libsumo prints a pyarrow version warning on import; it is irrelevant here and would spam
-    # every run's output, so swallow stdout while importing.
-    with contextlib.redirect_stdout(io.StringIO()):
-        import libsumo
-    module: ModuleType = libsumo
-    return module
+    # Nothing to silence: libsumo prints only when pyarrow's Arrow ABI differs from its own, and
+    # pyproject.toml pins the one it was built with (tests/sim/test_arrow_abi.py).
+    return sumoloading.bindings()
+
+
+def preload() -> None:
+    """Load libsumo now, so processes forked from this one start with it in memory."""
+    _load_libsumo()
+
+
+def running() -> bool:
+    """Whether this process has a SUMO simulation loaded (never loads libsumo to find out)."""
+    lib: Any = sumoloading.loaded()
+    return lib is not None and bool(lib.simulation.isLoaded())
 
 
 def sumo_angle(heading: float) -> float:
@@ -150,7 +158,7 @@ class SumoBackend:
             "true",
         ]
         try:
-            lib.start(args)
+            lib.simulation.start(args)
             edges = [e for e in lib.edge.getIDList() if not e.startswith(":")]
             if not edges:
                 raise SimulationError(f"SUMO network {net} has no edges")
@@ -227,7 +235,7 @@ class SumoBackend:
         try:
             if self._traffic is not None:
                 self._traffic.flush()
-            lib.simulationStep()
+            lib.simulation.step()
             departed = lib.simulation.getDepartedIDList()
             spawned = self._traffic.settle(departed) if self._traffic is not None else {}
             for vid in departed:
@@ -320,4 +328,4 @@ class SumoBackend:
     @staticmethod
     def _close_quietly(lib: Any) -> None:
         with contextlib.suppress(Exception):
-            lib.close()
+            lib.simulation.close()
