@@ -27,7 +27,7 @@ if [[ "${1:-}" == --cache-dir ]]; then
     CACHE_ROOT="$2"; shift 2
 fi
 TC="$CACHE_ROOT/toolchain"
-ALL_COMPONENTS=(etcd kwok kubernetes helm helmfile deviceplugin)
+ALL_COMPONENTS=(etcd kwok kubernetes crictl helm helmfile deviceplugin)
 JOBS="${SIMTEST_BUILD_JOBS:-2}"
 
 START=$(date +%s)
@@ -177,6 +177,24 @@ build_kubernetes() {
     log "kubernetes $v: done"
 }
 
+build_crictl() {
+    local v="$CRI_TOOLS_VERSION" dir="$TC/crictl-$CRI_TOOLS_VERSION/bin"
+    if version_matches "v$v" "$dir/crictl" --version; then log "crictl $v: cached"; return; fi
+    require_go
+    log "crictl $v: building"
+    local w="$TC/work/crictl-$v"
+    new_wrapper "$w" local/crictlbin
+    (
+        cd "$w"
+        go_get "sigs.k8s.io/cri-tools/cmd/crictl@v$v"
+        "${GO_BUILD[@]}" -ldflags "-s -w -X sigs.k8s.io/cri-tools/pkg/version.Version=v$v" \
+            -o "$w/out/crictl" sigs.k8s.io/cri-tools/cmd/crictl
+    )
+    install_bins "$w/out" "$dir"
+    version_matches "v$v" "$dir/crictl" --version || die "crictl built but 'crictl --version' does not say v$v"
+    log "crictl $v: done"
+}
+
 build_helm() {
     local v="$HELM_VERSION" dir="$TC/helm-$HELM_VERSION/bin"
     if version_matches "v$v" "$dir/helm" version --short; then log "helm $v: cached"; return; fi
@@ -272,7 +290,7 @@ for c in "${components[@]}"; do "build_$c"; done
 
 # Refresh bin/ symlinks to the pinned versions of what exists.
 for pair in "etcd-$ETCD_VERSION:etcd" "kwok-$KWOK_VERSION:kwok kwokctl" \
-    "kubernetes-$KUBERNETES_VERSION:$K8S_CMDS" "helm-$HELM_VERSION:helm" "helmfile-$HELMFILE_VERSION:helmfile"; do
+    "kubernetes-$KUBERNETES_VERSION:$K8S_CMDS" "crictl-$CRI_TOOLS_VERSION:crictl" "helm-$HELM_VERSION:helm" "helmfile-$HELMFILE_VERSION:helmfile"; do
     d="${pair%%:*}"
     for b in ${pair#*:}; do
         [[ -x "$TC/$d/bin/$b" ]] && ln -sfn "../$d/bin/$b" "$TC/bin/$b"
