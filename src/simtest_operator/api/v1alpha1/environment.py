@@ -89,7 +89,9 @@ class SutConfig(ApiModel):
 class SimulatorSettings(ApiModel):
     """Settings of the SUMO-backed simulator stand-in."""
 
-    image: Annotated[str, StringConstraints(max_length=512)] = "simtest-runner:0.1.0"
+    image: Annotated[str, StringConstraints(max_length=512)] = (
+        "ghcr.io/simtest-dev/simtest-runner:0.1.0"
+    )
     """Runner image the simulator pod runs."""
     step_length: Annotated[float, Field(gt=0, le=0.5)] = 0.05
     """Simulation step (s)."""
