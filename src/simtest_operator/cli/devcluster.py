@@ -13,6 +13,7 @@ from pathlib import Path
 
 import click
 
+from simtest_operator.devcluster import addons
 from simtest_operator.devcluster import images as built_images
 from simtest_operator.devcluster import toolchain as toolchains
 from simtest_operator.devcluster.cluster import DevCluster
@@ -109,10 +110,16 @@ def up(
     cluster = _cluster(name, root)
     settings = Settings.from_env()
     with _reported():
-        images = None
+        images, node_addons = None, []
         if real_nodes:
             index = built_images.load_index(built_images.index_path(settings.cache.root))
             images = built_images.node_images(index)
+            node_addons = addons.device_plugin_documents(
+                cluster.toolchain.binary("helm"),
+                addons.find_chart(Path.cwd()),
+                image=built_images.DEVICE_PLUGIN_IMAGE,
+                slots=slots,
+            )
         info = cluster.up(
             nodes=nodes,
             shape=NodeShape(simulator_slots=slots, gpus=gpus),
@@ -120,12 +127,16 @@ def up(
             apiserver_port=port,
             real_nodes=real_nodes,
             images=images,
+            addons=node_addons,
         )
     took = f" in {info.startup_seconds:.1f}s" if info.startup_seconds is not None else ""
     click.echo(f"dev cluster up{took}: {info.server}")
     click.echo(f"  nodes: {', '.join(info.nodes) or '(none)'} ({slots} simulator slots each)")
     if info.real_nodes:
-        click.echo(f"  real nodes: {', '.join(info.real_nodes)} (kubelet + containerd)")
+        click.echo(
+            f"  real nodes: {', '.join(info.real_nodes)} (kubelet + containerd, {slots} simulator"
+            " slots from the device plugin)"
+        )
     click.echo(f"  CRDs:  {', '.join(info.crds) or '(none found in ' + str(crds_dir) + ')'}")
     click.echo(f"  logs:  {info.logs_dir}")
     click.echo(f"  export KUBECONFIG={info.kubeconfig}")

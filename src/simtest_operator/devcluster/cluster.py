@@ -15,9 +15,12 @@ import functools
 import shutil
 import subprocess
 import time
+from collections.abc import Mapping, Sequence
 from importlib import resources
 from pathlib import Path
+from typing import Any
 
+from simtest_operator.devcluster import addons as add
 from simtest_operator.devcluster import components, hostnet, kubeconfig, provisioning, realnodes
 from simtest_operator.devcluster.components import Layout, Ports
 from simtest_operator.devcluster.nodeconfig import REAL_NODE_LABEL, containerd_argv, kubelet_argv
@@ -74,6 +77,7 @@ class DevCluster:
         apiserver_port: int | None = None,
         real_nodes: int = 0,
         images: NodeImages | None = None,
+        addons: Sequence[Mapping[str, Any]] = (),
         timeout: float = 90.0,
     ) -> ClusterInfo:
         """Start the cluster (or return the running one) and wait until it is usable.
@@ -83,7 +87,9 @@ class DevCluster:
         ``nodes`` fake nodes Ready with ``slots`` ``simtest.dev/simulator`` each (``shape``
         overrides all capacities), the ``default`` service account present, and ``real_nodes``
         real nodes (kubelet + containerd, at most one per machine: the kubelet's device-plugin
-        socket path is fixed) Ready with ``images`` imported.
+        socket path is fixed) Ready with ``images`` imported. ``addons`` (the chart's
+        device-plugin objects, :mod:`~simtest_operator.devcluster.addons`) are created after
+        the real node is Ready, which then must advertise simulator slots.
         """
         current = self._load_state()
         if current is not None:
@@ -122,7 +128,7 @@ class DevCluster:
                 state, pki, nodes=nodes, shape=shape, crds_dir=crds_dir, timeout=timeout
             )
             if real_nodes and images is not None:
-                state = self._start_real_node(state, pki, images, timeout=timeout)
+                state = self._start_real_node(state, pki, images, addons, timeout=timeout)
         except BaseException:
             self.down()
             raise
@@ -313,9 +319,15 @@ class DevCluster:
         return state
 
     def _start_real_node(
-        self, state: ClusterState, pki: Pki, images: NodeImages, *, timeout: float
+        self,
+        state: ClusterState,
+        pki: Pki,
+        images: NodeImages,
+        addons: Sequence[Mapping[str, Any]],
+        *,
+        timeout: float,
     ) -> ClusterState:
-        """containerd, the images, the kubelet; then wait for the Node to be Ready."""
+        """containerd, the images, the kubelet; the Node Ready; the addons and the slots."""
         name = realnodes.real_node_names(1)[0]
         node = RealNode(
             name=name,
@@ -349,6 +361,15 @@ class DevCluster:
                 watch=state.processes[-2:],
                 blame=state.processes[-1],
             )
+            if addons:
+                add.apply(api, addons)
+                wait_until(
+                    lambda: add.simulator_slots(api, name) > 0,
+                    what=f"{name} advertising simulator slots (device plugin in kube-system)",
+                    timeout=timeout,
+                    watch=state.processes[-2:],
+                    blame=state.processes[-1],
+                )
         finally:
             api.close()  # type: ignore[no-untyped-call]
         return state

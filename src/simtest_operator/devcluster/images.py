@@ -17,6 +17,8 @@ from simtest_operator.errors import ClusterError
 
 BUILD_SCRIPT = Path("deploy/docker/build.sh")
 INDEX = "images.json"
+RUNNER_IMAGE = "ghcr.io/simtest-dev/simtest-runner:0.1.0"
+DEVICE_PLUGIN_IMAGE = "ghcr.io/simtest-dev/simtest-device-plugin:0.1.0"
 SANDBOX_PREFIX = "localhost/simtest/pause:"
 """Name prefix of the pod-sandbox image the build script makes (a static ``pause``)."""
 
