@@ -12,8 +12,6 @@ from pathlib import Path
 from typing import Any
 
 import click
-from rich.console import Console
-from rich.table import Table
 
 from simtest_operator.errors import ScenarioError
 from simtest_operator.evaluation import reference as references
@@ -148,6 +146,10 @@ def _comparison(
 @_TAKEOVER
 def check(directory: Path, jobs: int | None, reference: Path | None, takeover: str) -> None:
     """Run every scenario under DIRECTORY in parallel and print a table."""
+    # Only `check` prints a table: `scenario run` starts without rich.
+    from rich.console import Console
+    from rich.table import Table
+
     settings = Settings.from_env()
     requests = _requests(directory, settings, SutConfig(takeover=Takeover(takeover)))
     ref = references.load(reference) if reference is not None else None

@@ -7,11 +7,13 @@ online evaluation, recording — writes the artifacts and the full result below 
 folder, and leaves the compact result in the termination message (``/dev/termination-log``,
 at most 4 KiB) where the operator reads it from the pod status.
 
-Isolation ``Reuse``: one warm pod runs a queue of scenarios. Each scenario runs in a freshly
-forked worker process; before each fork the runner verifies the reset — the parent never loaded
-a simulator (no SUMO module in the parent process) and the worker of the previous scenario has
-exited — so no state can leak from one scenario into the next. A scenario whose reset cannot be
-verified is not run: it ends as ``Error`` (the operator retries it in a fresh pod).
+Isolation ``Reuse``: one warm pod runs a queue of scenarios. The runner loads libsumo once (the
+bulk of a simulator's start-up) and runs each scenario in a worker process forked from itself, so
+every scenario starts with the engine in memory and none pays for it again. Before each fork the
+runner verifies the reset — the parent has no simulation loaded (it imports the engine, it never
+runs it) and the worker of the previous scenario has exited — so no state can leak from one
+scenario into the next. A scenario whose reset cannot be verified is not run: it ends as
+``Error`` (the operator retries it in a fresh pod).
 
 After the run the results are delivered (:mod:`simtest_operator.runner.delivering`): with an
 ``s3://`` artifacts URI the files are uploaded (endpoint and keys from ``AWS_ENDPOINT_URL_S3`` or
@@ -40,18 +42,24 @@ import time
 from collections.abc import Callable, Mapping, Sequence
 from collections.abc import Set as AbstractSet
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from simtest_operator import results
 from simtest_operator.api import converting
 from simtest_operator.api.v1alpha1 import EvaluationSpec, SimulatorSettings, SutConfig
 from simtest_operator.errors import RenderError, ResultsError, ScenarioError, SimtestError
 from simtest_operator.render import RunSpec, ScenarioRef, messages, runspecs
 from simtest_operator.render.inputs import STARTUP_ALLOWANCE_SECONDS
-from simtest_operator.results import uploading
-from simtest_operator.runner import delivering, execution
+from simtest_operator.runner import execution
 from simtest_operator.scenarios import FetchContext, Locator, PinnedScenario
 from simtest_operator.settings import Settings
+from simtest_operator.sim import sumo
 from simtest_operator.verdicts import ScenarioOutcome, Verdict
+
+if TYPE_CHECKING:
+    # Delivery (the results database, S3) is imported when the runs are over, not before the
+    # first simulation step: psycopg and boto3 cost more than the simulator's whole start-up.
+    from simtest_operator.results import uploading
+    from simtest_operator.runner import delivering
 
 TERMINATION_LOG = "/dev/termination-log"
 DSN_VAR = "SIMTEST_RESULTS_DSN"
@@ -60,8 +68,6 @@ RESULTS_STORED = "resultsStored"
 """Key of the termination-message entry flag set (to false) when the row was not stored."""
 DEADLINE_MARGIN_SECONDS = 10.0
 """Time kept free before the pod's activeDeadlineSeconds (pod start precedes the runner's)."""
-SIMULATOR_MODULES = ("libsumo", "traci")
-"""Modules whose presence in the parent process would mean simulator state could leak."""
 
 RunOne = Callable[[execution.RunRequest], ScenarioOutcome]
 
@@ -112,6 +118,8 @@ def run_job(
     spec = job.spec
     locator = Locator(FetchContext(base_dir=Path("/"), cache_dir=job.settings.cache.sources))
     isolated = spec.isolation == "Reuse" and len(spec.scenarios) > 1 if fork is None else fork
+    if isolated and run_one is _run_one:
+        sumo.preload()  # once per pod: every forked scenario starts with libsumo loaded
     attempts: list[delivering.Attempt] = []
     for scenario in spec.scenarios:
         started = time.perf_counter()
@@ -146,9 +154,8 @@ def run_job(
 
 def reset_problem() -> str | None:
     """Why the next scenario cannot be sure of a clean simulator, or None."""
-    loaded = [m for m in SIMULATOR_MODULES if m in sys.modules]
-    if loaded:
-        return f"the parent process loaded {', '.join(loaded)}"
+    if sumo.running():
+        return "the parent process has a SUMO simulation loaded"
     children = multiprocessing.active_children()
     if children:
         return f"{len(children)} worker process(es) of earlier scenarios still alive"
@@ -209,6 +216,8 @@ def _attempt(
     scenario: ScenarioRef, path: Path | None, outcome: ScenarioOutcome, job: Job
 ) -> delivering.Attempt:
     """The attempt with the pod's attempt number and every local artifact (result file added)."""
+    from simtest_operator.runner import delivering
+
     folder = job.artifacts / safe_name(scenario.id)
     artifacts = dict(outcome.artifacts)
     if (folder / "result.json").is_file():
@@ -240,6 +249,10 @@ def deliverer_for(
     job: Job, env: Mapping[str, str], *, run_key: str | None, deadline: float | None
 ) -> delivering.Deliverer:
     """The pod's deliverer from the run spec and the container environment."""
+    from simtest_operator import results
+    from simtest_operator.results import uploading
+    from simtest_operator.runner import delivering
+
     spec = job.spec
     deliverer = delivering.Deliverer(
         campaign=spec.campaign,
@@ -269,6 +282,8 @@ def deliverer_for(
 
 def s3_credentials(env: Mapping[str, str]) -> uploading.S3Credentials:
     """Endpoint and keys from the standard ``AWS_*`` variables; missing ones are an error."""
+    from simtest_operator.results import uploading
+
     endpoint = env.get("AWS_ENDPOINT_URL_S3") or env.get("AWS_ENDPOINT_URL") or ""
     missing = [
         name

@@ -22,7 +22,6 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import sumo
-import sumolib
 
 from simtest_operator import opendrive
 from simtest_operator.errors import ScenarioError, SimulationError
@@ -159,6 +158,8 @@ def lane_origins(net_path: Path) -> Mapping[tuple[str, int], tuple[str, ...]]:
     Normal lanes of split lane sections map several SUMO lanes to one OpenDRIVE lane (ordered as
     in the net file); junction connecting roads map to internal lanes (``:<junction>_<n>_<i>``).
     """
+    import sumolib  # here, not at the top: it imports numpy, pyproj and lxml (0.2 s)
+
     try:
         net = sumolib.net.readNet(str(net_path), withInternal=True)
     except (OSError, ValueError) as exc:
