@@ -7,13 +7,13 @@ online evaluation, recording — writes the artifacts and the full result below 
 folder, and leaves the compact result in the termination message (``/dev/termination-log``,
 at most 4 KiB) where the operator reads it from the pod status.
 
-Isolation ``Reuse``: one warm pod runs a queue of scenarios. The runner loads libsumo once (the
-bulk of a simulator's start-up) and runs each scenario in a worker process forked from itself, so
-every scenario starts with the engine in memory and none pays for it again. Before each fork the
-runner verifies the reset — the parent has no simulation loaded (it imports the engine, it never
-runs it) and the worker of the previous scenario has exited — so no state can leak from one
-scenario into the next. A scenario whose reset cannot be verified is not run: it ends as
-``Error`` (the operator retries it in a fresh pod).
+Isolation ``Reuse``: one warm pod runs a queue of scenarios. The runner loads libsumo and reads
+the reproducibility record once (most of a simulator's start-up) and runs each scenario in a
+worker process forked from itself, so every scenario starts warm and none pays for them again.
+Before each fork the runner verifies the reset — the parent has no simulation loaded (it loads
+the engine, it never runs it) and the worker of the previous scenario has exited — so no state
+can leak from one scenario into the next. A scenario whose reset cannot be verified is not run:
+it ends as ``Error`` (the operator retries it in a fresh pod).
 
 After the run the results are delivered (:mod:`simtest_operator.runner.delivering`): with an
 ``s3://`` artifacts URI the files are uploaded (endpoint and keys from ``AWS_ENDPOINT_URL_S3`` or
@@ -44,6 +44,7 @@ from collections.abc import Set as AbstractSet
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from simtest_operator import provenance
 from simtest_operator.api import converting
 from simtest_operator.api.v1alpha1 import EvaluationSpec, SimulatorSettings, SutConfig
 from simtest_operator.errors import RenderError, ResultsError, ScenarioError, SimtestError
@@ -119,7 +120,7 @@ def run_job(
     locator = Locator(FetchContext(base_dir=Path("/"), cache_dir=job.settings.cache.sources))
     isolated = spec.isolation == "Reuse" and len(spec.scenarios) > 1 if fork is None else fork
     if isolated and run_one is _run_one:
-        sumo.preload()  # once per pod: every forked scenario starts with libsumo loaded
+        warm_up()
     attempts: list[delivering.Attempt] = []
     for scenario in spec.scenarios:
         started = time.perf_counter()
@@ -150,6 +151,12 @@ def run_job(
             outcome = _failed(scenario.id, Verdict.ERROR, str(exc), started)
         attempts.append(_attempt(scenario, path, outcome, job))
     return attempts
+
+
+def warm_up() -> None:
+    """Pay once per pod what every scenario needs before its first step, before the forks."""
+    sumo.preload()  # libsumo: a forked scenario starts with it loaded
+    provenance.versions()  # computed once per process: the forks inherit it
 
 
 def reset_problem() -> str | None:
