@@ -227,8 +227,9 @@ func TestRegistersAndAdvertisesSlots(t *testing.T) {
 
 func TestServiceCalls(t *testing.T) {
 	dir := shortDir(t)
-	startKubelet(t, dir)
+	kubelet := startKubelet(t, dir)
 	r := startPlugin(t, dir, 4)
+	kubelet.nextRequest() // the plugin registers only once it serves its socket
 	ctx, cancel := context.WithTimeout(context.Background(), waitFor)
 	defer cancel()
 	client := dial(t, r.plugin.SocketPath())
