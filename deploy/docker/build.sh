@@ -4,8 +4,9 @@
 #
 #   bash deploy/docker/build.sh                    # all: runner operator helmfile device-plugin pause
 #   bash deploy/docker/build.sh runner pause       # a subset (the bases they need come along)
+#   bash deploy/docker/build.sh bases              # only the local bases
 #   bash deploy/docker/build.sh --cache-dir DIR …  # instead of $SIMTEST_CACHE_DIR
-#   bash deploy/docker/build.sh --prune            # then drop layers and archives nothing uses
+#   bash deploy/docker/build.sh --prune            # then drop the layer cache and stray archives
 #
 # Idempotent: an image whose content key is unchanged is not rebuilt (a few seconds in all).
 # Elsewhere, with a registry, the Dockerfiles build as they are on their public bases
@@ -67,7 +68,7 @@ RUNROOT="/run/simtest-buildah/$(printf '%s' "$STORE" | sha256sum | cut -c1-12)"
 TC="$CACHE_ROOT/toolchain"
 UV_CACHE="$CACHE_ROOT/uv/cache"
 ALL_TARGETS=(runner operator helmfile device-plugin pause)
-ISOLATION="${BUILDAH_ISOLATION:-chroot}"
+ISOLATION="${BUILDAH_ISOLATION:-oci}"
 CA_BUNDLE="${SSL_CERT_FILE:-/etc/ssl/certs/ca-certificates.crt}"
 KEY_LABEL=dev.simtest.build-key
 
@@ -131,12 +132,14 @@ label_of() {
 
 image_id() { bah inspect --type image --format '{{.FromImageID}}' "$1"; }
 
-# export_archive <image> <file>: an OCI archive whose index names the image twice: the OCI ref
-# name annotation and containerd's io.containerd.image.name, which `ctr images import` uses.
+# export_archive <image> <file>: an OCI archive (image layout in a tar) whose index names the
+# image twice: the OCI ref name annotation and containerd's io.containerd.image.name, which
+# `ctr images import` uses as the image's name.
 export_archive() {
     local name="$1" archive="$2" tmp="$IMG/work/export"
     rm -rf "$tmp"
-    bah push --quiet "$name" "oci:$tmp:$name" >/dev/null
+    # zstd: containerd 1.6 imports it; a third faster to write than gzip and 15 % smaller.
+    bah push --quiet --compression-format zstd "$name" "oci:$tmp:$name" >/dev/null
     python3 - "$tmp/index.json" "$name" <<'EOF'
 import json, sys
 path, name = sys.argv[1:]
@@ -161,24 +164,26 @@ restore() {
 }
 
 # record <short> <image> <key> <archive> [section]: what a real node needs to know about the
-# archive (manifest digest as containerd will list it, image ID, unpacked and archive sizes),
-# in <archive without .oci.tar>.json; write_index gathers these into images.json.
+# archive (manifest digest as containerd will list it, image ID, sizes) in <archive>.json, which
+# write_index gathers into images.json. The unpacked size is the sum of the image's layers in the
+# store (what `buildah images` shows); the archive's layers are zstd-compressed.
 record() {
-    python3 - "$@" <<'EOF'
-import gzip, json, os, sys, tarfile
-short, name, key, archive, section = (sys.argv[1:] + ["images"])[:5]
+    python3 - "$STORE" "$@" <<'EOF'
+import json, os, sys, tarfile
+store, short, name, key, archive, section = (sys.argv[1:] + ["images"])[:6]
 with tarfile.open(archive) as tar:
     blob = lambda digest: tar.extractfile("blobs/" + digest.replace(":", "/"))
     index = json.load(tar.extractfile("index.json"))
     (descriptor,) = index["manifests"]
     manifest = json.load(blob(descriptor["digest"]))
-    unpacked = 0
-    for layer in manifest["layers"]:
-        stream = blob(layer["digest"])
-        if layer["mediaType"].endswith("+gzip"):
-            stream = gzip.GzipFile(fileobj=stream)
-        while chunk := stream.read(1 << 20):
-            unpacked += len(chunk)
+with open(os.path.join(store, "overlay-layers", "layers.json")) as f:
+    layers = {layer["id"]: layer for layer in json.load(f)}
+with open(os.path.join(store, "overlay-images", "images.json")) as f:
+    (image,) = [i for i in json.load(f) if name in (i.get("names") or [])]
+unpacked, layer = 0, image.get("layer")
+while layer:
+    unpacked += layers[layer].get("diff-size", 0)
+    layer = layers[layer].get("parent")
 entry = {
     "section": section,
     "name": name,
@@ -189,19 +194,22 @@ entry = {
     "archiveSize": os.path.getsize(archive),
     "layers": len(manifest["layers"]),
     "key": key,
-    "short": short,
 }
 with open(archive.removesuffix(".oci.tar") + ".json", "w") as f:
     json.dump(entry, f, indent=2)
 EOF
 }
 
+declare -A ENSURED=()
+BUILT=0
 # ensure <short> <image> <key> <builder> [section]: <image>, made from content <key>, is in the
 # store and in <short>-<key>.oci.tar; whatever is missing is built (<builder> <image> <key>),
 # restored from the archive or exported. Older archives of <short> are deleted.
 ensure() {
     local short="$1" name="$2" key="$3" builder="$4" section="${5:-images}"
     local archive="$IMG/$short-$key.oci.tar" t0=$SECONDS
+    [[ -z "${ENSURED[$short]:-}" ]] || return 0
+    ENSURED[$short]=1
     if [[ "$(label_of "$name")" == "$key" && -s "$archive" && -s "${archive%.oci.tar}.json" ]]; then
         log "$short: cached ($name, key $key)"
         return
@@ -213,6 +221,7 @@ ensure() {
         else
             log "$short: building $name (key $key)"
             "$builder" "$name" "$key"
+            BUILT=1
         fi
         [[ "$(label_of "$name")" == "$key" ]] || die "$short: $name was made but does not carry $KEY_LABEL=$key"
     fi
@@ -316,7 +325,7 @@ key_base_python() {
 
 build_base_python() {
     local name="$1" key="$2" ctr version
-    ctr="$(bah from --quiet --pull never "$BASE_DEBIAN")"
+    ctr="$(bah from --quiet --pull=never "$BASE_DEBIAN")"
     # shellcheck disable=SC2086
     bah run --isolation "$ISOLATION" --network host "$ctr" -- sh -ec "
         apt-get update -qq
@@ -385,7 +394,7 @@ key_base_golang() {
 
 build_base_golang() {
     local name="$1" key="$2" ctr v="${BASE_GO#*:}"; v="${v%-bookworm}"
-    ctr="$(bah from --quiet --pull never "$BASE_DEBIAN")"
+    ctr="$(bah from --quiet --pull=never "$BASE_DEBIAN")"
     bah copy --quiet "$ctr" "$GOROOT_HOST" /usr/local/go >/dev/null
     bah run --isolation "$ISOLATION" "$ctr" -- sh -ec 'mkdir -p /go/src /go/bin && chmod -R 1777 /go && /usr/local/go/bin/go version' \
         >"$IMG/logs/base-golang.log" 2>&1 || die "the Go base does not run go: $(tail -n 3 "$IMG/logs/base-golang.log")"
@@ -457,19 +466,20 @@ stage_context() {
 # The FROM arguments a Dockerfile may declare and the local base each one is pointed at.
 declare -A BASE_OF_ARG=([PYTHON_IMAGE]=python [UV_IMAGE]=uv [GO_IMAGE]=golang [DEBIAN_IMAGE]=debian)
 
-# ensure_base <debian|python|uv|golang>: the base is ready; prints its image name.
+# ensure_base <debian|python|uv|golang>: the base is ready; its name in BASE_REF.
+BASE_REF=""
 ensure_base() {
     case "$1" in
-        debian) ensure base-debian "$BASE_DEBIAN" "$(key_base_debian)" build_base_debian bases >&2
-                echo "$BASE_DEBIAN" ;;
-        python) ensure_base debian >/dev/null
-                ensure base-python "$BASE_PYTHON" "$(key_base_python)" build_base_python bases >&2
-                echo "$BASE_PYTHON" ;;
-        uv)     ensure base-uv "$BASE_UV" "$(key_base_uv)" build_base_uv bases >&2
-                echo "$BASE_UV" ;;
-        golang) need_go; ensure_base debian >/dev/null
-                ensure base-golang "$BASE_GO" "$(key_base_golang)" build_base_golang bases >&2
-                echo "$BASE_GO" ;;
+        debian) ensure base-debian "$BASE_DEBIAN" "$(key_base_debian)" build_base_debian bases
+                BASE_REF="$BASE_DEBIAN" ;;
+        python) ensure_base debian
+                ensure base-python "$BASE_PYTHON" "$(key_base_python)" build_base_python bases
+                BASE_REF="$BASE_PYTHON" ;;
+        uv)     ensure base-uv "$BASE_UV" "$(key_base_uv)" build_base_uv bases
+                BASE_REF="$BASE_UV" ;;
+        golang) need_go; ensure_base debian
+                ensure base-golang "$BASE_GO" "$(key_base_golang)" build_base_golang bases
+                BASE_REF="$BASE_GO" ;;
     esac
 }
 
@@ -485,9 +495,11 @@ image_target() {
     local arg base ids=() uses_go=0
     BUD_ARGS=()
     for arg in $(sed -n 's/^ARG \([A-Z_]*_IMAGE\)=.*/\1/p' "$df"); do
+        # An empty image needs no local base.
+        grep -q "^ARG $arg=scratch\$" "$df" && continue
         [[ -n "${BASE_OF_ARG[$arg]:-}" ]] \
             || die "$short: $(basename "$df") takes a base in ARG $arg, for which build.sh has no local base (one of: ${!BASE_OF_ARG[*]})"
-        base="$(ensure_base "${BASE_OF_ARG[$arg]}")"
+        ensure_base "${BASE_OF_ARG[$arg]}"; base="$BASE_REF"
         BUD_ARGS+=(--build-arg "$arg=$base")
         ids+=("$arg=$base@$(image_id "$base")")
         [[ "$arg" == GO_IMAGE ]] && uses_go=1
@@ -512,11 +524,11 @@ build_dockerfile() {
     local name="$1" key="$2" short log rc
     short="$(basename "$DF" .Dockerfile)"; log="$IMG/logs/$short.log"
     set +e
-    bah bud --layers --pull never --isolation "$ISOLATION" --network host --format oci \
+    bah bud --layers --force-rm --pull=never --isolation "$ISOLATION" --network host --format oci \
         -v "$CA_BUNDLE:/etc/ssl/certs/ca-certificates.crt:ro" "${BUD_ARGS[@]}" \
         --label "$KEY_LABEL=$key" -f "$DF" -t "$name" "$CTX" 2>&1 \
         | tee "$log" | while IFS= read -r line; do
-            [[ "$line" == STEP* ]] && log "  $short: ${line:0:100}"
+            [[ "$line" =~ ^(\[[0-9]+/[0-9]+\]\ )?STEP ]] && log "  $short: ${line:0:100}"
         done
     rc=${PIPESTATUS[0]}
     set -e
@@ -529,7 +541,7 @@ build_dockerfile() {
 no_proxy_ca() {
     local extra=(/usr/local/share/ca-certificates/*.crt) ctr mnt crt line bad=""
     [[ -e "${extra[0]}" ]] || return 0
-    ctr="$(bah from --quiet --pull never "$1")"; mnt="$(bah mount "$ctr")"
+    ctr="$(bah from --quiet --pull=never "$1")"; mnt="$(bah mount "$ctr")"
     for crt in "${extra[@]}"; do
         line="$(sed -n '2p' "$crt")"
         [[ -n "$line" ]] || continue
@@ -565,9 +577,39 @@ os.replace(tmp, os.path.join(img, "images.json"))
 EOF
 }
 
+# drop_stale: remove every image of the store that no named image is built on, i.e. the layer
+# cache of earlier builds. The cache of the current ones stays (the steps the named images were
+# made from, e.g. the dependency layer); so does anything a container still uses.
+drop_stale() {
+    local ids
+    ids="$(python3 - "$STORE" <<'EOF'
+import json, os, sys
+store = sys.argv[1]
+with open(os.path.join(store, "overlay-layers", "layers.json")) as f:
+    parents = {layer["id"]: layer.get("parent") for layer in json.load(f)}
+with open(os.path.join(store, "overlay-images", "images.json")) as f:
+    images = json.load(f)
+kept = set()
+for image in images:
+    if image.get("names"):
+        layer = image.get("layer")
+        while layer and layer not in kept:
+            kept.add(layer)
+            layer = parents.get(layer)
+for image in images:
+    if not image.get("names") and image.get("layer") not in kept:
+        print(image["id"])
+EOF
+)"
+    [[ -n "$ids" ]] || return 0
+    # shellcheck disable=SC2086
+    bah rmi $ids >/dev/null 2>&1 || true
+    log "store: dropped $(wc -w <<<"$ids") stale cache image(s); $(du -sh "$STORE" | cut -f1) now"
+}
+
+# prune: also the layer cache of the current images, and archives images.json does not name.
 prune() {
-    log "prune: removing containers, dangling layers and archives images.json does not name"
-    bah rm --all >/dev/null 2>&1 || true
+    log "prune: removing the layer cache and archives images.json does not name"
     bah rmi --prune >/dev/null 2>&1 || true
     local f
     for f in "$IMG"/*.oci.tar; do
@@ -581,7 +623,7 @@ prune() {
 targets=("$@")
 [[ ${#targets[@]} -gt 0 ]] || targets=("${ALL_TARGETS[@]}")
 for t in "${targets[@]}"; do
-    [[ " ${ALL_TARGETS[*]} " == *" $t "* ]] || die "unknown image '$t' (one of: ${ALL_TARGETS[*]})"
+    [[ " ${ALL_TARGETS[*]} bases " == *" $t "* ]] || die "unknown image '$t' (one of: ${ALL_TARGETS[*]} bases)"
 done
 
 check_host
@@ -593,9 +635,11 @@ log "image cache: $IMG (isolation $ISOLATION, storage overlay)"
 for t in "${targets[@]}"; do
     case "$t" in
         pause) ensure pause "$PAUSE_IMAGE" "$(key_pause)" build_pause ;;
+        bases) for b in debian python uv golang; do ensure_base "$b"; done ;;
         *) image_target "$t" ;;
     esac
 done
 write_index
+[[ $BUILT == 0 ]] || drop_stale
 [[ $PRUNE == 0 ]] || prune
 log "ready: $IMG/images.json ($(du -sh "$IMG" --exclude=storage 2>/dev/null | cut -f1) in archives, store $(du -sh "$STORE" 2>/dev/null | cut -f1))"
