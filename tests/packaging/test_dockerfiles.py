@@ -5,11 +5,14 @@ Covers: every FROM resolves (through ARG defaults) to a pinned base (a version t
 never `latest` or a bare name); the final stage of each image switches to a numeric non-root user
 and has an entrypoint that exists (a console script of pyproject, or helmfile); COPY sources exist
 in the repository; no ADD of remote URLs and no curl-pipe-shell; the helmfile image builds helm and
-helmfile with deploy/devcluster/build.sh (versions from versions.env, no second pin); the
-constraints file pins every runtime dependency of pyproject.toml to a version its specifier
-accepts, and every distribution `pip install .` brings in; every third-party module the package
-imports is installed by the images (known gaps, waiting for a pyproject line, are listed and
-re-checked).
+helmfile with deploy/devcluster/build.sh (versions from versions.env, no second pin); the Python
+images install from uv.lock only (`uv sync --frozen --no-dev --no-editable`, the dependencies in a
+layer of their own before any source is copied, then the project), with uv from the pinned uv
+image (the version deploy/setup.sh pins) mounted rather than copied, never pip; the final image
+carries the lock at SIMTEST_LOCK_FILE; the lock pins every runtime dependency of pyproject.toml
+to a version its specifier accepts, and every distribution `pip install .` brings in; every
+third-party module the package imports is installed by the images (known gaps, waiting for a
+pyproject line, are listed and re-checked). Building them for real: tests/images/.
 """
 
 from __future__ import annotations
@@ -22,8 +25,10 @@ import sys
 import tomllib
 from importlib import metadata
 from pathlib import Path
+from typing import Any
 
 import pytest
+from packaging.markers import Marker
 from packaging.requirements import Requirement
 from packaging.utils import canonicalize_name
 from packaging.version import Version
@@ -35,6 +40,8 @@ IMAGES = {
     "runner.Dockerfile": "simtest-runner",
     "helmfile.Dockerfile": "helmfile",
 }
+PYTHON_IMAGES = ("operator.Dockerfile", "runner.Dockerfile")
+LOCK_FILE = "/opt/simtest/uv.lock"
 
 
 @dataclasses.dataclass(frozen=True, slots=True)
@@ -146,20 +153,111 @@ def test_helmfile_image_uses_the_one_build_recipe() -> None:
     assert "go install" not in runs
 
 
-def test_constraints_pin_every_runtime_dependency() -> None:
-    pins = {}
-    for line in (DOCKER / "constraints.txt").read_text().splitlines():
-        if line and not line.startswith("#"):
-            name, _, version = line.partition("==")
-            assert version, f"constraint {line!r} is not an exact pin"
-            pins[canonicalize_name(name)] = Version(version)
-    assert list(pins) == sorted(pins), "keep constraints.txt sorted"
+def _stage_chain(path: Path) -> list[list[Instruction]]:
+    """The stages the final image is built on, base first (FROM <stage> followed back)."""
+    named = {}
+    for stage in stages(path)[1:]:
+        base, _, alias = stage[0].argument.partition(" AS ")
+        if alias:
+            named[alias.strip()] = stage
+    chain = [stages(path)[-1]]
+    while (base := chain[-1][0].argument.partition(" AS ")[0].strip()) in named:
+        chain.append(named[base])
+    return chain[::-1]
+
+
+def _runs(stage: list[Instruction]) -> list[str]:
+    return [i.argument for i in stage if i.keyword == "RUN"]
+
+
+@pytest.mark.parametrize("name", PYTHON_IMAGES)
+def test_python_images_install_from_the_lock(name: str) -> None:
+    path = DOCKER / name
+    text = " ".join(i.argument for i in instructions(path))
+    assert "pip install" not in text and "constraints" not in text, "install from uv.lock only"
+    chain = _stage_chain(path)
+    # The dependencies: a RUN of the final image's own chain, before any source is there.
+    deps = next(stage for stage in chain if any("--no-install-project" in r for r in _runs(stage)))
+    copied = [shlex.split(i.argument) for i in deps if i.keyword == "COPY"]
+    assert copied == [["pyproject.toml", "uv.lock", "/opt/simtest/"]], "only the lock, first"
+    (sync,) = [r for r in _runs(deps) if "uv sync" in r]
+    for flag in ("--frozen", "--no-dev", "--no-editable", "--no-install-project"):
+        assert flag in sync
+    assert "UV_PROJECT_ENVIRONMENT=/opt/simtest/venv" in sync
+    # The project: a later stage with the sources, the same venv, only its files copied over.
+    project = next(
+        s
+        for s in stages(path)[1:]
+        if any(i.keyword == "COPY" and i.argument.startswith("src ") for i in s)
+    )
+    (sync,) = [r for r in _runs(project) if "uv sync" in r]
+    assert all(f in sync for f in ("--frozen", "--no-dev", "--no-editable"))
+    assert "--no-install-project" not in sync
+    final = chain[-1]
+    assert any(i.keyword == "COPY" and i.argument.startswith("--from=project ") for i in final)
+    # uv is used, never installed into an image the final one derives from.
+    for stage in chain:
+        for i in stage:
+            assert not (i.keyword == "COPY" and "/uv" in i.argument.split()[1:2]), "uv in image"
+            if i.keyword == "RUN" and "uv sync" in i.argument:
+                assert "--mount=from=uv,source=/uv,target=/bin/uv" in i.argument
+    envs = " ".join(i.argument for i in final if i.keyword == "ENV")
+    assert f"SIMTEST_LOCK_FILE={LOCK_FILE}" in envs
+
+
+@pytest.mark.parametrize("name", PYTHON_IMAGES)
+def test_uv_image_is_the_version_setup_pins(name: str) -> None:
+    setup = (REPO / "deploy" / "setup.sh").read_text()
+    (version,) = re.findall(r"^UV_VERSION=(\S+)$", setup, flags=re.MULTILINE)
+    assert global_args(DOCKER / name)["UV_IMAGE"] == f"ghcr.io/astral-sh/uv:{version}"
+
+
+def test_python_images_share_their_dependency_stages() -> None:
+    """Identical text up to the final stage: buildah and docker then reuse one dependency layer."""
+    heads = []
+    for name in PYTHON_IMAGES:
+        body = instructions(DOCKER / name)
+        heads.append(body[: max(k for k, i in enumerate(body) if i.keyword == "FROM")])
+    assert heads[0] == heads[1]
+
+
+def _locked() -> tuple[dict[str, list[dict[str, Any]]], dict[str, Any]]:
+    """uv.lock's packages by name, and the project's own entry."""
+    packages: dict[str, list[dict[str, Any]]] = {}
+    for package in tomllib.loads((REPO / "uv.lock").read_text())["package"]:
+        packages.setdefault(canonicalize_name(package["name"]), []).append(package)
+    (project,) = packages[canonicalize_name("simtest-operator")]
+    return packages, project
+
+
+def _lock_closure() -> dict[str, Version]:
+    """What `uv sync --frozen --no-dev` installs on this platform (markers evaluated here)."""
+    packages, project = _locked()
+    installed: dict[str, Version] = {}
+    stack = [(dep, "") for dep in project["dependencies"]]
+    while stack:
+        dep, extra = stack.pop()
+        marker = dep.get("marker")
+        if marker and not Marker(marker).evaluate({"extra": extra}):
+            continue
+        name = canonicalize_name(dep["name"])
+        candidates = [p for p in packages[name] if dep.get("version") in (None, p["version"])]
+        (package,) = candidates
+        installed[name] = Version(package["version"])
+        stack += [(d, "") for d in package.get("dependencies", [])]
+        for wanted in dep.get("extra", []):
+            stack += [(d, wanted) for d in package.get("optional-dependencies", {})[wanted]]
+    return installed
+
+
+def test_lock_pins_every_runtime_dependency() -> None:
+    locked = _lock_closure()
     dependencies = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]["dependencies"]
     for dependency in map(Requirement, dependencies):
         name = canonicalize_name(dependency.name)
-        assert name in pins, f"{dependency.name} is not pinned in deploy/docker/constraints.txt"
-        assert dependency.specifier.contains(pins[name], prereleases=True), (
-            f"{dependency.name}=={pins[name]} does not satisfy {dependency}"
+        assert name in locked, f"{dependency.name} is not in uv.lock (run `uv lock`)"
+        assert dependency.specifier.contains(locked[name], prereleases=True), (
+            f"uv.lock has {dependency.name}=={locked[name]}, which does not satisfy {dependency}"
         )
 
 
@@ -212,12 +310,7 @@ def _imported_distributions() -> dict[str, set[str]]:
 
 def test_images_provide_every_imported_package() -> None:
     closure = _runtime_closure()
-    pinned = {
-        canonicalize_name(line.partition("==")[0])
-        for line in (DOCKER / "constraints.txt").read_text().splitlines()
-        if line and not line.startswith("#")
-    }
-    assert sorted(closure - pinned) == [], "installed by the images but not pinned"
+    assert sorted(closure - set(_lock_closure())) == [], "a runtime requirement uv.lock lacks"
     missing = {module for module, dists in _imported_distributions().items() if not dists & closure}
     assert sorted(missing - set(KNOWN_UNDECLARED)) == [], "imported but not installed"
     assert sorted(set(KNOWN_UNDECLARED) - missing) == [], "fixed: remove from KNOWN_UNDECLARED"
