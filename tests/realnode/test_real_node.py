@@ -14,12 +14,14 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+import threading
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
 import yaml
-from kubernetes import client
+from kubernetes import client, watch
 
 from simtest_operator.devcluster import images
 from simtest_operator.devcluster.nodeconfig import REAL_NODE_LABEL
@@ -84,7 +86,6 @@ def real_operator(
         workdir=tmp_path,
         extra_env={
             "SIMTEST_OPERATOR_SCENARIO_CLAIM": scenario_claim,
-            "SIMTEST_OPERATOR_KEEP_ENVIRONMENTS": "true",
         },
     )
     process.start()
@@ -126,6 +127,37 @@ def _local_verdicts(tmp_path: Path) -> dict[str, str]:
     return results
 
 
+class PodWatch:
+    """The last state of every simulator pod in a namespace, seen through a watch."""
+
+    def __init__(self, api: client.ApiClient, namespace: str) -> None:
+        self.pods: dict[str, Any] = {}
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, args=(api, namespace), daemon=True)
+
+    def _run(self, api: client.ApiClient, namespace: str) -> None:
+        core = client.CoreV1Api(api)
+        while not self._stop.is_set():
+            stream = watch.Watch().stream(
+                core.list_namespaced_pod,
+                namespace,
+                label_selector="simtest.dev/campaign",
+                timeout_seconds=2,
+            )
+            for event in stream:
+                pod = event["object"]
+                if event["type"] != "DELETED" or pod.metadata.name not in self.pods:
+                    self.pods[pod.metadata.name] = pod
+
+    def __enter__(self) -> PodWatch:
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self._stop.set()
+        self._thread.join(timeout=10)
+
+
 def test_smoke_campaign_runs_in_real_containers_with_the_local_verdicts(
     real_cluster: ClusterInfo,
     real_api_client: client.ApiClient,
@@ -133,9 +165,10 @@ def test_smoke_campaign_runs_in_real_containers_with_the_local_verdicts(
     real_operator: support.OperatorProcess,
     tmp_path: Path,
 ) -> None:
-    submitted = support.submit(
-        SMOKE, namespace=real_namespace, kubeconfig=real_cluster.kubeconfig, timeout=300
-    )
+    with PodWatch(real_api_client, real_namespace) as seen:
+        submitted = support.submit(
+            SMOKE, namespace=real_namespace, kubeconfig=real_cluster.kubeconfig, timeout=300
+        )
     assert submitted.returncode == 1, submitted.stdout + submitted.stderr  # one scenario fails
     cluster = support.Cluster(real_api_client, real_namespace)
     results = cluster.results("smoke")
@@ -143,14 +176,14 @@ def test_smoke_campaign_runs_in_real_containers_with_the_local_verdicts(
     assert verdicts == _local_verdicts(tmp_path)
     assert verdicts["cut-in_highway_v30_gap8_dv12.xosc"] == "Failed"
     assert "collided" in results["cut-in_highway_v30_gap8_dv12.xosc"]["reason"]
-    pods = cluster.pods()
+    pods = list(seen.pods.values())
     assert len(pods) == 6
     for pod in pods:
         (status,) = pod.status.container_statuses
         assert pod.spec.node_name == real_cluster.real_nodes[0]
         assert status.image == images.RUNNER_IMAGE
         assert status.container_id.startswith("containerd://")
-        assert status.state.terminated is not None
+        assert status.state.terminated is not None, status.state
         assert pod.spec.security_context.run_as_user == 65532
         assert pod.spec.containers[0].security_context.read_only_root_filesystem is True
 
