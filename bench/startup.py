@@ -247,7 +247,9 @@ def imports_by_package(stderr: str) -> dict[str, float]:
         if match.group(4) == "simtest-bench-first-step":
             break
         totals[match.group(4).split(".")[0]] += int(match.group(1)) / 1e6
-    return dict(totals)
+    small = sum(seconds for seconds in totals.values() if seconds < 1e-3)
+    kept = {package: round(s, 6) for package, s in totals.items() if s >= 1e-3}
+    return kept | {"(below 1 ms each)": round(small, 6)}
 
 
 def phases(run: dict[str, Any]) -> dict[str, float]:
@@ -362,7 +364,8 @@ def table(name: str, figures: dict[str, dict[str, float]], labels: list[str]) ->
         (k for k in keys if k.startswith("  ")),
         key=lambda k: -max(figures[label].get(k, 0.0) for label in labels),
     )
-    top, rest = packages[:8], packages[8:]
+    top = [k for k in packages if not k.startswith("  (")][:8]
+    rest = [k for k in packages if k not in top]
     ordered = [k for k in keys if not k.startswith("  ") and k != "imports before first step"]
     at = ordered.index("wall (plain run)")
     ordered[at:at] = ["imports before first step", *top, "  (other packages)"]
