@@ -28,23 +28,33 @@
 #   runner operator helmfile device-plugin                      deploy/docker/<name>.Dockerfile
 #
 # What buildah 1.28 (Debian bookworm) needs on this machine kind, found by trying:
-#   storage   overlay on the ext4 cache (native overlay diff); vfs works too but copies every
-#             layer in full. A store of our own (--root/--runroot) keeps the project's layers
-#             out of /var/lib/containers and lets one `rm -rf` clean up.
-#   isolation chroot (BUILDAH_ISOLATION). oci (runc) fails: the VM refuses to lower
-#             oom_score_adj and runc 1.1 dies on it (see ../shared/notes/real-node.md).
-#   network   --network host for RUN steps: there is no CNI configuration for buildah's private
-#             network, and PyPI, the Go proxy and Debian are reached through the host's route.
+#   storage   overlay on the ext4 cache (native overlay diff); vfs would copy every layer in
+#             full. A store of our own (--root/--runroot) keeps the project's layers out of
+#             /var/lib/containers; drop_stale keeps it to the current images and their cache.
+#   isolation oci (runc 1.1, the default; BUILDAH_ISOLATION=chroot works too): each RUN step in
+#             its own pid/mount/ipc/uts namespaces as with docker build. The VM's refusal to
+#             lower oom_score_adj (real-node.md) does not matter: buildah does not ask.
+#   network   --network host for RUN steps: no CNI set-up or iptables needed, and the egress
+#             proxy stays transparent. PyPI, the Go proxy and Debian (http) are reached.
 #   TLS       egress goes through a TLS-intercepting proxy whose CA is only in the host's bundle.
 #             The bundle is bind-mounted read-only over /etc/ssl/certs/ca-certificates.crt for
-#             RUN steps only (`buildah bud -v`): it is never part of a layer (checked after each
-#             build). uv reads it because the build stages set UV_SYSTEM_CERTS=1; Go reads it as
-#             the system pool. Debian is fetched over plain http (apt verifies signatures).
+#             RUN steps only (`bud -v`): never part of a layer (no_proxy_ca checks every image).
+#             uv reads it with UV_SYSTEM_CERTS=1 (set in the Dockerfiles' RUN steps, harmless
+#             elsewhere); Go reads it as the system pool; apt needs none (http, signed indexes).
 #   caches    the host's uv cache ($CACHE_ROOT/uv/cache) and Go caches ($CACHE_ROOT/toolchain/
-#             gomodcache, gocache) are bind-mounted into RUN steps (`-v`), so an image build
-#             reuses what `deploy/setup.sh` and `deploy/devcluster/build.sh` already fetched and
-#             compiled. `--layers` keeps intermediate layers, so a source change re-runs only the
-#             project's layer, never the dependency install.
+#             gomodcache, gocache) are bind-mounted into RUN steps (`bud -v`), so an image
+#             build reuses what deploy/setup.sh and deploy/devcluster/build.sh fetched and
+#             compiled (helm and helmfile link in seconds). Not `RUN --mount=type=cache` in the
+#             Dockerfiles: buildah keeps those in /var/tmp/buildah-cache, apart from the host's
+#             caches, and which of the two a RUN sees when both name a path is not reliable.
+#   layers    --layers caches RUN and COPY-from-context steps by parent and content, but never a
+#             `COPY --from=<stage>`: the Python images' final stages therefore start FROM the
+#             dependency stage instead of copying the venv (else every build re-copies 1.9 GB).
+#   flags     --pull=never, with the `=`: --pull takes an optional value, and `--pull never`
+#             leaves "never" as a stray argument ("too many arguments specified").
+#   archives  `buildah push … oci:DIR:NAME` plus the io.containerd.image.name annotation, then
+#             tar: `ctr images import` names the image from it. zstd layers: containerd 1.6
+#             imports and runs them; a third faster to write than gzip and 15 % smaller.
 set -euo pipefail
 
 HERE="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
@@ -104,7 +114,7 @@ sha() { sha256sum | cut -c1-16; }
 check_host() {
     [[ "$(uname -s)" == Linux ]] || die "images are built on Linux (buildah); this is $(uname -s)"
     [[ "$(id -u)" == 0 ]] || die "building images needs root here (buildah, debootstrap, chroot); rerun as root"
-    local tool pkg missing=()
+    local tool dir missing=()
     for tool in buildah:buildah debootstrap:debootstrap gcc:gcc git:git python3:python3 tar:tar; do
         command -v "${tool%%:*}" >/dev/null 2>&1 || missing+=("${tool#*:}")
     done
@@ -114,8 +124,8 @@ check_host() {
     [[ -n "$PROJECT_VERSION" && -n "$UV_VERSION" && -n "$PAUSE_VERSION" ]] \
         || die "cannot read a version (pyproject.toml version, deploy/setup.sh UV_VERSION, pause.c PAUSE_VERSION)"
     [[ -r "$CA_BUNDLE" ]] || die "no CA bundle at $CA_BUNDLE (set SSL_CERT_FILE)"
-    for pkg in "$IMG" "$IMG/logs" "$IMG/work" "$STORE" "$RUNROOT" "$UV_CACHE" "$TC/gomodcache" "$TC/gocache"; do
-        mkdir -p "$pkg"
+    for dir in "$IMG" "$IMG/logs" "$IMG/work" "$STORE" "$RUNROOT" "$UV_CACHE" "$TC/gomodcache" "$TC/gocache"; do
+        mkdir -p "$dir"
     done
     # A persistent /run keeps stale mount counts across a reboot: start those afresh.
     local boot; boot="$(cat /proc/sys/kernel/random/boot_id)"
@@ -138,7 +148,6 @@ image_id() { bah inspect --type image --format '{{.FromImageID}}' "$1"; }
 export_archive() {
     local name="$1" archive="$2" tmp="$IMG/work/export"
     rm -rf "$tmp"
-    # zstd: containerd 1.6 imports it; a third faster to write than gzip and 15 % smaller.
     bah push --quiet --compression-format zstd "$name" "oci:$tmp:$name" >/dev/null
     python3 - "$tmp/index.json" "$name" <<'EOF'
 import json, sys

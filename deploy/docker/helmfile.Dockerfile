@@ -5,9 +5,12 @@
 # deploy/devcluster/versions.env), so the image runs exactly the binaries the tests ran.
 #
 #   docker build -f deploy/docker/helmfile.Dockerfile -t ghcr.io/simtest-dev/simtest-helmfile:0.1.0 .
+#   bash deploy/docker/build.sh helmfile   # here: buildah, local bases, cached (docs/images.md)
 ARG GO_IMAGE=golang:1.26.8-bookworm
 ARG DEBIAN_IMAGE=debian:12.8-slim
 
+# deploy/docker/build.sh mounts the dev toolchain's Go module and build caches at
+# /build/toolchain/{gomodcache,gocache}, so helm and helmfile link in seconds instead of compiling.
 FROM ${GO_IMAGE} AS build
 COPY deploy/devcluster/build.sh deploy/devcluster/versions.env /src/
 RUN bash /src/build.sh --cache-dir /build helm helmfile \

@@ -16,12 +16,12 @@ FROM ${UV_IMAGE} AS uv
 # The base plus the locked dependencies, and nothing else: the final image starts FROM here, so
 # this layer changes only with uv.lock or pyproject.toml (a source change never reinstalls SUMO)
 # and is the same layer in the runner and operator images. uv is mounted, not copied; uv.lock
-# stays in the image at /opt/simtest/uv.lock. hardlink: eclipse-sumo and libsumo bundle the same
-# 111 shared libraries (230 MB); identical files become one.
+# stays in the image at /opt/simtest/uv.lock; uv's cache is /root/.cache/uv (deploy/docker/
+# build.sh mounts the host's there). hardlink: eclipse-sumo and libsumo bundle the same 111
+# shared libraries (230 MB); identical files become one.
 FROM ${PYTHON_IMAGE} AS deps
 COPY pyproject.toml uv.lock /opt/simtest/
 RUN --mount=from=uv,source=/uv,target=/bin/uv \
-    --mount=type=cache,target=/root/.cache/uv \
     cd /opt/simtest \
     && UV_PROJECT_ENVIRONMENT=/opt/simtest/venv UV_PYTHON=python3.11 UV_PYTHON_DOWNLOADS=never \
        UV_LINK_MODE=copy UV_COMPILE_BYTECODE=1 UV_SYSTEM_CERTS=1 UV_CACHE_DIR=/root/.cache/uv \
@@ -34,7 +34,6 @@ FROM deps AS project
 COPY pyproject.toml uv.lock README.md LICENSE /src/
 COPY src /src/src
 RUN --mount=from=uv,source=/uv,target=/bin/uv \
-    --mount=type=cache,target=/root/.cache/uv \
     cd /src \
     && UV_PROJECT_ENVIRONMENT=/opt/simtest/venv UV_PYTHON=python3.11 UV_PYTHON_DOWNLOADS=never \
        UV_LINK_MODE=copy UV_COMPILE_BYTECODE=1 UV_SYSTEM_CERTS=1 UV_CACHE_DIR=/root/.cache/uv \
