@@ -213,10 +213,11 @@ def kubelet_config(
         "cgroupDriver": "cgroupfs",
         "failCgroupV1": False,
         "failSwapOn": False,
-        # QoS cgroups and node-allocatable enforcement need the root cgroups; container limits
-        # (what OOMKilled and CPU throttling come from) are still applied by runc per container.
-        "cgroupsPerQOS": False,
-        "enforceNodeAllocatable": [],
+        # Pod and QoS cgroups (kubepods/...) as on any node: pod-level limits, and the kubelet's
+        # in-place resize code path needs them (with cgroupsPerQOS off, kubelet 1.36.4 panics
+        # in doPodResizeAction when a pod's sync is retried, e.g. after an image pull error).
+        "cgroupsPerQOS": True,
+        "enforceNodeAllocatable": ["pods"],
         "localStorageCapacityIsolation": False,
         "podLogsDir": str(layout.pod_logs),
         "volumePluginDir": str(layout.kubelet_dir / "volume-plugins"),
