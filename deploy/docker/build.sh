@@ -54,7 +54,7 @@
 #             leaves "never" as a stray argument ("too many arguments specified").
 #   archives  `buildah push … oci:DIR:NAME` plus the io.containerd.image.name annotation, then
 #             tar: `ctr images import` names the image from it. zstd layers: containerd 1.6
-#             imports and runs them; a third faster to write than gzip and 15 % smaller.
+#             imports and runs them; a third faster to write than gzip and 14 % smaller.
 set -euo pipefail
 
 HERE="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
@@ -243,7 +243,7 @@ ensure() {
     for old in "$IMG/$short"-????????????????.oci.tar; do
         [[ -e "$old" && "$old" != "$archive" ]] && rm -f "$old" "${old%.oci.tar}.json"
     done
-    log "$short: ready in $((SECONDS - t0)) s: $name, $(du -m "$archive" | cut -f1) MB archive"
+    log "$short: ready in $((SECONDS - t0)) s: $name, $(du -m "$archive" | cut -f1) MiB archive"
 }
 
 # commit <container> <image> <key> [buildah-config args...]: set config and labels, commit.
