@@ -1,19 +1,19 @@
-"""The image recipes in deploy/docker, checked without a container engine (none here: nothing is
-built, so these tests only read the files).
+"""The image recipes in deploy/docker, checked without a container engine (these tests only read
+the files; tests/images builds the images and runs them).
 
-Covers: every FROM of every recipe (the device plugin's too) resolves (through ARG defaults) to
-a pinned base (a version tag or a digest, or `scratch`; never `latest` or a bare name); the final
-stage of each image switches to a numeric non-root user
-and has an entrypoint that exists (a console script of pyproject, or helmfile); COPY sources exist
-in the repository; no ADD of remote URLs and no curl-pipe-shell; the helmfile image builds helm and
-helmfile with deploy/devcluster/build.sh (versions from versions.env, no second pin); the Python
-images install from uv.lock only (`uv sync --frozen --no-dev --no-editable`, the dependencies in a
-layer of their own before any source is copied, then the project), with uv from the pinned uv
-image (the version deploy/setup.sh pins) mounted rather than copied, never pip; the final image
-carries the lock at SIMTEST_LOCK_FILE; the lock pins every runtime dependency of pyproject.toml
-to a version its specifier accepts, and every distribution `pip install .` brings in; every
-third-party module the package imports is installed by the images (known gaps, waiting for a
-pyproject line, are listed and re-checked). Building them for real: tests/images/.
+Covers: every FROM of every recipe (the device plugin's too) resolves (through ARG defaults) to a
+pinned base (a version tag or a digest, or `scratch`; never `latest` or a bare name); the final
+stage of each image switches to a numeric non-root user and has an entrypoint that exists (a
+console script of pyproject, or helmfile); COPY sources exist in the repository; no ADD of remote
+URLs and no curl-pipe-shell; the helmfile image builds helm and helmfile with
+deploy/devcluster/build.sh (versions from versions.env, no second pin); the Python images install
+from uv.lock only (`uv sync --frozen --no-dev --no-editable`, the dependencies in a layer of their
+own before any source is copied, then the project), with uv from the pinned uv image (the version
+deploy/setup.sh pins) mounted rather than copied, never pip; the final image carries the lock at
+SIMTEST_LOCK_FILE; runner and operator share their dependency stages; the lock pins every runtime
+dependency of pyproject.toml to a version its specifier accepts, and every distribution
+`pip install .` brings in; every third-party module the package imports is installed by the
+images (known gaps, waiting for a pyproject line, are listed and re-checked).
 """
 
 from __future__ import annotations
