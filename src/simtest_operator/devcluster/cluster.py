@@ -165,6 +165,33 @@ class DevCluster:
         self._procs.clear()
         return tuple(stopped)
 
+    def stop_component(self, name: str) -> bool:
+        """Stop one component (e.g. ``kubelet-simtest-real-0``) as a crash or an admin would."""
+        state = self._require_state()
+        record = next((r for r in state.processes if r.name == name), None)
+        if record is None:
+            raise ClusterError(f"no component {name!r} (have: {[r.name for r in state.processes]})")
+        return stop(record)
+
+    def start_component(self, name: str) -> None:
+        """Start a stopped component again with the command line it had (a restart)."""
+        state = self._require_state()
+        record = next((r for r in state.processes if r.name == name), None)
+        if record is None:
+            raise ClusterError(f"no component {name!r} (have: {[r.name for r in state.processes]})")
+        if is_alive(record):
+            raise ClusterError(f"{name} is still running (pid {record.pid})")
+        rest = dataclasses.replace(
+            state, processes=tuple(r for r in state.processes if r != record)
+        )
+        self._spawn(rest, name, list(record.argv))
+
+    def _require_state(self) -> ClusterState:
+        state = self._load_state()
+        if state is None:
+            raise ClusterError(f"no dev cluster is started in {self.layout.root}; run `up` first")
+        return state
+
     def status(self) -> ClusterStatus:
         """Which recorded processes are alive and whether the apiserver answers ``/readyz``."""
         state = self._load_state()
@@ -186,10 +213,7 @@ class DevCluster:
 
     def info(self) -> ClusterInfo:
         """Connection details of the started cluster; :class:`ClusterError` if not started."""
-        state = self._load_state()
-        if state is None:
-            raise ClusterError(f"no dev cluster is started in {self.layout.root}; run `up` first")
-        return self._info(state)
+        return self._info(self._require_state())
 
     # -- steps ----------------------------------------------------------------------------------
 

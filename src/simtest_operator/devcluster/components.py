@@ -114,6 +114,8 @@ def kube_apiserver(tc: Toolchain, layout: Layout, ports: Ports, pki: Pki) -> lis
         "--allow-privileged=true",
         # Nothing listens on the advertised address for pods, so do not maintain its endpoints.
         "--endpoint-reconciler-type=none",
+        # Reach a real node's kubelet (logs, exec) at its address, as kubeadm configures it.
+        "--kubelet-preferred-address-types=InternalIP,ExternalIP,Hostname",
         "--enable-priority-and-fairness=false",
         "--profiling=false",
         "--v=1",
