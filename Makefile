@@ -6,7 +6,7 @@ VENV ?= .venv
 SIMTEST := $(VENV)/bin/simtest
 UV = $${SIMTEST_CACHE_DIR:-$$HOME/.cache/simtest}/uv/$$(sed -n 's/^UV_VERSION=//p' deploy/setup.sh)/bin/uv
 
-.PHONY: setup setup-run toolchain run test lint crds lock-upgrade
+.PHONY: setup setup-run toolchain images run test lint crds lock-upgrade
 
 setup-run:
 	@bash deploy/setup.sh run
@@ -17,6 +17,11 @@ setup:
 toolchain:
 	bash deploy/devcluster/build.sh
 
+# The container images (runner, operator, helmfile, device plugin, pause), built with buildah on
+# locally made bases and cached by content; the dev cluster's real node imports them.
+images: setup toolchain
+	bash deploy/docker/build.sh
+
 # simtest run exits 1 when a scenario fails; the smoke campaign has one deliberately failing
 # cut-in, so 0 and 1 both mean the run worked (2 means errors or invalid input).
 run: setup-run
@@ -25,7 +30,7 @@ run: setup-run
 	[ $$rc -le 1 ]
 
 # pytest's exit code 5 (no tests collected) is a failure here, not a pass.
-test: setup toolchain
+test: setup toolchain images
 	$(VENV)/bin/python -m pytest $(PYTEST_ARGS); rc=$$?; \
 	if [ $$rc -eq 5 ]; then echo "pytest collected no tests" >&2; exit 1; fi; exit $$rc
 

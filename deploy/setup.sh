@@ -3,8 +3,8 @@
 #
 #   bash deploy/setup.sh run    # what running needs: git, the project and its runtime deps
 #   bash deploy/setup.sh test   # plus the test/lint tools, PostgreSQL, Chromium and the real
-#                               # node's container stack (containerd, runc, CNI plugins, buildah,
-#                               # debootstrap)
+#                               # node's container stack (containerd, runc, CNI plugins, iproute2)
+#                               # and image build (buildah, debootstrap, gcc for the pause image)
 #
 # Python packages come only from uv.lock (`uv sync --frozen`: exact versions, hashes checked);
 # uv itself is pinned below and installed from PyPI into the cache. Idempotent and quiet: a
@@ -21,7 +21,8 @@ CACHE_ROOT="${SIMTEST_CACHE_DIR:-${XDG_CACHE_HOME:-$HOME/.cache}/simtest}"
 
 case "$MODE" in
   run) APT_PACKAGES=(git) ;;
-  test) APT_PACKAGES=(git postgresql chromium containerd runc containernetworking-plugins buildah debootstrap) ;;
+  test) APT_PACKAGES=(git postgresql chromium containerd runc containernetworking-plugins buildah
+        debootstrap iproute2 gcc libc6-dev) ;;
   *) echo "setup.sh: error: unknown mode '$MODE' (run or test)" >&2; exit 2 ;;
 esac
 

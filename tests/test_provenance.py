@@ -11,6 +11,7 @@ from __future__ import annotations
 import hashlib
 import importlib.metadata
 import json
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -38,6 +39,20 @@ def test_record_names_the_lock_and_the_simulator() -> None:
     assert record["sumo"] == importlib.metadata.version("eclipse-sumo")
     assert record["simulator"].startswith(f"SUMO {record['sumo']} ")
     assert record["installed"].startswith("sha256:")
+
+
+def test_installed_digest_follows_the_installed_set(tmp_path: Path) -> None:
+    (tmp_path / "alpha-1.0.dist-info").mkdir()
+    (tmp_path / "beta_pkg-2.1.dist-info").mkdir()
+    before = provenance.installed_digest([str(tmp_path)])
+    (tmp_path / "beta_pkg-2.1.dist-info").rename(tmp_path / "beta_pkg-2.2.dist-info")
+    assert provenance.installed_digest([str(tmp_path)]) != before
+    names = {
+        f"{re.sub(r'[-_.]+', '-', d.metadata['Name']).lower()}=={d.version}"
+        for d in importlib.metadata.distributions()
+    }
+    expected = "sha256:" + hashlib.sha256("\n".join(sorted(names)).encode()).hexdigest()
+    assert provenance.installed_digest() == expected
 
 
 @pytest.mark.slow

@@ -16,8 +16,9 @@ import functools
 import hashlib
 import importlib.metadata
 import platform
+import re
 import sys
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from pathlib import Path
 
 from simtest_operator import __version__
@@ -39,16 +40,28 @@ def _sha256(data: bytes) -> str:
     return "sha256:" + hashlib.sha256(data).hexdigest()
 
 
-def installed_digest() -> str:
-    """Digest of the installed distributions (``name==version`` lines, sorted)."""
-    lines = sorted(
-        {
-            f"{dist.metadata['Name'].lower()}=={dist.version}"
-            for dist in importlib.metadata.distributions()
-            if dist.metadata["Name"]
-        }
-    )
-    return _sha256("\n".join(lines).encode())
+def installed_digest(paths: Iterable[str] | None = None) -> str:
+    """Digest of the installed distributions (``name==version`` lines, sorted).
+
+    Read from the ``<name>-<version>.dist-info`` folder names on ``sys.path`` (what installers
+    write, normalised per the wheel spec), not from each METADATA file: listing a few folders
+    costs about a millisecond, parsing ~150 metadata files about 0.1 s of every runner's start.
+    """
+    found = set()
+    for entry in sys.path if paths is None else paths:
+        folder = Path(entry or ".")
+        if not folder.is_dir():
+            continue
+        for info in folder.glob("*.dist-info"):
+            name, _, version = info.name.removesuffix(".dist-info").partition("-")
+            if version:
+                found.add(f"{_normalized(name)}=={version}")
+    return _sha256("\n".join(sorted(found)).encode())
+
+
+def _normalized(name: str) -> str:
+    """A distribution name as PEP 503 compares them (``Zope_Interface`` = ``zope-interface``)."""
+    return re.sub(r"[-_.]+", "-", name).lower()
 
 
 def _version_of(distribution: str) -> str:
