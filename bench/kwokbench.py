@@ -197,6 +197,7 @@ def operator_process(
     cache: Path,
     log: Path,
     ready_timeout: float = 90.0,
+    env: Mapping[str, str] | None = None,
 ) -> Iterator[tuple[subprocess.Popen[bytes], int]]:
     """A real ``simtest operator`` for ``namespace``, ready; yields (process, metrics port)."""
     port = free_port()
@@ -222,6 +223,7 @@ def operator_process(
             ],
             stdout=out,
             stderr=subprocess.STDOUT,
+            env={**os.environ, **(env or {})},
         )
         try:
             wait_ready(port, operator, timeout=ready_timeout)
