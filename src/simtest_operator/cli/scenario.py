@@ -1,7 +1,9 @@
 """``simtest scenario run|check``: run one scenario, or every scenario under a directory.
 
 Thin wiring: options -> :mod:`simtest_operator.runner.execution` -> formatted output. ``check``
-expands ParameterValueDistribution files into their concrete runs and skips catalogs.
+expands ParameterValueDistribution files into their concrete runs and skips catalogs. ``run``
+exits like ``simtest run`` over a one-scenario list (:mod:`simtest_operator.runner.summaries`), so
+a script or CI step can use either command with the same meaning of 0, 1 and 2.
 """
 
 from __future__ import annotations
@@ -16,7 +18,7 @@ import click
 from simtest_operator.errors import ScenarioError
 from simtest_operator.evaluation import reference as references
 from simtest_operator.openscenario import FileKind, expand_distribution, file_kind
-from simtest_operator.runner import execution
+from simtest_operator.runner import execution, summaries
 from simtest_operator.settings import Settings
 from simtest_operator.sim import SutConfig, Takeover
 from simtest_operator.verdicts import Verdict
@@ -47,7 +49,11 @@ def scenario() -> None:
 @click.option("--no-record", is_flag=True, help="Do not write the omega-prime recording.")
 @_TAKEOVER
 def run(file: Path, out: Path | None, no_record: bool, takeover: str) -> None:
-    """Run FILE and print its verdict, reason and metrics."""
+    """Run FILE and print its verdict, reason and metrics.
+
+    Exit code, as for `simtest run`: 0 passed, 1 failed or timed out (a verdict on the system
+    under test), 2 error or invalid input (the scenario could not be judged).
+    """
     settings = Settings.from_env()
     report = execution.run_scenario(
         execution.RunRequest(
@@ -68,7 +74,9 @@ def run(file: Path, out: Path | None, no_record: bool, takeover: str) -> None:
         click.echo(f"ignored: {', '.join(outcome.ignored_elements)}")
     for name, uri in sorted(outcome.artifacts.items()):
         click.echo(f"{name}: {uri}")
-    raise SystemExit(0 if outcome.verdict.counts_as_ran else 1)
+    raise SystemExit(
+        summaries.summarise([outcome.scenario_id], {outcome.scenario_id: outcome}).exit_code
+    )
 
 
 def _requests(directory: Path, settings: Settings, sut: SutConfig) -> list[execution.RunRequest]:
