@@ -27,6 +27,7 @@ from simtest_operator.devcluster.nodeconfig import REAL_NODE_LABEL, containerd_a
 from simtest_operator.devcluster.nodes import NodeShape, node_names
 from simtest_operator.devcluster.pki import Pki, ensure_pki
 from simtest_operator.devcluster.processes import (
+    ProcessRecord,
     free_ports,
     is_alive,
     port_in_use,
@@ -167,24 +168,25 @@ class DevCluster:
 
     def stop_component(self, name: str) -> bool:
         """Stop one component (e.g. ``kubelet-simtest-real-0``) as a crash or an admin would."""
-        state = self._require_state()
-        record = next((r for r in state.processes if r.name == name), None)
-        if record is None:
-            raise ClusterError(f"no component {name!r} (have: {[r.name for r in state.processes]})")
-        return stop(record)
+        return stop(self._component(self._require_state(), name))
 
     def start_component(self, name: str) -> None:
         """Start a stopped component again with the command line it had (a restart)."""
         state = self._require_state()
-        record = next((r for r in state.processes if r.name == name), None)
-        if record is None:
-            raise ClusterError(f"no component {name!r} (have: {[r.name for r in state.processes]})")
+        record = self._component(state, name)
         if is_alive(record):
             raise ClusterError(f"{name} is still running (pid {record.pid})")
         rest = dataclasses.replace(
             state, processes=tuple(r for r in state.processes if r != record)
         )
         self._spawn(rest, name, list(record.argv))
+
+    @staticmethod
+    def _component(state: ClusterState, name: str) -> ProcessRecord:
+        for record in state.processes:
+            if record.name == name:
+                return record
+        raise ClusterError(f"no component {name!r} (have: {[r.name for r in state.processes]})")
 
     def _require_state(self) -> ClusterState:
         state = self._load_state()
