@@ -5,11 +5,16 @@ the failing scenario's reason is on the page, opening ``#<scenario>`` expands it
 (the script works), which holds a trajectory SVG drawn from the real recording and the metric
 timelines, and the comparison table lists the regression; the screenshot is a real rendering
 (page size, the Failed and Passed colours of the tiles present). Name resolution is disabled, so
-any attempt to load a remote resource would fail the rendering checks.
+any attempt to load a remote resource would fail the rendering checks. The README's smoke
+campaign run by ``simtest run`` on real SUMO: its header names SUMO and the installed version,
+and the digest of the lock the environment was installed from (issue 17).
 """
 
 from __future__ import annotations
 
+import hashlib
+import importlib.metadata
+import re
 import shutil
 import subprocess
 from pathlib import Path
@@ -18,10 +23,13 @@ import lxml.html
 import pytest
 from PIL import Image
 
+from simtest_operator import __version__
 from simtest_operator.cli.main import cli
 from tests.results.sampleoutdir import make_outdir
 
 pytestmark = pytest.mark.browser
+
+REPO = Path(__file__).resolve().parents[2]
 
 FLAGS = (
     "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
@@ -101,3 +109,36 @@ def test_screenshot_is_a_real_rendering(report: Path, tmp_path: Path) -> None:
     assert pixels.get((0xD3, 0x3F, 0x3F), 0) > 2000  # the red Failed tile and bar
     assert pixels.get((0x2E, 0x9D, 0x5B), 0) > 2000  # the green Passed tile and bar
     assert len(pixels) > 100  # text, charts and colours, not a blank page
+
+
+@pytest.fixture(scope="module")
+def smoke_report(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    from click.testing import CliRunner
+
+    root = tmp_path_factory.mktemp("smoke")
+    result = CliRunner().invoke(
+        cli,
+        [
+            "run",
+            str(REPO / "scenarios" / "smoke-campaign.yaml"),
+            "-o",
+            str(root / "out"),
+            "--plain",
+        ],
+        env={"SIMTEST_CACHE_DIR": str(root / "cache")},
+    )
+    assert result.exit_code == 1, result.output  # the README's deliberately close cut-in
+    return root / "out" / "report.html"
+
+
+def test_the_header_names_sumo_and_the_lock(smoke_report: Path, tmp_path: Path) -> None:
+    dom = _browse(smoke_report.as_uri(), tmp_path / "profile", "--dump-dom")
+    page = lxml.html.fromstring(dom.stdout)
+    simulator = page.get_element_by_id("simulator").text_content()
+    assert re.fullmatch(r"SUMO \d+\.\d+\.\d+ \(simtest engine \S+\)", simulator), simulator
+    sumo = importlib.metadata.version("eclipse-sumo")
+    assert simulator == f"SUMO {sumo} (simtest engine {__version__})"
+    lock = page.get_element_by_id("lock")
+    digest = hashlib.sha256((REPO / "uv.lock").read_bytes()).hexdigest()
+    assert lock.get("title") == f"sha256:{digest}"  # the .venv beside it was synced from it
+    assert lock.text_content() == f"sha256:{digest[:12]}"

@@ -66,6 +66,7 @@ class ScenarioView:
     wall_seconds: float
     artifacts: tuple[tuple[str, str], ...]
     versions: tuple[tuple[str, str], ...]
+    """(label, value) of the scenario's reproducibility record: versions and digests."""
     ignored_elements: tuple[str, ...]
     history: tuple[tuple[int, str, str], ...]
     """Earlier attempts: (attempt, verdict, reason)."""
@@ -81,6 +82,26 @@ class ScenarioView:
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Provenance:
+    """What the header names of the run's reproducibility record, so a reader can rerun it."""
+
+    simulator: str = ""
+    """The campaign's simulator: SUMO and engine versions for ``simtest run``, the runner image
+    for a campaign recorded from the cluster."""
+    engine: str = ""
+    """What the scenarios' own records name as simulator, when it adds to ``simulator`` (a
+    cluster campaign names its image; its pods record the SUMO version)."""
+    lock: str = ""
+    """Digest of the ``uv.lock`` the run was installed from; several, joined, if scenarios
+    differ."""
+
+    @property
+    def short_lock(self) -> str:
+        """The lock digest(s) cut to 12 hex digits: enough to tell locks apart at a glance."""
+        return " / ".join(_short_digest(part) for part in self.lock.split(" / ") if part)
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
 class Report:
     """Everything the template renders."""
 
@@ -92,6 +113,7 @@ class Report:
     coverage: tuple[tuple[str, tuple[GroupRow, ...]], ...]
     scenarios: tuple[ScenarioView, ...]
     comparison: comparing.Comparison | None
+    provenance: Provenance = dataclasses.field(default_factory=Provenance)
     verdict_colours: Mapping[str, str] = dataclasses.field(
         default_factory=lambda: dict(plots.VERDICT_COLOURS)
     )
@@ -150,6 +172,7 @@ def build(
         ),
         scenarios=tuple(views),
         comparison=comparison,
+        provenance=_provenance(run.campaign.info, [s.outcome.versions for s in final.values()]),
     )
 
 
@@ -158,6 +181,30 @@ def verdict_totals(run: Run) -> dict[str, int]:
     final = comparing.final_outcomes(run.outcomes)
     ids = {s.scenario_id for s in run.scenarios} | final.keys()
     return _count(final[key].verdict.value if key in final else NOT_RUN for key in ids)
+
+
+def _provenance(info: records.CampaignInfo, recorded: Sequence[Mapping[str, str]]) -> Provenance:
+    """The campaign row's record first (``simtest run`` stores it), else what the scenarios'
+    outcomes agree on (a cluster campaign's pods record theirs per scenario)."""
+    campaign = info.settings.get("versions")
+    campaign = campaign if isinstance(campaign, Mapping) else {}
+    engine = _agreed(v.get("simulator", "") for v in recorded)
+    simulator = info.simulator_version or engine
+    lock = str(campaign.get("lock", "")) or _agreed(v.get("lock", "") for v in recorded)
+    return Provenance(simulator=simulator, engine=engine if engine != simulator else "", lock=lock)
+
+
+def _agreed(values: Iterable[str]) -> str:
+    return " / ".join(sorted({value for value in values if value}))
+
+
+def _short_digest(value: str) -> str:
+    algorithm, _, digest = value.partition(":")
+    return f"{algorithm}:{digest[:12]}" if digest and algorithm.isalnum() else value
+
+
+def _version_label(name: str) -> str:
+    return f"{name} digest" if name in ("lock", "installed") else f"{name} version"
 
 
 def _by_category(scenario: records.ScenarioInfo) -> tuple[str, ...]:
@@ -217,7 +264,10 @@ def _scenario_view(
         simulated_seconds=outcome.simulated_seconds if outcome else 0.0,
         wall_seconds=outcome.wall_seconds if outcome else 0.0,
         artifacts=tuple(sorted((outcome.artifacts if outcome else {}).items())),
-        versions=tuple(sorted((outcome.versions if outcome else {}).items())),
+        versions=tuple(
+            (_version_label(name), value)
+            for name, value in sorted((outcome.versions if outcome else {}).items())
+        ),
         ignored_elements=outcome.ignored_elements if outcome else (),
         history=tuple((s.outcome.attempts, s.verdict.value, s.outcome.reason) for s in earlier),
         trajectory_svg=plots.trajectories(extra.trajectories),
