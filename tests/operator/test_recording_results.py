@@ -4,7 +4,9 @@ Covers: the start recorded once the list is frozen (frozen list in order, not fi
 once the status is final (phase, counters, completionTime, description refreshed), nothing more
 after that; the DSN read from the Secret the spec names; no database configured -> no Secret read;
 a database that is down -> no exception, a retry after the backoff that then succeeds; a Secret
-without the key -> a clear error in the log and a retry; the same against a real PostgreSQL.
+without the key -> a clear error in the log and a retry; the same against a real PostgreSQL, with
+the Secret's DSN in every form libpq accepts (issue 12: a key/value DSN was taken for a SQLite
+path); a Secret DSN that is down or ambiguous leaves no file and no password in the log.
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ from simtest_operator.operator import observed, recording_results
 from simtest_operator.operator.client import NotFoundError
 from simtest_operator.operator.scenariolists import StoredList
 from simtest_operator.scenarios import FrozenList, PinnedScenario
+from tests.results import dsnforms
 
 T0 = datetime.datetime(2025, 3, 1, 12, 0, tzinfo=datetime.UTC)
 CREATED = "2025-03-01T11:59:00Z"
@@ -200,9 +203,30 @@ def test_a_secret_without_the_key_is_reported(caplog: pytest.LogCaptureFixture) 
     assert not recorder.finished
 
 
+@pytest.mark.parametrize(
+    "dsn",
+    [f"host=127.0.0.1 port=1 password={dsnforms.PASSWORD} dbname=d",
+     f"POSTGRESQL://u:{dsnforms.PASSWORD}@127.0.0.1:1/d",
+     f"host=127.0.0.1 password={dsnforms.PASSWORD} dbname"],
+)  # fmt: skip
+def test_a_secret_dsn_in_any_form_leaves_no_file_and_no_password(
+    dsn: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    recorder = recording_results.CampaignRecorder(FakeSecrets({"dsn": dsn}), clock=Clock())
+    with caplog.at_level(logging.DEBUG):
+        asyncio.run(_observe(recorder, campaign(status=FINAL)))
+    assert not recorder.finished
+    assert "cannot record the run" in caplog.text
+    assert dsnforms.PASSWORD not in caplog.text
+    assert list(tmp_path.iterdir()) == []
+
+
 @pytest.mark.postgres
-def test_finish_into_postgresql(postgres_dsn: str) -> None:
-    recorder = recording_results.CampaignRecorder(FakeSecrets({"dsn": postgres_dsn}), clock=Clock())
+@pytest.mark.parametrize("form", ["as-given", *dsnforms.forms("host=h port=1 user=u dbname=d")])
+def test_finish_into_postgresql(postgres_dsn: str, form: str) -> None:
+    dsn = postgres_dsn if form == "as-given" else dsnforms.forms(postgres_dsn)[form]
+    recorder = recording_results.CampaignRecorder(FakeSecrets({"dsn": dsn}), clock=Clock())
     final = campaign(status=FINAL)
     asyncio.run(_observe(recorder, final))
     with results.open_store(postgres_dsn) as store:

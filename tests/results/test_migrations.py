@@ -18,7 +18,7 @@ import pytest
 
 from simtest_operator import results
 from simtest_operator.errors import ResultsError
-from simtest_operator.results import migrating, postgres, sqlite
+from simtest_operator.results import dsn, migrating, postgres, sqlite
 from simtest_operator.verdicts import Verdict
 from tests.results.resultdata import T0, campaign, outcome, scenario
 
@@ -34,7 +34,7 @@ def _raw(store: results.Store, sql: str) -> list[tuple[object, ...]]:
 def _open(
     target: str, *, auto_migrate: bool = True, now: datetime.datetime = T0
 ) -> sqlite.SqliteStore | postgres.PostgresStore:
-    if postgres.is_dsn(target):
+    if isinstance(dsn.classify(target), dsn.Dsn):
         return postgres.PostgresStore(target, clock=lambda: now, auto_migrate=auto_migrate)
     return sqlite.SqliteStore(target, clock=lambda: now, auto_migrate=auto_migrate)
 

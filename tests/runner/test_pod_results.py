@@ -127,7 +127,7 @@ def test_a_database_that_is_down_keeps_every_verdict(tmp_path: Path) -> None:
     assert [o.verdict for o in delivered.outcomes] == [Verdict.PASSED, Verdict.FAILED]
     assert [o.reason for o in delivered.outcomes] == ["", "minTTC 0.9 s < 1.5 s"]
     log = "\n".join(delivered.notes)
-    assert "cannot connect to the results database 127.0.0.1" in log
+    assert "cannot connect to the results database postgresql://127.0.0.1" in log
     assert "s3cret-pw" not in log
 
     path = tmp_path / "termination-log"

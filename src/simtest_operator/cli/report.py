@@ -57,14 +57,12 @@ def report(
 ) -> None:
     """Write a self-contained HTML report of the run in OUTDIR (overview, coverage, per-scenario
     detail with trajectories, and a comparison with another run)."""
-    from simtest_operator.results import opening, publishing, records
+    from simtest_operator.results import dsn, publishing, records
 
     target: str | Path = database or outdir
     other = None
     if compare is not None or compare_run is not None:
         compare_target: str | Path = compare if compare is not None else target
-        if isinstance(compare_target, str) and not compare_target.startswith("postgres"):
-            compare_target = Path(compare_target)
         other = publishing.RunRef(
             target=compare_target,
             run_key=records.RunKey(compare_run) if compare_run else None,
@@ -87,10 +85,11 @@ def report(
         click.echo(f"simtest report: {exc}", err=True)
         raise SystemExit(2) from None
     counts = ", ".join(f"{n} {v.lower()}" for v, n in published.totals.items() if n)
-    click.echo(f"run {published.run_key} ({opening.describe(target)}): {counts}")
+    click.echo(f"run {published.run_key} ({dsn.describe(target)}): {counts}")
     if published.comparison is not None:
         moved = ", ".join(f"{n} {c.value}" for c, n in published.comparison.items() if n)
-        click.echo(f"compared with {compare or compare_run}: {moved or 'no scenarios'}")
+        against = dsn.describe(compare) if compare is not None else compare_run
+        click.echo(f"compared with {against}: {moved or 'no scenarios'}")
     if published.report is not None:
         click.echo(f"report: {published.report}")
     if published.junit is not None:

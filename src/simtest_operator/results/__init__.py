@@ -2,7 +2,7 @@
 
 Public API (import from here)::
 
-    store = results.open_store(outdir)            # or "postgresql://..."
+    store = results.open_store(outdir)            # or a DSN: "postgresql://...", "host=..."
     key = store.begin_campaign(results.CampaignInfo(...), scenarios=[results.ScenarioInfo(...)])
     store.add_outcome(key, scenario_info, outcome)   # one transaction, idempotent per attempt
     store.finish_campaign(key, finished_at=now, phase="Succeeded")
@@ -24,8 +24,9 @@ from simtest_operator.results.clusterruns import (
     start_campaign_run,
 )
 from simtest_operator.results.comparing import Change, Comparison, ScenarioChange, compare
+from simtest_operator.results.dsn import describe
 from simtest_operator.results.migrating import LATEST_VERSION
-from simtest_operator.results.opening import describe, open_store
+from simtest_operator.results.opening import open_store
 from simtest_operator.results.postgres import PostgresStore
 from simtest_operator.results.records import (
     UNCATEGORIZED,

@@ -4,7 +4,7 @@ Same schema and queries as SQLite (see :mod:`.sqlstore`), with native JSONB and 
 columns so the tables are pleasant to query from other tools. Migrations take a transaction-level
 advisory lock, so several operator replicas or CI jobs opening the database at once apply each
 step exactly once. The DSN comes from a Secret and may hold a password: it never appears in an
-error message (only host, port and database name do).
+error message (only host, port and database name do; see :mod:`.dsn`).
 """
 
 from __future__ import annotations
@@ -15,30 +15,13 @@ from collections.abc import Iterable, Iterator, Sequence
 from typing import Any
 
 import psycopg
-import psycopg.conninfo
 import psycopg.types.json
 
 from simtest_operator.errors import ResultsError
-from simtest_operator.results import migrating, sqlrows, sqlstore
+from simtest_operator.results import dsn, migrating, sqlrows, sqlstore
 
 MIGRATION_LOCK = 0x73696D7465737400
 """Advisory lock key for migrations (``b"simtest\\0"`` as a big-endian integer)."""
-
-DSN_PREFIXES = ("postgresql://", "postgres://")
-
-
-def is_dsn(target: str) -> bool:
-    """Whether a store target names a PostgreSQL database rather than a file."""
-    return target.startswith(DSN_PREFIXES)
-
-
-def describe(dsn: str) -> str:
-    """``host:port/dbname`` of a DSN, safe to show (no user, no password)."""
-    try:
-        parts = psycopg.conninfo.conninfo_to_dict(dsn)
-    except psycopg.ProgrammingError:
-        return "<unparsable DSN>"
-    return f"{parts.get('host', 'localhost')}:{parts.get('port', 5432)}/{parts.get('dbname', '')}"
 
 
 class _PostgresCodec:
@@ -74,14 +57,6 @@ class _PostgresTx:
                 cursor.executemany(_placeholders(sql), batch)
 
 
-def _redact(message: str, dsn: str) -> str:
-    try:
-        password = psycopg.conninfo.conninfo_to_dict(dsn).get("password")
-    except psycopg.ProgrammingError:
-        return "<error message withheld: unparsable DSN>"
-    return message.replace(str(password), "***") if password else message
-
-
 def _placeholders(sql: str) -> str:
     # The shared queries use sqlite3's "?"; none contains a literal "?" or "%".
     return sql.replace("?", "%s")
@@ -94,22 +69,27 @@ class PostgresStore(sqlstore.SqlStore):
 
     def __init__(
         self,
-        dsn: str,
+        target: str | dsn.Dsn,
         *,
         clock: sqlstore.Clock = sqlstore.utc_now,
         auto_migrate: bool = True,
         connect_timeout: int = 10,
     ) -> None:
-        """Connect to ``dsn``; ``auto_migrate=False`` is for staged upgrades."""
+        """Connect to ``target`` (a DSN); ``auto_migrate=False`` is for staged upgrades."""
         super().__init__(codec=_PostgresCodec(), clock=clock)
-        self.where = describe(dsn)
+        located = dsn.classify(target) if isinstance(target, str) else target
+        if not isinstance(located, dsn.Dsn):
+            raise ResultsError(f"not a PostgreSQL DSN: {located}")
+        self._dsn = located
+        self.where = located.where
         try:
             self._connection: psycopg.Connection[Any] = psycopg.connect(
-                dsn, autocommit=True, connect_timeout=connect_timeout
+                located.conninfo, autocommit=True, connect_timeout=connect_timeout
             )
         except psycopg.Error as exc:
+            reason = " ".join(dsn.redact(str(exc), located).split())
             raise ResultsError(
-                f"cannot connect to the results database {self.where}: {_redact(str(exc), dsn)}; "
+                f"cannot connect to the results database {self.where}: {reason}; "
                 "check the DSN secret and that the server is reachable"
             ) from None
         if auto_migrate:
@@ -127,7 +107,8 @@ class PostgresStore(sqlstore.SqlStore):
                     self._connection.execute("SET TRANSACTION READ ONLY")
                 yield _PostgresTx(self._connection)
         except psycopg.Error as exc:
-            raise ResultsError(f"results database {self.where}: {exc}") from exc
+            reason = " ".join(dsn.redact(str(exc), self._dsn).split())
+            raise ResultsError(f"results database {self.where}: {reason}") from exc
 
     def _lock_for_migration(self, tx: sqlstore.Tx) -> None:
         tx.query("SELECT pg_advisory_xact_lock(?)", (MIGRATION_LOCK,))

@@ -17,6 +17,7 @@ from simtest_operator.errors import ResultsError
 from simtest_operator.results import (
     comparing,
     details,
+    dsn,
     junit,
     opening,
     records,
@@ -136,7 +137,7 @@ def publish(
             ),
             comparison=comparison,
         )
-        document = reporting.render(view, source=opening.describe(run_ref.target))
+        document = reporting.render(view, source=dsn.describe(run_ref.target))
         written_report = reporting.write(report_path, document)
     if junit_path is not None:
         document = junit.render(run.campaign, run.outcomes, scenarios=run.scenarios,
@@ -152,5 +153,5 @@ def publish(
 
 
 def _label(ref: RunRef, run: reportmodel.Run) -> str:
-    where = opening.describe(ref.target)
+    where = dsn.describe(ref.target)
     return f"{run.campaign.run_key} ({where})"

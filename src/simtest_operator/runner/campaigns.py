@@ -21,7 +21,7 @@ from pathlib import Path
 
 from simtest_operator import recording
 from simtest_operator.errors import ResultsError, ScenarioError, SourceError
-from simtest_operator.results import details, publishing
+from simtest_operator.results import details, dsn, publishing
 from simtest_operator.runner import executing, outputs, storing, summaries, tasks
 from simtest_operator.runner import preparing as prep
 from simtest_operator.runner.tasks import ExecuteFn
@@ -130,6 +130,8 @@ def _run(
     started: float,
     early: list[Worker],
 ) -> LocalRunResult:
+    if request.database:
+        dsn.classify(request.database)  # refuse an ambiguous --db before the output is written
     plan = prep.prepare(request, now=now())
     out = plan.output
     notes = list(plan.notes)
