@@ -33,6 +33,21 @@ JOBS="${SIMTEST_BUILD_JOBS:-2}"
 START=$(date +%s)
 log() { printf '[build.sh %4ss] %s\n' "$(($(date +%s) - START))" "$*" >&2; }
 die() { printf 'build.sh: error: %s\n' "$*" >&2; exit 1; }
+# Said once, by the first component that must be built (a cached run never calls it, so the
+# cached path does no extra work): how long the wait is. Measured cold on 2 cores: about 13 min
+# for everything, most of it kubernetes.
+estimated=0
+estimate() {
+    [[ $estimated == 0 ]] || return 0
+    estimated=1
+    if [[ " ${components[*]} " == *" kubernetes "* && ! -x "$TC/kubernetes-$KUBERNETES_VERSION/bin/kube-apiserver" ]]; then
+        local also=" (kubernetes $KUBERNETES_VERSION among it)"
+        [[ $1 != kubernetes* ]] || also=""
+        log "building $1 and what else is missing from Go modules$also: ~10-15 min on 2 cores, cached afterwards in $TC"
+    else
+        log "building $1 (and what else is missing) from Go modules: a few minutes on 2 cores, cached afterwards in $TC"
+    fi
+}
 
 # --- the Go environment: local toolchain, static binaries, caches outside the repo -------------
 export GOTOOLCHAIN=local CGO_ENABLED=0 GO111MODULE=on GOWORK=off
@@ -99,6 +114,7 @@ install_bins() {
 build_etcd() {
     local v="$ETCD_VERSION" dir="$TC/etcd-$ETCD_VERSION/bin"
     if version_matches "$v" "$dir/etcd" --version; then log "etcd $v: cached"; return; fi
+    estimate "etcd $v"
     require_go
     log "etcd $v: building (own wrapper module, go.etcd.io/etcd/server/v3)"
     local w="$TC/work/etcd-$v"
@@ -118,6 +134,7 @@ build_kwok() {
     if version_matches "$v" "$dir/kwok" --version && version_matches "$v" "$dir/kwokctl" --version; then
         log "kwok $v: cached"; return
     fi
+    estimate "kwok $v"
     require_go
     log "kwok $v: building kwok + kwokctl"
     local w="$TC/work/kwok-$v"
@@ -152,6 +169,7 @@ k8s_cached() {
 build_kubernetes() {
     local v="$KUBERNETES_VERSION" dir="$TC/kubernetes-$KUBERNETES_VERSION/bin"
     if k8s_cached; then log "kubernetes $v: cached"; return; fi
+    estimate "kubernetes $v"
     require_go
     local minor="${v#1.}"; minor="${minor%%.*}"
     log "kubernetes $v: building $K8S_CMDS (wrapper module, staging modules -> v0.${v#1.}; the long one)"
@@ -169,7 +187,7 @@ build_kubernetes() {
         for m in $K8S_STAGING; do go mod edit -replace="k8s.io/$m=k8s.io/$m@v0.${v#1.}"; done
         log "kubernetes $v: resolving modules"
         go_get "${gets[@]}"
-        log "kubernetes $v: compiling (cold: ~20-30 min on 2 cores)"
+        log "kubernetes $v: compiling (most of the ~10-15 min on 2 cores)"
         "${GO_BUILD[@]}" -ldflags "$ldf" -o "$w/out/" "${pkgs[@]}"
     )
     install_bins "$w/out" "$dir"
@@ -180,6 +198,7 @@ build_kubernetes() {
 build_crictl() {
     local v="$CRI_TOOLS_VERSION" dir="$TC/crictl-$CRI_TOOLS_VERSION/bin"
     if version_matches "v$v" "$dir/crictl" --version; then log "crictl $v: cached"; return; fi
+    estimate "crictl $v"
     require_go
     log "crictl $v: building"
     local w="$TC/work/crictl-$v"
@@ -198,6 +217,7 @@ build_crictl() {
 build_helm() {
     local v="$HELM_VERSION" dir="$TC/helm-$HELM_VERSION/bin"
     if version_matches "v$v" "$dir/helm" version --short; then log "helm $v: cached"; return; fi
+    estimate "helm $v"
     require_go
     log "helm $v: building"
     local w="$TC/work/helm-$v" kminor="${KUBERNETES_VERSION#1.}"; kminor="${kminor%%.*}"
@@ -219,6 +239,7 @@ build_helm() {
 build_helmfile() {
     local v="$HELMFILE_VERSION" dir="$TC/helmfile-$HELMFILE_VERSION/bin"
     if version_matches "v$v" "$dir/helmfile" --version; then log "helmfile $v: cached"; return; fi
+    estimate "helmfile $v"
     require_go
     log "helmfile $v: building"
     local w="$TC/work/helmfile-$v"
@@ -257,6 +278,7 @@ build_deviceplugin() {
     h="$(deviceplugin_hash)" || die "no Go module at $DP_SRC (deploy/deviceplugin of the checkout)"
     local dir="$TC/deviceplugin-$h/bin"
     if version_matches "$h" "$dir/simtest-device-plugin" --version; then log "deviceplugin $h: cached"; return; fi
+    estimate "deviceplugin $h"
     require_go
     log "deviceplugin $h: building simtest-device-plugin"
     local out="$TC/work/deviceplugin-$h/out"
