@@ -5,6 +5,10 @@ runner does the work, and this module shows progress (a rich progress bar on a t
 line per scenario otherwise), prints the summary and exits 0 (all passed), 1 (some failed) or
 2 (errors, invalid input, interrupted) with a one-line reason.
 
+Every piece of user text (paths, campaign and scenario names, reasons, YAML error messages) goes
+through :func:`rich.markup.escape` or is printed with markup off: a scenario called ``[/x]`` once
+crashed the CLI with a MarkupError and exit 1, which CI reads as "the SUT failed" (issue 12).
+
 The first Ctrl-C stops the run in order (workers killed, unfinished scenarios marked as not run,
 outputs consistent; the same command resumes); a second one aborts at once.
 """
@@ -24,6 +28,7 @@ from typing import NoReturn
 
 import click
 from rich.console import Console
+from rich.markup import escape
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 from rich.table import Table
 
@@ -169,7 +174,7 @@ def _default_output(manifest: Path | None, rerun_failed: Path | None) -> Path:
 
 
 def _fail(errors: Console, reason: str) -> NoReturn:
-    errors.print(f"[bold red]error:[/] {reason}", markup=True, soft_wrap=True)
+    errors.print(f"[bold red]error:[/] {escape(reason)}", soft_wrap=True)
     raise SystemExit(summaries.EXIT_ERROR)
 
 
@@ -283,13 +288,14 @@ class _Live(_Plain):
                 self.task,
                 total=event.total,
                 completed=event.finished,
-                description=event.campaign,
+                description=escape(event.campaign),
                 counts=self.counts.line(),
             )
         elif isinstance(event, executing.Retrying):
             o = event.outcome
             self.console.print(
-                f"[yellow]retry[/] {o.scenario_id} after attempt {o.attempts}: {o.reason}",
+                f"[yellow]retry[/] {escape(o.scenario_id)} after attempt {o.attempts}: "
+                f"{escape(o.reason)}",
                 soft_wrap=True,
             )
         elif isinstance(event, executing.Finished):
@@ -298,7 +304,9 @@ class _Live(_Plain):
             if o.verdict is not Verdict.PASSED:
                 colour = _COLOURS[o.verdict]
                 self.console.print(
-                    f"[{colour}]{o.verdict.value:<8}[/] {o.scenario_id}  {o.reason}", soft_wrap=True
+                    f"[{colour}]{o.verdict.value:<8}[/] {escape(o.scenario_id)}  "
+                    f"{escape(o.reason)}",
+                    soft_wrap=True,
                 )
             self.progress.update(self.task, advance=1, counts=self.counts.line())
 
@@ -307,8 +315,9 @@ def _print_prepared(console: Console, event: campaigns.Prepared) -> None:
     verb = "resuming" if event.resumed else "running"
     todo = event.total - event.finished
     console.print(
-        f"{verb} campaign [bold]{event.campaign}[/]: {todo} of {event.total} scenarios on "
-        f"{event.parallel} worker process(es)\n  output  {event.output}\n  results {event.store}",
+        f"{verb} campaign [bold]{escape(event.campaign)}[/]: {todo} of {event.total} scenarios "
+        f"on {event.parallel} worker process(es)\n  output  {escape(str(event.output))}\n"
+        f"  results {escape(event.store)}",
         soft_wrap=True,
     )
     for note in event.notes:
@@ -328,12 +337,16 @@ def _print_summary(console: Console, result: campaigns.LocalRunResult) -> None:
         for column in ("scenario", "verdict", "reason"):
             listing.add_column(column, overflow="fold")
         for ident, verdict, reason in problems[:LISTED]:
-            listing.add_row(ident, f"[{_COLOURS[verdict]}]{verdict.value}[/]", reason)
+            listing.add_row(
+                escape(ident), f"[{_COLOURS[verdict]}]{verdict.value}[/]", escape(reason)
+            )
         console.print(listing)
         if len(problems) > LISTED:
-            console.print(f"... and {len(problems) - LISTED} more (see {result.output})")
+            console.print(
+                f"... and {len(problems) - LISTED} more (see {result.output})", markup=False
+            )
     for warning in result.warnings:
-        console.print(f"[yellow]warning:[/] {warning}", soft_wrap=True)
+        console.print(f"[yellow]warning:[/] {escape(warning)}", soft_wrap=True)
     console.print(f"wall time {result.wall_seconds:.1f} s on {result.parallel} worker(s)")
     for label, path in (
         ("output", result.output),
@@ -343,4 +356,4 @@ def _print_summary(console: Console, result: campaigns.LocalRunResult) -> None:
         if path is not None:
             console.print(f"{label:<7}{path}", markup=False, soft_wrap=True)
     colour = {0: "green", 1: "red"}.get(summary.exit_code, "magenta")
-    console.print(f"[bold {colour}]{summary.reason}[/]", soft_wrap=True)
+    console.print(f"[bold {colour}]{escape(summary.reason)}[/]", soft_wrap=True)
