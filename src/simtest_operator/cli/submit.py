@@ -17,9 +17,10 @@ from pathlib import Path
 from typing import Any
 
 import click
-import yaml
 
+from simtest_operator.api import manifestfiles
 from simtest_operator.api.v1alpha1 import GROUP, VERSION, ManifestError, parse_campaign
+from simtest_operator.errors import ScenarioError
 from simtest_operator.results import junit, records
 from simtest_operator.verdicts import ScenarioOutcome, Verdict
 
@@ -30,9 +31,10 @@ CAMPAIGN_LABEL = "simtest.dev/campaign"
 
 def _documents(path: Path) -> list[Any]:
     try:
-        return [d for d in yaml.safe_load_all(path.read_text(encoding="utf-8")) if d is not None]
-    except (OSError, yaml.YAMLError) as exc:
-        raise click.ClickException(f"{path}: {exc}") from exc
+        return manifestfiles.read(path)[1]
+    except ScenarioError as exc:  # exit 2 like an invalid manifest, not click's 1 ("failed")
+        click.echo(f"error: {exc}", err=True)
+        raise SystemExit(EXIT_ERROR) from None
 
 
 def _api(kubeconfig: Path | None, context: str | None) -> tuple[Any, str]:

@@ -14,9 +14,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-import yaml
-
-from simtest_operator.api import converting, v1alpha1
+from simtest_operator.api import converting, manifestfiles, v1alpha1
 from simtest_operator.errors import ScenarioError
 from simtest_operator.openscenario import headers
 from simtest_operator.runner import executing, outputs, resolving, tasks
@@ -143,14 +141,7 @@ def prepare(request: LocalRunRequest, *, now: datetime.datetime) -> Plan:
 
 def read_manifest(path: Path) -> tuple[str, v1alpha1.Manifest[v1alpha1.TestCampaignSpec]]:
     """The manifest's text and the validated TestCampaign in it."""
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ScenarioError(f"cannot read manifest: {exc.strerror or exc}", file=str(path)) from exc
-    try:
-        documents = [d for d in yaml.safe_load_all(text) if d is not None]
-    except yaml.YAMLError as exc:
-        raise ScenarioError(f"manifest is not valid YAML: {exc}", file=str(path)) from exc
+    text, documents = manifestfiles.read(path)
     if len(documents) != 1:
         raise ScenarioError(
             f"expected exactly one TestCampaign document, found {len(documents)}", file=str(path)

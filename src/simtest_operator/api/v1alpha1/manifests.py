@@ -17,6 +17,17 @@ from simtest_operator.api.v1alpha1 import common, kinds
 from simtest_operator.errors import ScenarioError
 
 DNS1123_SUBDOMAIN = re.compile(r"^[a-z0-9]([-a-z0-9]*[a-z0-9])?(\.[a-z0-9]([-a-z0-9]*[a-z0-9])?)*$")
+OBJECT_META_STRINGS = frozenset(
+    {"name", "generateName", "namespace", "uid", "resourceVersion", "selfLink",
+     "creationTimestamp", "deletionTimestamp"}
+)  # fmt: skip
+"""ObjectMeta fields the API server types as strings (timestamps are RFC 3339 text)."""
+OBJECT_META_OTHERS = frozenset(
+    {"labels", "annotations", "finalizers", "generation", "deletionGracePeriodSeconds",
+     "ownerReferences", "managedFields"}
+)  # fmt: skip
+"""The other ObjectMeta fields; anything else in ``metadata`` is refused, as the API server's
+strict field validation (kubectl's default) does."""
 
 
 class ManifestError(ScenarioError):
@@ -112,12 +123,43 @@ def _check_metadata(
                 f"{kinds.CAMPAIGN_NAME_MAX} characters (child objects derive their names from it)",
             )
         )
+    _check_meta_types(metadata, problems)
     namespace = metadata.get("namespace")
-    labels = metadata.get("labels") or {}
-    if not isinstance(labels, Mapping):
-        problems.append(("metadata.labels", "must be a mapping of strings"))
-        labels = {}
-    return name, namespace if isinstance(namespace, str) else None, labels
+    labels = metadata.get("labels")
+    return (
+        name,
+        namespace if isinstance(namespace, str) else None,
+        labels if isinstance(labels, Mapping) and _is_string_map(labels) else {},
+    )
+
+
+def _check_meta_types(metadata: Mapping[Any, Any], problems: list[tuple[str, str]]) -> None:
+    """ObjectMeta's field names and types, as strict as the API server's decoder."""
+    for key in sorted(metadata, key=str):
+        value, path = metadata[key], f"metadata.{key}"
+        if key in OBJECT_META_STRINGS:
+            if value is not None and not isinstance(value, str):
+                problems.append((path, f"must be a string, got {type(value).__name__}"))
+        elif key in ("labels", "annotations"):
+            if value is not None and not _is_string_map(value):
+                problems.append((path, "must be a mapping of strings to strings"))
+        elif key == "finalizers":
+            if value is not None and not (
+                isinstance(value, list) and all(isinstance(v, str) for v in value)
+            ):
+                problems.append((path, "must be a list of strings"))
+        elif key in ("generation", "deletionGracePeriodSeconds"):
+            if value is not None and (isinstance(value, bool) or not isinstance(value, int)):
+                problems.append((path, f"must be an integer, got {type(value).__name__}"))
+        elif key not in OBJECT_META_OTHERS:
+            problems.append((path, "unknown field"))
+
+
+def _is_string_map(value: Any) -> bool:
+    return value is None or (
+        isinstance(value, Mapping)
+        and all(isinstance(k, str) and isinstance(v, str) for k, v in value.items())
+    )
 
 
 def _pydantic_problems(exc: pydantic.ValidationError, *, prefix: str) -> list[tuple[str, str]]:
