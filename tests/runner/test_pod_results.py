@@ -1,6 +1,7 @@
 """A simulator pod's attempts in the results database (runner entrypoint + delivering).
 
-Covers: run_job giving each attempt the pod's attempt number and every local artifact; the rows a
+Covers: run_job giving each attempt the pod's attempt number and every local artifact; a pinned
+source the pod cannot read ending Error (the environment's fault), not Invalid; the rows a
 pod writes into a real PostgreSQL (verdict, reason, metrics, versions, scenario and recording
 hashes, artifact URIs under the run spec's prefix, header labels, a provisional campaign record);
 a re-delivered attempt (retried pod, restarted runner) replacing its row, a new attempt adding
@@ -210,3 +211,14 @@ def test_main_runs_a_real_scenario_and_stores_its_row(
     assert row.outcome.verdict in (Verdict.PASSED, Verdict.FAILED)
     assert "recording" in row.content_hashes
     assert row.outcome.artifacts["recording"].endswith("hard-braking.xosc/recording.mcap")
+
+
+def test_a_pinned_source_the_pod_cannot_read_is_an_error_not_invalid(tmp_path: Path) -> None:
+    job = podsupport.job(tmp_path, {"gone": "pass", "kept": "pass"})
+    (tmp_path / "scenarios" / "gone.xosc").unlink()
+    attempts = entrypoint.run_job(job, run_one=podsupport.fake_run_one, fork=False)
+    outcomes = {a.outcome.scenario_id: a.outcome for a in attempts}
+    assert outcomes["gone.xosc"].verdict is Verdict.ERROR
+    assert "cannot fetch the pinned scenario" in outcomes["gone.xosc"].reason
+    assert "SIMTEST_OPERATOR_SCENARIO_CLAIM" in outcomes["gone.xosc"].reason
+    assert outcomes["kept.xosc"].verdict is Verdict.PASSED

@@ -48,7 +48,13 @@ from typing import TYPE_CHECKING
 from simtest_operator import provenance
 from simtest_operator.api import converting
 from simtest_operator.api.v1alpha1 import EvaluationSpec, SimulatorSettings, SutConfig
-from simtest_operator.errors import RenderError, ResultsError, ScenarioError, SimtestError
+from simtest_operator.errors import (
+    RenderError,
+    ResultsError,
+    ScenarioError,
+    SimtestError,
+    SourceError,
+)
 from simtest_operator.render import RunSpec, ScenarioRef, messages, runspecs
 from simtest_operator.render.inputs import STARTUP_ALLOWANCE_SECONDS
 from simtest_operator.runner import execution
@@ -146,6 +152,16 @@ def run_job(
                     outcome = run_forked(run_one, request)
             else:
                 outcome = run_one(request)
+        except SourceError as exc:
+            # The operator resolved and pinned this source: if the pod cannot fetch it, the
+            # environment is at fault (a path source without the scenario volume, a network
+            # policy, a moved file), never the scenario, so Error (retried), not Invalid.
+            reason = f"the pod cannot fetch the pinned scenario: {exc}"
+            if scenario.source.startswith("file://"):
+                reason += (
+                    " (path sources need the scenario volume: SIMTEST_OPERATOR_SCENARIO_CLAIM)"
+                )
+            outcome = _failed(scenario.id, Verdict.ERROR, reason, started)
         except ScenarioError as exc:
             outcome = _failed(scenario.id, Verdict.INVALID, str(exc), started)
         except SimtestError as exc:
