@@ -114,9 +114,12 @@ def scenario_claim(core: client.CoreV1Api, namespace: str) -> None:
     )
 
 
-def run_on_real_node(api: client.ApiClient, namespace: str, name: str) -> tuple[float, PodTimeline]:
+def run_on_real_node(
+    api: client.ApiClient, namespace: str, name: str, cpu: str
+) -> tuple[float, PodTimeline]:
     manifest = yaml.safe_load(SMOKE.read_text())
     manifest["metadata"]["name"] = name
+    manifest["spec"]["execution"]["resources"] = {"requests": {"cpu": cpu}, "limits": {"cpu": cpu}}
     custom = client.CustomObjectsApi(api)
     with PodTimeline(api, namespace) as timeline:
         started = time.monotonic()
@@ -159,6 +162,12 @@ def run_locally(out: Path) -> tuple[float, list[float]]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--repeat", type=int, default=5)
+    parser.add_argument(
+        "--cpu",
+        default="900m",
+        help="CPU request = limit per simulator pod (the campaign default, 1, lets only one pod "
+        "fit next to the device plugin on 2 cores: the scheduler then backs off for seconds)",
+    )
     parser.add_argument("--json", type=Path, default=REPO / "bench" / "results" / "real_pods.json")
     args = parser.parse_args()
     settings = Settings.from_env()
@@ -205,7 +214,9 @@ def main() -> None:
                 env={"SIMTEST_OPERATOR_SCENARIO_CLAIM": "scenarios"},
             ):
                 for round_ in range(args.repeat):
-                    makespan, timeline = run_on_real_node(api, namespace, f"smoke-{round_}")
+                    makespan, timeline = run_on_real_node(
+                        api, namespace, f"smoke-{round_}", args.cpu
+                    )
                     real.append(makespan)
                     for marks in timeline.seen.values():
                         for phase in PHASES:
@@ -220,7 +231,9 @@ def main() -> None:
         finally:
             api.close()  # type: ignore[no-untyped-call]
             cluster.down()
-    table = Table(title=f"smoke campaign (6 scenarios, {SLOTS} slots), {args.repeat} rounds")
+    table = Table(
+        title=f"smoke campaign (6 scenarios, {SLOTS} slots, cpu {args.cpu}), {args.repeat} rounds"
+    )
     for column in ("measure", "p50 (s)", "p95 (s)", "n"):
         table.add_column(column, justify="right" if column != "measure" else "left")
     rows = {
