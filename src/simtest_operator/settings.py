@@ -53,6 +53,9 @@ class SimulationSettings:
     """Seed for SUMO and every local random generator, so runs are reproducible."""
     record_hz: float = 10.0
     """Recording rate of the ground-truth MCAP; omega-prime needs at least 10 Hz."""
+    real_time_factor: float = 0.0
+    """Pace: simulated seconds per wall second (1.0 is real time, as a SUT with hard timing or a
+    rendering simulator like CARLA runs); 0 runs as fast as possible."""
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)

@@ -15,11 +15,9 @@ import json
 import subprocess
 import sys
 import threading
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-import pytest
 import yaml
 from kubernetes import client, watch
 
@@ -32,67 +30,6 @@ from tests.fixtures.realnode import REAL_SLOTS
 
 SCENARIOS = support.REPO / "scenarios"
 SMOKE = SCENARIOS / "smoke-campaign.yaml"
-
-
-@pytest.fixture
-def scenario_claim(real_api_client: client.ApiClient, real_namespace: str) -> Iterator[str]:
-    """A PVC with the repository's scenarios: a hostPath volume, bound to this namespace.
-
-    The operator resolves ``path`` sources against the same folder and mounts the claim
-    read-only into every simulator pod, as it would an NFS share on a real cluster.
-    """
-    core = client.CoreV1Api(real_api_client)
-    name = f"scenarios-{real_namespace}"
-    core.create_persistent_volume(
-        body={
-            "metadata": {"name": name},
-            "spec": {
-                "capacity": {"storage": "1Gi"},
-                "accessModes": ["ReadOnlyMany"],
-                "persistentVolumeReclaimPolicy": "Retain",
-                "storageClassName": "",
-                "hostPath": {"path": str(SCENARIOS), "type": "Directory"},
-                "claimRef": {"namespace": real_namespace, "name": "scenarios"},
-            },
-        }
-    )
-    core.create_namespaced_persistent_volume_claim(
-        real_namespace,
-        body={
-            "metadata": {"name": "scenarios"},
-            "spec": {
-                "accessModes": ["ReadOnlyMany"],
-                "storageClassName": "",
-                "volumeName": name,
-                "resources": {"requests": {"storage": "1Gi"}},
-            },
-        },
-    )
-    try:
-        yield "scenarios"
-    finally:
-        core.delete_persistent_volume(name)
-
-
-@pytest.fixture
-def real_operator(
-    real_cluster: ClusterInfo, real_namespace: str, scenario_claim: str, tmp_path: Path
-) -> Iterator[support.OperatorProcess]:
-    process = support.OperatorProcess(
-        kubeconfig=real_cluster.kubeconfig,
-        namespace=real_namespace,
-        templates=support.REPO / "helm-templates",
-        sources=SCENARIOS,
-        workdir=tmp_path,
-        extra_env={
-            "SIMTEST_OPERATOR_SCENARIO_CLAIM": scenario_claim,
-        },
-    )
-    process.start()
-    try:
-        yield process
-    finally:
-        process.stop()
 
 
 def test_real_node_registers_with_its_own_identity_and_advertises_slots(

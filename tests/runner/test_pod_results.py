@@ -8,25 +8,32 @@ a re-delivered attempt (retried pod, restarted runner) replacing its row, a new 
 one; a database that is down keeping every verdict, flagging ``resultsStored: false`` in the
 termination message and keeping the password out of the log; a DSN without a run key; no database
 configured; the flag never pushing the message past 4 KiB; ``main`` end to end with a real
-scenario and PostgreSQL.
+scenario and PostgreSQL; SIGTERM (the pod deleted) keeping what finished and making the running
+and unstarted scenarios Error, and a real runner stopping within seconds of it.
 """
 
 from __future__ import annotations
 
 import hashlib
 import json
+import os
+import signal
 import socket
+import subprocess
+import sys
+import time
 from pathlib import Path
 
 import pytest
 
 from simtest_operator import results
 from simtest_operator.render import RunSpec, ScenarioRef, messages
-from simtest_operator.runner import entrypoint
+from simtest_operator.runner import entrypoint, execution
 from simtest_operator.verdicts import ScenarioOutcome, Verdict
 from tests.runner import podsupport
 
 KEY = "nightly-20250301T115900Z-0badcafe"
+REPO = Path(__file__).resolve().parents[2]
 
 
 def _env(dsn: str, key: str | None = KEY) -> dict[str, str]:
@@ -222,3 +229,56 @@ def test_a_pinned_source_the_pod_cannot_read_is_an_error_not_invalid(tmp_path: P
     assert "cannot fetch the pinned scenario" in outcomes["gone.xosc"].reason
     assert "SIMTEST_OPERATOR_SCENARIO_CLAIM" in outcomes["gone.xosc"].reason
     assert outcomes["kept.xosc"].verdict is Verdict.PASSED
+
+
+def test_sigterm_keeps_what_finished_and_makes_the_rest_error(tmp_path: Path) -> None:
+    job = podsupport.job(tmp_path, {"a": "pass", "b": "pass", "c": "pass"})
+
+    def terminated_on_b(request: execution.RunRequest) -> ScenarioOutcome:
+        if request.scenario.name == "b.xosc":
+            raise entrypoint.Terminated
+        return podsupport.fake_run_one(request)
+
+    attempts = entrypoint.run_job(job, run_one=terminated_on_b, fork=False)
+    outcomes = {a.outcome.scenario_id: a.outcome for a in attempts}
+    assert outcomes["a.xosc"].verdict is Verdict.PASSED
+    assert outcomes["b.xosc"].verdict is Verdict.ERROR
+    assert outcomes["b.xosc"].reason == entrypoint.TERMINATED_REASON
+    assert outcomes["c.xosc"].verdict is Verdict.ERROR
+    assert outcomes["c.xosc"].reason == entrypoint.NOT_STARTED_REASON
+
+
+@pytest.mark.slow
+def test_the_runner_stops_on_sigterm_within_seconds(tmp_path: Path) -> None:
+    scenario = REPO / "scenarios" / "smoke" / "following_highway_v25_thw2_drop5_d2.xosc"
+    spec = RunSpec(
+        campaign="c",
+        environment="c-e0",
+        attempt=1,
+        scenarios=(
+            ScenarioRef(
+                id=scenario.name,
+                source=scenario.as_uri(),
+                sha256=hashlib.sha256(scenario.read_bytes()).hexdigest(),
+            ),
+        ),
+        isolation="PerScenario",
+        timeout_seconds=60,
+        artifacts_dir=str(tmp_path / "artifacts"),
+        simulator={"realTimeFactor": 1.0, "record": False},
+    )
+    log = tmp_path / "termination-log"
+    runner = subprocess.Popen(
+        [str(Path(sys.executable).parent / "simtest-runner"), "--spec", spec.dumps(),
+         "--termination-log", str(log)],
+        env={**os.environ, "SIMTEST_CACHE_DIR": str(tmp_path / "cache")},
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+    )  # fmt: skip
+    time.sleep(2.0)  # started (about 0.7 s), simulating in real time (10 s)
+    runner.send_signal(signal.SIGTERM)
+    stopped = time.monotonic()
+    runner.wait(timeout=10)
+    assert time.monotonic() - stopped < 5, "the runner must stop well inside the grace period"
+    (outcome,) = messages.decode(log.read_text())
+    assert outcome.verdict is Verdict.ERROR, outcome
+    assert "SIGTERM" in outcome.reason

@@ -115,9 +115,12 @@ def sut(spec: environment.SutConfig) -> SutConfig:
 
 
 def simulation(spec: environment.SimulatorSettings) -> SimulationSettings:
-    """Step length, seed and recording rate of the simulator stand-in."""
+    """Step length, seed, recording rate and pace of the simulator stand-in."""
     return SimulationSettings(
-        step_length=spec.step_length, seed=spec.seed, record_hz=spec.record_hz
+        step_length=spec.step_length,
+        seed=spec.seed,
+        record_hz=spec.record_hz,
+        real_time_factor=spec.real_time_factor,
     )
 
 

@@ -38,6 +38,7 @@ import json
 import multiprocessing
 import multiprocessing.connection
 import os
+import signal
 import sys
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -82,6 +83,22 @@ RunOne = Callable[[execution.RunRequest], ScenarioOutcome]
 
 def _run_one(request: execution.RunRequest) -> ScenarioOutcome:
     return execution.run_scenario(request).outcome
+
+
+class Terminated(BaseException):
+    """SIGTERM arrived: the pod is being deleted (or its node drained) while scenarios ran.
+
+    A BaseException, like KeyboardInterrupt, so that no ``except Exception`` inside the
+    simulation turns it into a verdict of the scenario: it belongs to the environment.
+    """
+
+
+def _raise_terminated(signum: int, frame: object) -> None:
+    raise Terminated
+
+
+TERMINATED_REASON = "stopped: the pod was terminated (SIGTERM) while this scenario ran"
+NOT_STARTED_REASON = "not run: the pod was terminated (SIGTERM) before this scenario started"
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
@@ -129,7 +146,7 @@ def run_job(
     if isolated and run_one is _run_one:
         warm_up()
     attempts: list[delivering.Attempt] = []
-    for scenario in spec.scenarios:
+    for index, scenario in enumerate(spec.scenarios):
         started = time.perf_counter()
         path: Path | None = None
         try:
@@ -166,6 +183,22 @@ def run_job(
             outcome = _failed(scenario.id, Verdict.INVALID, str(exc), started)
         except SimtestError as exc:
             outcome = _failed(scenario.id, Verdict.ERROR, str(exc), started)
+        except Terminated:
+            # Keep what finished; the interrupted and the unstarted scenarios are Error, so the
+            # operator runs them again elsewhere. Nothing here may take long: the kubelet kills
+            # the container when the grace period ends.
+            attempts.append(
+                _attempt(
+                    scenario,
+                    path,
+                    _failed(scenario.id, Verdict.ERROR, TERMINATED_REASON, started),
+                    job,
+                )
+            )
+            for rest in spec.scenarios[index + 1 :]:
+                skipped = _failed(rest.id, Verdict.ERROR, NOT_STARTED_REASON, time.perf_counter())
+                attempts.append(_attempt(rest, None, skipped, job))
+            break
         attempts.append(_attempt(scenario, path, outcome, job))
     return attempts
 
@@ -216,6 +249,10 @@ def run_forked(run_one: RunOne, request: execution.RunRequest) -> ScenarioOutcom
         data = receiver.recv()
     except EOFError:
         data = None
+    except Terminated:
+        worker.kill()  # the fork does not get the pod's SIGTERM: stop it with the parent
+        worker.join()
+        raise
     worker.join()
     receiver.close()
     if data is None:
@@ -379,7 +416,10 @@ def main(argv: Sequence[str] | None = None) -> None:
     artifacts = args.artifacts or Path(spec.artifacts_dir)
     artifacts.mkdir(parents=True, exist_ok=True)
     job = Job(spec=spec, artifacts=artifacts, settings=Settings.from_env(env))
+    signal.signal(signal.SIGTERM, _raise_terminated)
     attempts = run_job(job)
+    # Past the runs a second SIGTERM ends the process at once: the verdicts are written next.
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
     # The verdicts first: whatever happens while delivering, the kubelet finds them.
     write_message([a.outcome for a in attempts], args.termination_log)
     deliverer = deliverer_for(job, env, run_key=args.run_key, deadline=deadline)

@@ -209,6 +209,8 @@ def _loop(
     """Step until the storyboard completes or a limit is hit; True when the wall limit hit."""
     limit = request.criteria.time_limit
     wall_limit = request.wall_clock_limit
+    pace = request.simulation.real_time_factor
+    paced_from = time.perf_counter() - simulation.time / pace if pace > 0 else 0.0
     steps = 0
     while True:
         evaluator.observe(snapshot)
@@ -218,7 +220,11 @@ def _loop(
         if simulation.complete or simulation.time >= limit - 1e-9:
             return False
         steps += 1
-        wall_check = wall_limit is not None and steps % 200 == 0
+        if pace > 0:  # no step before its wall time: simulated t at paced_from + t / pace
+            ahead = paced_from + simulation.time / pace - time.perf_counter()
+            if ahead > 0:
+                time.sleep(ahead)
+        wall_check = wall_limit is not None and (pace > 0 or steps % 200 == 0)
         if wall_check and time.perf_counter() - started > (wall_limit or 0.0):
             return True
         snapshot = simulation.step()

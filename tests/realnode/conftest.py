@@ -1,0 +1,75 @@
+"""Fixtures of the real-node end-to-end tests: the scenarios as a PVC, and the operator."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+from kubernetes import client
+
+from simtest_operator.devcluster.state import ClusterInfo
+from tests.e2e import support
+
+SCENARIOS = support.REPO / "scenarios"
+
+
+@pytest.fixture
+def scenario_claim(real_api_client: client.ApiClient, real_namespace: str) -> Iterator[str]:
+    """A PVC with the repository's scenarios: a hostPath volume, bound to this namespace.
+
+    The operator resolves ``path`` sources against the same folder and mounts the claim
+    read-only into every simulator pod, as it would an NFS share on a real cluster.
+    """
+    core = client.CoreV1Api(real_api_client)
+    name = f"scenarios-{real_namespace}"
+    core.create_persistent_volume(
+        body={
+            "metadata": {"name": name},
+            "spec": {
+                "capacity": {"storage": "1Gi"},
+                "accessModes": ["ReadOnlyMany"],
+                "persistentVolumeReclaimPolicy": "Retain",
+                "storageClassName": "",
+                "hostPath": {"path": str(SCENARIOS), "type": "Directory"},
+                "claimRef": {"namespace": real_namespace, "name": "scenarios"},
+            },
+        }
+    )
+    core.create_namespaced_persistent_volume_claim(
+        real_namespace,
+        body={
+            "metadata": {"name": "scenarios"},
+            "spec": {
+                "accessModes": ["ReadOnlyMany"],
+                "storageClassName": "",
+                "volumeName": name,
+                "resources": {"requests": {"storage": "1Gi"}},
+            },
+        },
+    )
+    try:
+        yield "scenarios"
+    finally:
+        core.delete_persistent_volume(name)
+
+
+@pytest.fixture
+def real_operator(
+    real_cluster: ClusterInfo, real_namespace: str, scenario_claim: str, tmp_path: Path
+) -> Iterator[support.OperatorProcess]:
+    process = support.OperatorProcess(
+        kubeconfig=real_cluster.kubeconfig,
+        namespace=real_namespace,
+        templates=support.REPO / "helm-templates",
+        sources=SCENARIOS,
+        workdir=tmp_path,
+        extra_env={
+            "SIMTEST_OPERATOR_SCENARIO_CLAIM": scenario_claim,
+        },
+    )
+    process.start()
+    try:
+        yield process
+    finally:
+        process.stop()
