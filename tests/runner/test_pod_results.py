@@ -272,7 +272,7 @@ def test_the_runner_stops_on_sigterm_within_seconds(tmp_path: Path) -> None:
         [str(Path(sys.executable).parent / "simtest-runner"), "--spec", spec.dumps(),
          "--termination-log", str(log)],
         env={**os.environ, "SIMTEST_CACHE_DIR": str(tmp_path / "cache")},
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
     )  # fmt: skip
     time.sleep(2.0)  # started (about 0.7 s), simulating in real time (10 s)
     runner.send_signal(signal.SIGTERM)
