@@ -171,26 +171,20 @@ def main() -> None:
     parser.add_argument("--json", type=Path, default=REPO / "bench" / "results" / "real_pods.json")
     args = parser.parse_args()
     settings = Settings.from_env()
-    index = images.load_index(images.index_path(settings.cache.root))
     toolchain = Toolchain(root=settings.cache.toolchain)
     console = Console()
     with tempfile.TemporaryDirectory(prefix="real-pods-") as tmp:
         work = Path(tmp)
         cluster = DevCluster(work / "cluster", toolchain, tied_to_this_process=True)
         up_started = time.monotonic()
-        info = cluster.up(
-            nodes=0,
-            real_nodes=1,
-            crds_dir=REPO / "crds",
-            timeout=300,
-            images=images.node_images(index, (images.RUNNER_IMAGE, images.DEVICE_PLUGIN_IMAGE)),
-            addons=addons.device_plugin_documents(
-                toolchain.binary("helm"),
-                REPO / addons.CHART,
-                image=images.DEVICE_PLUGIN_IMAGE,
-                slots=SLOTS,
-            ),
+        setup = images.real_node_setup(
+            settings.cache.root,
+            helm=toolchain.binary("helm"),
+            chart=REPO / addons.CHART,
+            slots=SLOTS,
+            wanted=(images.RUNNER_IMAGE, images.DEVICE_PLUGIN_IMAGE),
         )
+        info = cluster.up(nodes=0, real_node=setup, crds_dir=REPO / "crds", timeout=300)
         up_seconds = time.monotonic() - up_started
         api = provisioning.api_client(info.kubeconfig)
         try:

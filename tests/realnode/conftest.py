@@ -2,16 +2,38 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
 from pathlib import Path
+from typing import Any
 
 import pytest
+import yaml
 from kubernetes import client
 
 from simtest_operator.devcluster.state import ClusterInfo
 from tests.e2e import support
 
 SCENARIOS = support.REPO / "scenarios"
+SMOKE = SCENARIOS / "smoke-campaign.yaml"
+
+
+def smoke_variant(
+    tmp_path: Path,
+    name: str,
+    include: str,
+    *,
+    simulator: Mapping[str, Any] | None = None,
+    **execution: Any,
+) -> Path:
+    """The smoke campaign renamed, cut to ``include``, with changed execution/simulator fields."""
+    manifest = yaml.safe_load(SMOKE.read_text())
+    manifest["metadata"]["name"] = name
+    manifest["spec"]["scenarios"]["include"] = [include]
+    manifest["spec"]["execution"].update(execution)
+    manifest["spec"]["environment"]["simulator"].update(simulator or {})
+    path = tmp_path / f"{name}.yaml"
+    path.write_text(yaml.safe_dump(manifest))
+    return path
 
 
 @pytest.fixture

@@ -11,25 +11,13 @@ from __future__ import annotations
 
 import time
 from pathlib import Path
-from typing import Any
 
 import yaml
 from kubernetes import client
 
 from simtest_operator.devcluster.state import ClusterInfo
 from tests.e2e import support
-
-SMOKE = support.REPO / "scenarios" / "smoke-campaign.yaml"
-
-
-def _campaign(tmp_path: Path, name: str, scenario: str, **execution: Any) -> Path:
-    manifest = yaml.safe_load(SMOKE.read_text())
-    manifest["metadata"]["name"] = name
-    manifest["spec"]["scenarios"]["include"] = [scenario]
-    manifest["spec"]["execution"].update(execution)
-    path = tmp_path / f"{name}.yaml"
-    path.write_text(yaml.safe_dump(manifest))
-    return path
+from tests.realnode.conftest import smoke_variant
 
 
 def test_a_memory_limit_too_low_is_oomkilled_error_and_retried(
@@ -40,7 +28,7 @@ def test_a_memory_limit_too_low_is_oomkilled_error_and_retried(
     tmp_path: Path,
 ) -> None:
     memory = {"requests": {"cpu": "500m", "memory": "48Mi"}, "limits": {"memory": "48Mi"}}
-    path = _campaign(tmp_path, "oom", "hard-braking_*.xosc", retries=1, resources=memory)
+    path = smoke_variant(tmp_path, "oom", "hard-braking_*.xosc", retries=1, resources=memory)
     submitted = support.submit(
         path, namespace=real_namespace, kubeconfig=real_cluster.kubeconfig, timeout=180
     )
@@ -58,13 +46,15 @@ def test_a_pod_deleted_mid_run_is_error_then_retried(
     real_operator: support.OperatorProcess,
     tmp_path: Path,
 ) -> None:
-    body = yaml.safe_load(
-        _campaign(
-            tmp_path, "deleted", "hard-braking_*.xosc", retries=1,
-            resources={"requests": {"cpu": "500m"}},
-        ).read_text()
-    )  # fmt: skip
-    body["spec"]["environment"]["simulator"]["realTimeFactor"] = 1.0  # 10 s of wall time
+    path = smoke_variant(
+        tmp_path,
+        "deleted",
+        "hard-braking_*.xosc",
+        simulator={"realTimeFactor": 1.0},  # seconds of wall time per simulated second
+        retries=1,
+        resources={"requests": {"cpu": "500m"}},
+    )
+    body = yaml.safe_load(path.read_text())
     cluster = support.Cluster(real_api_client, real_namespace)
     cluster.create(body)
     core = client.CoreV1Api(real_api_client)

@@ -18,7 +18,6 @@ import threading
 from pathlib import Path
 from typing import Any
 
-import yaml
 from kubernetes import client, watch
 
 from simtest_operator.devcluster import images
@@ -27,9 +26,7 @@ from simtest_operator.devcluster.nodes import SIMULATOR_RESOURCE
 from simtest_operator.devcluster.state import ClusterInfo
 from tests.e2e import support
 from tests.fixtures.realnode import REAL_SLOTS
-
-SCENARIOS = support.REPO / "scenarios"
-SMOKE = SCENARIOS / "smoke-campaign.yaml"
+from tests.realnode.conftest import SMOKE, smoke_variant
 
 
 def test_real_node_registers_with_its_own_identity_and_advertises_slots(
@@ -132,13 +129,13 @@ def test_an_image_that_does_not_exist_ends_error_with_the_kubelet_reason(
     real_operator: support.OperatorProcess,
     tmp_path: Path,
 ) -> None:
-    manifest = yaml.safe_load(SMOKE.read_text())
-    manifest["metadata"]["name"] = "no-image"
-    manifest["spec"]["scenarios"]["include"] = ["hard-braking_*.xosc"]
-    manifest["spec"]["execution"]["retries"] = 0
-    manifest["spec"]["environment"]["simulator"]["image"] = "ghcr.io/simtest-dev/not-built:0.0.0"
-    path = tmp_path / "no-image.yaml"
-    path.write_text(yaml.safe_dump(manifest))
+    path = smoke_variant(
+        tmp_path,
+        "no-image",
+        "hard-braking_*.xosc",
+        simulator={"image": "ghcr.io/simtest-dev/not-built:0.0.0"},
+        retries=0,
+    )
     submitted = support.submit(
         path, namespace=real_namespace, kubeconfig=real_cluster.kubeconfig, timeout=180
     )

@@ -110,14 +110,12 @@ def up(
     cluster = _cluster(name, root)
     settings = Settings.from_env()
     with _reported():
-        images, node_addons = None, []
+        real_node = None
         if real_nodes:
-            index = built_images.load_index(built_images.index_path(settings.cache.root))
-            images = built_images.node_images(index)
-            node_addons = addons.device_plugin_documents(
-                cluster.toolchain.binary("helm"),
-                addons.find_chart(Path.cwd()),
-                image=built_images.DEVICE_PLUGIN_IMAGE,
+            real_node = built_images.real_node_setup(
+                settings.cache.root,
+                helm=cluster.toolchain.binary("helm"),
+                chart=addons.find_chart(Path.cwd()),
                 slots=slots,
             )
         info = cluster.up(
@@ -125,9 +123,7 @@ def up(
             shape=NodeShape(simulator_slots=slots, gpus=gpus),
             crds_dir=crds_dir,
             apiserver_port=port,
-            real_nodes=real_nodes,
-            images=images,
-            addons=node_addons,
+            real_node=real_node,
         )
     took = f" in {info.startup_seconds:.1f}s" if info.startup_seconds is not None else ""
     click.echo(f"dev cluster up{took}: {info.server}")

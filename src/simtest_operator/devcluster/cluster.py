@@ -15,15 +15,24 @@ import functools
 import shutil
 import subprocess
 import time
-from collections.abc import Mapping, Sequence
 from importlib import resources
 from pathlib import Path
-from typing import Any
 
-from simtest_operator.devcluster import addons as add
-from simtest_operator.devcluster import components, hostnet, kubeconfig, provisioning, realnodes
+from simtest_operator.devcluster import (
+    addons,
+    components,
+    hostnet,
+    kubeconfig,
+    provisioning,
+    realnodes,
+)
 from simtest_operator.devcluster.components import Layout, Ports
-from simtest_operator.devcluster.nodeconfig import REAL_NODE_LABEL, containerd_argv, kubelet_argv
+from simtest_operator.devcluster.nodeconfig import (
+    REAL_NODE_LABEL,
+    KubeletPorts,
+    containerd_argv,
+    kubelet_argv,
+)
 from simtest_operator.devcluster.nodes import NodeShape, node_names
 from simtest_operator.devcluster.pki import Pki, ensure_pki
 from simtest_operator.devcluster.processes import (
@@ -35,7 +44,7 @@ from simtest_operator.devcluster.processes import (
     stop,
 )
 from simtest_operator.devcluster.readiness import http_ok, wait_until
-from simtest_operator.devcluster.realnodes import NodeImages, RealNode
+from simtest_operator.devcluster.realnodes import RealNode, RealNodeSetup
 from simtest_operator.devcluster.state import (
     ClusterInfo,
     ClusterState,
@@ -76,9 +85,7 @@ class DevCluster:
         shape: NodeShape | None = None,
         crds_dir: Path | None = None,
         apiserver_port: int | None = None,
-        real_nodes: int = 0,
-        images: NodeImages | None = None,
-        addons: Sequence[Mapping[str, Any]] = (),
+        real_node: RealNodeSetup | None = None,
         timeout: float = 90.0,
     ) -> ClusterInfo:
         """Start the cluster (or return the running one) and wait until it is usable.
@@ -86,27 +93,18 @@ class DevCluster:
         Usable means: apiserver ``/readyz`` ok, controller-manager, scheduler and kwok healthy,
         the CRDs from ``crds_dir`` established (skipped when the folder is missing or empty),
         ``nodes`` fake nodes Ready with ``slots`` ``simtest.dev/simulator`` each (``shape``
-        overrides all capacities), the ``default`` service account present, and ``real_nodes``
-        real nodes (kubelet + containerd, at most one per machine: the kubelet's device-plugin
-        socket path is fixed) Ready with ``images`` imported. ``addons`` (the chart's
-        device-plugin objects, :mod:`~simtest_operator.devcluster.addons`) are created after
-        the real node is Ready, which then must advertise simulator slots.
+        overrides all capacities), the ``default`` service account present, and with
+        ``real_node`` the real node (kubelet + containerd) Ready with its images imported and,
+        given addons, advertising simulator slots.
         """
         current = self._load_state()
         if current is not None:
             if self.status().running:
                 return self._info(current)
             self.down()  # stale: something died; start over cleanly
-        if real_nodes not in (0, 1):
-            raise ClusterError(
-                f"--real-nodes {real_nodes}: one machine runs at most one real node (every "
-                "kubelet serves device plugins at the same fixed socket path)"
-            )
-        if real_nodes and images is None:
-            raise ClusterError("a real node needs images (at least the pod sandbox image)")
-        if real_nodes:
+        if real_node is not None:
             realnodes.check_host()
-        needed = (*CONTROL_PLANE_BINARIES, *(("kubelet", "crictl") if real_nodes else ()))
+        needed = (*CONTROL_PLANE_BINARIES, *(("kubelet", "crictl") if real_node else ()))
         missing = self.toolchain.missing(needed)
         if missing:
             raise ToolchainError(
@@ -128,8 +126,8 @@ class DevCluster:
             state = self._provision(
                 state, pki, nodes=nodes, shape=shape, crds_dir=crds_dir, timeout=timeout
             )
-            if real_nodes and images is not None:
-                state = self._start_real_node(state, pki, images, addons, timeout=timeout)
+            if real_node is not None:
+                state = self._start_real_node(state, pki, real_node, timeout=timeout)
         except BaseException:
             self.down()
             raise
@@ -348,22 +346,22 @@ class DevCluster:
         self,
         state: ClusterState,
         pki: Pki,
-        images: NodeImages,
-        addons: Sequence[Mapping[str, Any]],
+        setup: RealNodeSetup,
         *,
         timeout: float,
     ) -> ClusterState:
         """containerd, the images, the kubelet; the Node Ready; the addons and the slots."""
-        name = realnodes.real_node_names(1)[0]
+        name = realnodes.NODE_NAME
+        server_port, healthz_port = free_ports(2)
         node = RealNode(
             name=name,
             root=self.layout.root / "nodes" / name,
             network=hostnet.pick_network(self.layout.root, 0),
-            ports=realnodes.kubelet_ports(free_ports(2)),
+            ports=KubeletPorts(server=server_port, healthz=healthz_port),
         )
         state = dataclasses.replace(state, real_nodes=(node,))
         state.save(self.layout.state)
-        realnodes.prepare(node, pki=pki, server=state.server, sandbox_image=images.sandbox)
+        realnodes.prepare(node, pki=pki, server=state.server, sandbox_image=setup.sandbox_image)
         containerd = realnodes.system_binary("containerd")
         state = self._spawn(state, f"containerd-{name}", containerd_argv(containerd, node.layout))
         wait_until(
@@ -373,7 +371,7 @@ class DevCluster:
             watch=state.processes[-1:],
             blame=state.processes[-1],
         )
-        realnodes.import_images(node, images.archives)
+        realnodes.import_images(node, setup.archives)
         labels = {REAL_NODE_LABEL: "true", "kubernetes.io/os": "linux"}
         kubelet = self.toolchain.binary("kubelet")
         argv = kubelet_argv(kubelet, node.layout, network=node.network, labels=labels)
@@ -387,10 +385,10 @@ class DevCluster:
                 watch=state.processes[-2:],
                 blame=state.processes[-1],
             )
-            if addons:
-                add.apply(api, addons)
+            if setup.addons:
+                addons.apply(api, setup.addons)
                 wait_until(
-                    lambda: add.simulator_slots(api, name) > 0,
+                    lambda: addons.simulator_slots(api, name) > 0,
                     what=f"{name} advertising simulator slots (device plugin in kube-system)",
                     timeout=timeout,
                     watch=state.processes[-2:],

@@ -12,7 +12,8 @@ import dataclasses
 import json
 from pathlib import Path
 
-from simtest_operator.devcluster.realnodes import NodeImages
+from simtest_operator.devcluster import addons
+from simtest_operator.devcluster.realnodes import RealNodeSetup
 from simtest_operator.errors import ClusterError
 
 BUILD_SCRIPT = Path("deploy/docker/build.sh")
@@ -61,8 +62,12 @@ def load_index(path: Path) -> dict[str, BuiltImage]:
     return images
 
 
-def node_images(index: dict[str, BuiltImage], wanted: tuple[str, ...] = ()) -> NodeImages:
-    """The sandbox image plus ``wanted`` (default: every built image) for a real node."""
+def real_node_setup(
+    cache_root: Path, *, helm: Path, chart: Path, slots: int, wanted: tuple[str, ...] = ()
+) -> RealNodeSetup:
+    """What the real node gets: the sandbox image plus ``wanted`` (default: every built image)
+    from the build script's index, and the chart's device plugin advertising ``slots``."""
+    index = load_index(index_path(cache_root))
     sandboxes = sorted(name for name in index if name.startswith(SANDBOX_PREFIX))
     if not sandboxes:
         raise ClusterError(f"the image index has no pod sandbox image ({SANDBOX_PREFIX}*)")
@@ -71,4 +76,9 @@ def node_images(index: dict[str, BuiltImage], wanted: tuple[str, ...] = ()) -> N
     if unknown:
         raise ClusterError(f"not built: {', '.join(unknown)}; run `bash {BUILD_SCRIPT}`")
     chosen = dict.fromkeys((sandboxes[-1], *names))
-    return NodeImages(sandbox=sandboxes[-1], archives=tuple(index[n].archive for n in chosen))
+    plugin = addons.device_plugin_documents(helm, chart, image=DEVICE_PLUGIN_IMAGE, slots=slots)
+    return RealNodeSetup(
+        sandbox_image=sandboxes[-1],
+        archives=tuple(index[n].archive for n in chosen),
+        addons=tuple(plugin),
+    )

@@ -21,13 +21,15 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import json
 import os
 import shutil
 import signal
 import socket
 import subprocess
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
+from typing import Any
 
 from simtest_operator.devcluster import hostnet, kubeconfig, nodeconfig
 from simtest_operator.devcluster.nodeconfig import (
@@ -39,7 +41,8 @@ from simtest_operator.devcluster.nodeconfig import (
 from simtest_operator.devcluster.pki import Pki, ensure_client_cert
 from simtest_operator.errors import ClusterError
 
-NAME_PREFIX = "simtest-real-"
+NODE_NAME = "simtest-real-0"
+"""The real node's name: one per machine (every kubelet serves device plugins at one fixed path)."""
 SYSTEM_BINARIES = ("containerd", "containerd-shim-runc-v2", "runc", "ctr")
 """From Debian's ``containerd`` and ``runc`` packages (``deploy/setup.sh test`` installs them)."""
 
@@ -79,16 +82,16 @@ class RealNode:
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
-class NodeImages:
-    """What a real node gets instead of registry pulls: built images, as OCI archives."""
+class RealNodeSetup:
+    """What ``up`` gives the real node: built images instead of registry pulls, and the objects
+    it needs from the cluster (the chart's device plugin, so that it advertises slots)."""
 
-    sandbox: str
+    sandbox_image: str
     """Name of the pod-sandbox ("pause") image among the archives."""
     archives: tuple[Path, ...]
-
-
-def real_node_names(count: int) -> tuple[str, ...]:
-    return tuple(f"{NAME_PREFIX}{i}" for i in range(count))
+    addons: tuple[Mapping[str, Any], ...] = ()
+    """Created once the node is Ready (:mod:`~simtest_operator.devcluster.addons`); with any,
+    ``up`` waits until the node advertises simulator slots."""
 
 
 def system_binary(name: str) -> Path:
@@ -162,36 +165,24 @@ def containerd_ready(node: RealNode) -> bool:
     return result.returncode == 0
 
 
-def import_images(node: RealNode, archives: Iterable[Path]) -> tuple[str, ...]:
+def import_images(node: RealNode, archives: Iterable[Path]) -> None:
     """Load OCI archives into the node's containerd (namespace ``k8s.io``, what CRI uses).
 
     This stands in for a registry pull: the kubelet then finds the images by name and, with
     ``imagePullPolicy: IfNotPresent``, never tries to pull them.
     """
     ctr = str(system_binary("ctr"))
-    imported = []
     for archive in archives:
         result = subprocess.run(
-            [
-                ctr,
-                "--address",
-                str(node.layout.socket),
-                "-n",
-                "k8s.io",
-                "images",
-                "import",
-                "--no-unpack=false",
-                str(archive),
-            ],
+            [ctr, "--address", str(node.layout.socket), "-n", "k8s.io", "images", "import",
+             str(archive)],
             capture_output=True,
             text=True,
             check=False,
             timeout=600,
-        )
+        )  # fmt: skip
         if result.returncode != 0:
             raise ClusterError(f"cannot import {archive} into {node.name}: {result.stderr.strip()}")
-        imported.append(archive.name)
-    return tuple(imported)
 
 
 def remove_pods(node: RealNode, crictl: Path | None, *, timeout: float = 60.0) -> None:
@@ -262,9 +253,9 @@ def _kill_shims(socket_path: Path) -> None:
 
 def _kill_containers(runc_root: Path) -> None:
     """Force-delete whatever runc still lists under this node's runc root."""
-    runc = shutil.which("runc", path="/usr/sbin:/usr/bin:/sbin:/bin")
-    if runc is None or not runc_root.is_dir():
+    if not runc_root.is_dir():
         return
+    runc = str(system_binary("runc"))
     for namespace_root in runc_root.iterdir():
         for container in namespace_root.iterdir() if namespace_root.is_dir() else ():
             subprocess.run(
@@ -287,21 +278,17 @@ def _mounts_under(root: Path) -> list[str]:
 def _netns_of(layout: NodeLayout) -> list[Path]:
     """Network namespaces containerd made for this node's pods and did not remove.
 
-    containerd 1.6 names them ``/var/run/netns/cni-<uuid>`` and records each in the sandbox's
-    spec under its state folder; only those are ours.
+    Each pod sandbox's OCI spec (``config.json`` under this node's containerd state) names its
+    namespace; only those are ours (containerd 1.6 puts them at ``/var/run/netns/cni-<uuid>``).
     """
     state = layout.containerd_state
-    if not state.is_dir():
-        return []
-    names = set()
-    for spec in state.rglob("config.json"):
-        with contextlib.suppress(OSError):
-            text = spec.read_text()
-            for part in text.split('"'):
-                if part.startswith("/var/run/netns/cni-"):
-                    names.add(Path(part))
-    return sorted(names)
-
-
-def kubelet_ports(free: Sequence[int]) -> KubeletPorts:
-    return KubeletPorts(server=free[0], healthz=free[1])
+    found: set[Path] = set()
+    for spec in state.rglob("config.json") if state.is_dir() else ():
+        with contextlib.suppress(OSError, ValueError):
+            namespaces = json.loads(spec.read_text()).get("linux", {}).get("namespaces", [])
+            found.update(
+                Path(ns["path"])
+                for ns in namespaces
+                if ns.get("type") == "network" and ns.get("path")
+            )
+    return sorted(found)

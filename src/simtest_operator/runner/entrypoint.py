@@ -195,10 +195,13 @@ def run_job(
                     job,
                 )
             )
-            for rest in spec.scenarios[index + 1 :]:
-                skipped = _failed(rest.id, Verdict.ERROR, NOT_STARTED_REASON, time.perf_counter())
-                attempts.append(_attempt(rest, None, skipped, job))
-            break
+            attempts.extend(
+                _attempt(
+                    rest, None, _failed(rest.id, Verdict.ERROR, NOT_STARTED_REASON, started), job
+                )
+                for rest in spec.scenarios[index + 1 :]
+            )
+            return attempts
         attempts.append(_attempt(scenario, path, outcome, job))
     return attempts
 
