@@ -178,6 +178,50 @@ def test_reuse_worker_reports_each_scenario_and_errors_for_those_it_did_not_reac
 
 
 @pytest.mark.parametrize(
+    ("pod_reason", "container_reason", "cut", "words"),
+    [
+        ("DeadlineExceeded", "Error", Verdict.TIMEOUT, "deadline"),
+        ("", "OOMKilled", Verdict.ERROR, "OOMKilled"),
+        ("Evicted", "Error", Verdict.ERROR, "evicted"),
+    ],
+)
+def test_a_warm_pod_killed_mid_queue_keeps_what_finished(
+    pod_reason: str, container_reason: str, cut: Verdict, words: str
+) -> None:
+    # The runner rewrites its message after each scenario; SIGTERM (the kubelet's deadline kill)
+    # adds the interrupted and unstarted ones flagged "stopped": they take the pod's verdict.
+    message = json.dumps(
+        {
+            "results": [
+                {"scenarioId": "a.xosc", "verdict": "Passed", "wallSeconds": 4.0},
+                {"scenarioId": "b.xosc", "verdict": "Error", "stopped": True, "reason": "SIGTERM"},
+                {"scenarioId": "c.xosc", "verdict": "Error", "stopped": True, "reason": "SIGTERM"},
+            ]
+        }
+    )
+    container = terminated(message, code=137, reason=container_reason)
+    result = assess(
+        env("a.xosc", "b.xosc", "c.xosc"), pod(phase="Failed", state=container, reason=pod_reason)
+    )
+    assert result.results is not None
+    assert [r.verdict for r in result.results] == [Verdict.PASSED, cut, Verdict.ERROR]
+    assert result.results[0].duration_seconds == 4.0
+    assert words in result.results[1].reason
+    assert result.results[2].reason.startswith("not run:") and words in result.results[2].reason
+
+
+def test_a_killed_runner_keeps_what_it_finished_and_names_the_exit() -> None:
+    message = json.dumps({"results": [{"scenarioId": "a.xosc", "verdict": "Passed"}]})
+    result = assess(
+        env("a.xosc", "b.xosc"),
+        pod(phase="Failed", state=terminated(message, code=137, reason="Error")),
+    )
+    assert result.results is not None
+    assert [r.verdict for r in result.results] == [Verdict.PASSED, Verdict.ERROR]
+    assert "exit code 137" in result.results[1].reason
+
+
+@pytest.mark.parametrize(
     ("pod_reason", "container", "verdict", "words"),
     [
         ("DeadlineExceeded", terminated("", code=137, reason="Error"), Verdict.TIMEOUT, "deadline"),

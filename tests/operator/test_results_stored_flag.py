@@ -12,16 +12,20 @@ from __future__ import annotations
 
 import json
 
-from simtest_operator.operator import environments
 from simtest_operator.operator.actions import Kind
 from simtest_operator.operator.records import ResultRecord
+from simtest_operator.render import messages
 from simtest_operator.verdicts import Verdict
 from tests.operator.fakecluster import FakeCluster, Script, campaign_body, frozen_list
 
 
+def unstored(text: str, *, default_id: str | None = None) -> frozenset[str]:
+    return messages.flagged(text, messages.RESULTS_STORED, False, default_id=default_id)
+
+
 def test_unstored_ids_from_single_and_warm_worker_messages() -> None:
     single = json.dumps({"verdict": "Passed", "resultsStored": False})
-    assert environments.unstored_ids(single, default_id="a.xosc") == {"a.xosc"}
+    assert unstored(single, default_id="a.xosc") == {"a.xosc"}
     warm = json.dumps(
         {
             "results": [
@@ -31,9 +35,9 @@ def test_unstored_ids_from_single_and_warm_worker_messages() -> None:
             ]
         }
     )
-    assert environments.unstored_ids(warm) == {"a"}
-    assert environments.unstored_ids("Traceback (most recent call last)") == frozenset()
-    assert environments.unstored_ids('{"results": 3}') == frozenset()
+    assert unstored(warm) == {"a"}
+    assert unstored("Traceback (most recent call last)") == frozenset()
+    assert unstored('{"results": 3}') == frozenset()
 
 
 def test_the_flag_is_in_the_wire_form_only_when_false() -> None:

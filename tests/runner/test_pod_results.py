@@ -22,13 +22,14 @@ import socket
 import subprocess
 import sys
 import time
+from collections.abc import Sequence
 from pathlib import Path
 
 import pytest
 
 from simtest_operator import results
 from simtest_operator.render import RunSpec, ScenarioRef, messages
-from simtest_operator.runner import entrypoint, execution
+from simtest_operator.runner import delivering, entrypoint, execution
 from simtest_operator.verdicts import ScenarioOutcome, Verdict
 from tests.runner import podsupport
 
@@ -142,7 +143,7 @@ def test_a_database_that_is_down_keeps_every_verdict(tmp_path: Path) -> None:
     text = entrypoint.write_message(delivered.outcomes, path, unstored=delivered.unstored)
     data = json.loads(path.read_text())
     assert text == path.read_text()
-    assert [e[entrypoint.RESULTS_STORED] for e in data["results"]] == [False, False]
+    assert [e[messages.RESULTS_STORED] for e in data["results"]] == [False, False]
     decoded = messages.decode(text)
     assert [o.verdict for o in decoded] == [Verdict.PASSED, Verdict.FAILED]
 
@@ -164,7 +165,7 @@ def test_without_a_database_nothing_is_flagged(tmp_path: Path) -> None:
     delivered = entrypoint.deliverer_for(job, {}, run_key=None, deadline=None).deliver(attempts)
     assert delivered.unstored == frozenset() and delivered.notes == ()
     text = entrypoint.write_message(delivered.outcomes, tmp_path / "log")
-    assert entrypoint.RESULTS_STORED not in text
+    assert messages.RESULTS_STORED not in text
     assert delivered.outcomes[0].artifacts["result"] == str(attempts[0].folder / "result.json")
 
 
@@ -182,7 +183,7 @@ def test_the_flag_keeps_the_message_within_the_limit(tmp_path: Path) -> None:
     text = entrypoint.write_message(outcomes, tmp_path / "log", unstored=unstored)
     assert len(text.encode()) <= messages.LIMIT_BYTES
     entries = json.loads(text)["results"]
-    assert entries and all(e[entrypoint.RESULTS_STORED] is False for e in entries)
+    assert entries and all(e[messages.RESULTS_STORED] is False for e in entries)
 
 
 @pytest.mark.postgres
@@ -211,7 +212,7 @@ def test_main_runs_a_real_scenario_and_stores_its_row(
     termination = tmp_path / "termination-log"
     entrypoint.main(["--spec", spec.dumps(), "--termination-log", str(termination)])
     [outcome] = messages.decode(termination.read_text())
-    assert entrypoint.RESULTS_STORED not in termination.read_text()
+    assert messages.RESULTS_STORED not in termination.read_text()
     with results.open_store(postgres_dsn) as store:
         [row] = store.outcomes(results.RunKey(KEY))
     assert row.outcome.verdict is outcome.verdict
@@ -246,6 +247,36 @@ def test_sigterm_keeps_what_finished_and_makes_the_rest_error(tmp_path: Path) ->
     assert outcomes["b.xosc"].reason == entrypoint.TERMINATED_REASON
     assert outcomes["c.xosc"].verdict is Verdict.ERROR
     assert outcomes["c.xosc"].reason == entrypoint.NOT_STARTED_REASON
+
+
+def test_the_message_holds_every_verdict_so_far_after_each_scenario(tmp_path: Path) -> None:
+    # A warm pod killed mid-queue (SIGKILL, the OOM killer) leaves this file to the kubelet.
+    job = podsupport.job(tmp_path, {"a": "pass", "b": "fail", "c": "pass"})
+    log = tmp_path / "termination-log"
+    seen: list[list[str]] = []
+
+    def progress(done: Sequence[delivering.Attempt]) -> None:
+        entrypoint._report(done, log)
+        seen.append([o.scenario_id for o in messages.decode(log.read_text())])
+
+    entrypoint.run_job(job, run_one=podsupport.fake_run_one, fork=False, progress=progress)
+    assert seen == [["a.xosc"], ["a.xosc", "b.xosc"], ["a.xosc", "b.xosc", "c.xosc"]]
+
+
+def test_stopped_scenarios_are_flagged_in_the_message(tmp_path: Path) -> None:
+    job = podsupport.job(tmp_path, {"a": "pass", "b": "pass"})
+
+    def terminated_on_b(request: execution.RunRequest) -> ScenarioOutcome:
+        if request.scenario.name == "b.xosc":
+            raise entrypoint.Terminated
+        return podsupport.fake_run_one(request)
+
+    attempts = entrypoint.run_job(job, run_one=terminated_on_b, fork=False)
+    stopped = frozenset(a.scenario.id for a in attempts if a.stopped)
+    text = entrypoint.write_message(
+        [a.outcome for a in attempts], tmp_path / "log", stopped=stopped
+    )
+    assert messages.flagged(text, messages.STOPPED, True) == {"b.xosc"}
 
 
 @pytest.mark.slow

@@ -15,7 +15,6 @@ from __future__ import annotations
 import dataclasses
 import datetime
 import enum
-import json
 from collections.abc import Mapping
 
 from simtest_operator.operator.observed import EnvironmentView, NodeView, PodView, Timings
@@ -35,8 +34,6 @@ IMAGE_ERRORS = frozenset(
     }
 )
 """Waiting reasons that mean the container will not start without someone fixing something."""
-RESULTS_STORED = "resultsStored"
-"""Flag of a termination-message entry (the runner's ``entrypoint.RESULTS_STORED``)."""
 
 
 class Phase(enum.StrEnum):
@@ -263,25 +260,35 @@ def _terminated(
     exit_text = (
         f"exit code {container.exit_code}" if container.exit_code is not None else "no exit code"
     )
-    if pod.reason == "DeadlineExceeded":
-        reason = clip(f"exceeded its deadline (activeDeadlineSeconds): {pod.message}".rstrip(": "))
-        return failed_records(
-            env, Verdict.TIMEOUT, reason, started=timings.started, end=end
-        ), reason
-    if pod.reason == "Evicted":
-        reason = clip(f"evicted: {pod.message}".rstrip(": "))
-        return failed_records(env, Verdict.ERROR, reason, started=timings.started, end=end), reason
-    if container.reason == "OOMKilled":
-        reason = f"simulator killed for exceeding its memory limit (OOMKilled, {exit_text})"
-        return failed_records(env, Verdict.ERROR, reason, started=timings.started, end=end), reason
     default_id = env.scenarios[0].id if len(env.scenarios) == 1 else None
     try:
         outcomes = messages.decode(container.message, default_id=default_id)
     except messages.MessageError:
         outcomes = ()
+    # The runner rewrites its message after every scenario, so whatever killed the pod, the
+    # scenarios that finished before keep their verdicts; the pod's fate is the verdict of the
+    # one it interrupted, and the ones it never started are Error (run again elsewhere).
+    stopped = messages.flagged(container.message, messages.STOPPED, True, default_id=default_id)
+    finished = tuple(o for o in outcomes if o.scenario_id not in stopped)
+    cut: tuple[Verdict, str] | None = None
+    if pod.reason == "DeadlineExceeded":
+        reason = clip(f"exceeded its deadline (activeDeadlineSeconds): {pod.message}".rstrip(": "))
+        cut = (Verdict.TIMEOUT, reason)
+    elif pod.reason == "Evicted":
+        cut = (Verdict.ERROR, clip(f"evicted: {pod.message}".rstrip(": ")))
+    elif container.reason == "OOMKilled":
+        reason = f"simulator killed for exceeding its memory limit (OOMKilled, {exit_text})"
+        cut = (Verdict.ERROR, reason)
+    if cut is not None:
+        return _cut_short(env, finished, cut, started=timings.started, end=end), cut[1]
     if outcomes:
-        unstored = unstored_ids(container.message, default_id=default_id)
-        return _from_outcomes(env, outcomes, unstored, started=timings.started, end=end)
+        unstored = messages.flagged(
+            container.message, messages.RESULTS_STORED, False, default_id=default_id
+        )
+        ended = f"{exit_text}, {container.reason}" if container.reason else exit_text
+        return _from_outcomes(
+            env, outcomes, unstored, ended=ended, started=timings.started, end=end
+        )
     tail = (
         clip(container.message.strip().splitlines()[-1], 300) if container.message.strip() else ""
     )
@@ -295,20 +302,48 @@ def _terminated(
     return failed_records(env, Verdict.ERROR, reason, started=timings.started, end=end), reason
 
 
-def unstored_ids(message: str, *, default_id: str | None = None) -> frozenset[str]:
-    """Scenario ids whose termination-message entry says ``"resultsStored": false``."""
-    try:
-        data = json.loads(message)
-    except ValueError:
-        return frozenset()
-    entries = data.get("results") if isinstance(data, Mapping) and "results" in data else [data]
-    if not isinstance(entries, list):
-        return frozenset()
-    return frozenset(
-        str(entry.get("scenarioId", default_id))
-        for entry in entries
-        if isinstance(entry, Mapping) and entry.get(RESULTS_STORED) is False
-    )
+def _cut_short(
+    env: EnvironmentView,
+    finished: tuple[ScenarioOutcome, ...],
+    cut: tuple[Verdict, str],
+    *,
+    started: datetime.datetime | None,
+    end: datetime.datetime,
+) -> tuple[ResultRecord, ...]:
+    """Records of a pod that was killed: finished scenarios kept, the interrupted one gets the
+    pod's verdict, the rest are Error (not run)."""
+    by_id = {o.scenario_id: o for o in finished}
+    verdict, reason = cut
+    records: list[ResultRecord] = []
+    interrupted = False
+    for scenario in env.scenarios:
+        outcome = by_id.get(scenario.id)
+        if outcome is not None:
+            duration = outcome.wall_seconds if outcome.wall_seconds > 0 else 0.0
+            records.append(
+                ResultRecord.from_outcome(outcome, attempts=env.attempt, duration=duration)
+            )
+        elif not interrupted:
+            interrupted = True
+            records.append(
+                ResultRecord(
+                    id=scenario.id,
+                    verdict=verdict,
+                    reason=clip(reason),
+                    duration_seconds=_elapsed(started, end) - sum(o.wall_seconds for o in finished),
+                    attempts=env.attempt,
+                )
+            )
+        else:
+            records.append(
+                ResultRecord(
+                    id=scenario.id,
+                    verdict=Verdict.ERROR,
+                    reason=clip(f"not run: the warm simulator was stopped before it ({reason})"),
+                    attempts=env.attempt,
+                )
+            )
+    return tuple(records)
 
 
 def _from_outcomes(
@@ -316,6 +351,7 @@ def _from_outcomes(
     outcomes: tuple[ScenarioOutcome, ...],
     unstored: frozenset[str] = frozenset(),
     *,
+    ended: str,
     started: datetime.datetime | None,
     end: datetime.datetime,
 ) -> tuple[tuple[ResultRecord, ...], str]:
@@ -329,7 +365,7 @@ def _from_outcomes(
                 ResultRecord(
                     id=scenario.id,
                     verdict=Verdict.ERROR,
-                    reason="the warm simulator ended before running this scenario",
+                    reason=f"the warm simulator ended ({ended}) before running this scenario",
                     attempts=env.attempt,
                 )
             )

@@ -20,6 +20,11 @@ from simtest_operator.verdicts import ScenarioOutcome
 
 LIMIT_BYTES = 4096
 """Kubernetes' limit for one container's termination message."""
+RESULTS_STORED = "resultsStored"
+"""Entry flag, ``false`` when the pod could not store the scenario's row in the results database."""
+STOPPED = "stopped"
+"""Entry flag, ``true`` when SIGTERM ended the scenario before it finished (or before it started):
+a verdict of the environment, not of the scenario."""
 KEY_METRICS = ("minTTC", "minTHW", "minDistance", "maxDecel", "collisions", "offRoad")
 """Metrics kept first when a message has to shrink."""
 
@@ -43,6 +48,40 @@ def encode(outcomes: Sequence[ScenarioOutcome], *, limit: int = LIMIT_BYTES) -> 
     while len(_dumps(docs).encode("utf-8")) > limit and len(docs) > 1:
         docs = docs[:-1]
     return _dumps(docs)
+
+
+def encode_flagged(
+    outcomes: Sequence[ScenarioOutcome],
+    flags: Mapping[str, Mapping[str, bool]],
+    *,
+    limit: int = LIMIT_BYTES,
+) -> str:
+    """:func:`encode` plus per-entry flags (scenario id -> {flag: value}), within ``limit``."""
+    reserve = sum(len(f',"{key}":false') for entry in flags.values() for key in entry)
+    text = encode(outcomes, limit=limit - reserve)
+    if not flags:
+        return text
+    data = json.loads(text)
+    entries = data["results"] if isinstance(data.get("results"), list) else [data]
+    for entry in entries:
+        entry.update(flags.get(entry.get("scenarioId"), {}))
+    return json.dumps(data, sort_keys=True, separators=(",", ":"), ensure_ascii=False)
+
+
+def flagged(text: str, flag: str, value: bool, *, default_id: str | None = None) -> frozenset[str]:
+    """Scenario ids whose entry has ``flag`` set to ``value`` (none for text we did not write)."""
+    try:
+        data = json.loads(text)
+    except ValueError:
+        return frozenset()
+    entries = data.get("results") if isinstance(data, Mapping) and "results" in data else [data]
+    if not isinstance(entries, list):
+        return frozenset()
+    return frozenset(
+        str(entry.get("scenarioId", default_id))
+        for entry in entries
+        if isinstance(entry, Mapping) and entry.get(flag) is value
+    )
 
 
 def decode(text: str, *, default_id: str | None = None) -> tuple[ScenarioOutcome, ...]:

@@ -70,6 +70,8 @@ class Attempt:
     """Artifacts as local paths; ``attempts`` is the pod's attempt number."""
     folder: Path
     """The scenario's artifacts folder."""
+    stopped: bool = False
+    """SIGTERM ended the pod before this scenario finished: the environment's verdict."""
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)

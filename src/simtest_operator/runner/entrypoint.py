@@ -34,7 +34,6 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import gc
-import json
 import multiprocessing
 import multiprocessing.connection
 import os
@@ -73,8 +72,6 @@ if TYPE_CHECKING:
 TERMINATION_LOG = "/dev/termination-log"
 DSN_VAR = "SIMTEST_RESULTS_DSN"
 RUN_KEY_VAR = "SIMTEST_RESULTS_RUN_KEY"
-RESULTS_STORED = "resultsStored"
-"""Key of the termination-message entry flag set (to false) when the row was not stored."""
 DEADLINE_MARGIN_SECONDS = 10.0
 """Time kept free before the pod's activeDeadlineSeconds (pod start precedes the runner's)."""
 
@@ -137,9 +134,17 @@ def safe_name(scenario_id: str) -> str:
 
 
 def run_job(
-    job: Job, *, run_one: RunOne = _run_one, fork: bool | None = None
+    job: Job,
+    *,
+    run_one: RunOne = _run_one,
+    fork: bool | None = None,
+    progress: Callable[[Sequence[delivering.Attempt]], None] | None = None,
 ) -> list[delivering.Attempt]:
-    """Run every scenario of the job; never raises for scenario or simulator problems."""
+    """Run every scenario of the job; never raises for scenario or simulator problems.
+
+    ``progress`` gets the attempts so far after each scenario: the entry point rewrites the
+    termination message there, so a pod killed mid-queue still reports what it finished.
+    """
     spec = job.spec
     locator = Locator(FetchContext(base_dir=Path("/"), cache_dir=job.settings.cache.sources))
     isolated = spec.isolation == "Reuse" and len(spec.scenarios) > 1 if fork is None else fork
@@ -193,16 +198,23 @@ def run_job(
                     path,
                     _failed(scenario.id, Verdict.ERROR, TERMINATED_REASON, started),
                     job,
+                    stopped=True,
                 )
             )
             attempts.extend(
                 _attempt(
-                    rest, None, _failed(rest.id, Verdict.ERROR, NOT_STARTED_REASON, started), job
+                    rest,
+                    None,
+                    _failed(rest.id, Verdict.ERROR, NOT_STARTED_REASON, started),
+                    job,
+                    stopped=True,
                 )
                 for rest in spec.scenarios[index + 1 :]
             )
             return attempts
         attempts.append(_attempt(scenario, path, outcome, job))
+        if progress is not None:
+            progress(attempts)
     return attempts
 
 
@@ -278,7 +290,12 @@ def _failed(scenario_id: str, verdict: Verdict, reason: str, started: float) -> 
 
 
 def _attempt(
-    scenario: ScenarioRef, path: Path | None, outcome: ScenarioOutcome, job: Job
+    scenario: ScenarioRef,
+    path: Path | None,
+    outcome: ScenarioOutcome,
+    job: Job,
+    *,
+    stopped: bool = False,
 ) -> delivering.Attempt:
     """The attempt with the pod's attempt number and every local artifact (result file added)."""
     from simtest_operator.runner import delivering
@@ -290,22 +307,39 @@ def _attempt(
     if (folder / "run.log").is_file():
         artifacts.setdefault("log", str(folder / "run.log"))
     outcome = dataclasses.replace(outcome, artifacts=artifacts, attempts=job.spec.attempt)
-    return delivering.Attempt(scenario=scenario, path=path, outcome=outcome, folder=folder)
+    return delivering.Attempt(
+        scenario=scenario, path=path, outcome=outcome, folder=folder, stopped=stopped
+    )
+
+
+def _report(attempts: Sequence[delivering.Attempt], termination_log: Path) -> None:
+    """After each scenario: its line in the log and every verdict so far in the message."""
+    outcome = attempts[-1].outcome
+    sys.stdout.write(f"finished {outcome.scenario_id}: {outcome.verdict.value}\n")
+    sys.stdout.flush()
+    write_message([a.outcome for a in attempts], termination_log)
 
 
 def write_message(
-    outcomes: Sequence[ScenarioOutcome], path: Path, *, unstored: AbstractSet[str] = frozenset()
+    outcomes: Sequence[ScenarioOutcome],
+    path: Path,
+    *,
+    unstored: AbstractSet[str] = frozenset(),
+    stopped: AbstractSet[str] = frozenset(),
 ) -> str:
-    """Write the compact result where the kubelet picks it up; flag entries not stored."""
-    flag = f',"{RESULTS_STORED}":false'
-    text = messages.encode(outcomes, limit=messages.LIMIT_BYTES - len(flag) * len(unstored))
-    if unstored:
-        data = json.loads(text)
-        entries = data["results"] if isinstance(data.get("results"), list) else [data]
-        for entry in entries:
-            if entry.get("scenarioId") in unstored:
-                entry[RESULTS_STORED] = False
-        text = json.dumps(data, sort_keys=True, separators=(",", ":"), ensure_ascii=False)
+    """Write the compact result where the kubelet picks it up, flagging entries not stored and
+    scenarios SIGTERM stopped.
+
+    One ``write`` of the whole text over the old one: the runner rewrites the message after every
+    scenario, and the kubelet copies whatever the file holds when the container ends, however it
+    ends (a kill, the OOM killer, the deadline).
+    """
+    flags: dict[str, dict[str, bool]] = {}
+    for scenario_id in unstored:
+        flags.setdefault(scenario_id, {})[messages.RESULTS_STORED] = False
+    for scenario_id in stopped:
+        flags.setdefault(scenario_id, {})[messages.STOPPED] = True
+    text = messages.encode_flagged(outcomes, flags)
     path.write_text(text, encoding="utf-8")
     return text
 
@@ -420,16 +454,19 @@ def main(argv: Sequence[str] | None = None) -> None:
     artifacts.mkdir(parents=True, exist_ok=True)
     job = Job(spec=spec, artifacts=artifacts, settings=Settings.from_env(env))
     signal.signal(signal.SIGTERM, _raise_terminated)
-    attempts = run_job(job)
+    attempts = run_job(job, progress=lambda done: _report(done, args.termination_log))
     # Past the runs a second SIGTERM ends the process at once: the verdicts are written next.
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    stopped = frozenset(a.scenario.id for a in attempts if a.stopped)
     # The verdicts first: whatever happens while delivering, the kubelet finds them.
-    write_message([a.outcome for a in attempts], args.termination_log)
+    write_message([a.outcome for a in attempts], args.termination_log, stopped=stopped)
     deliverer = deliverer_for(job, env, run_key=args.run_key, deadline=deadline)
     delivered = deliverer.deliver(attempts)
     for note in delivered.notes:
         sys.stderr.write(f"simtest-runner: {note}\n")
-    text = write_message(delivered.outcomes, args.termination_log, unstored=delivered.unstored)
+    text = write_message(
+        delivered.outcomes, args.termination_log, unstored=delivered.unstored, stopped=stopped
+    )
     for outcome in delivered.outcomes:
         sys.stdout.write(f"{outcome.scenario_id}: {outcome.verdict.value} {outcome.reason}\n")
     sys.stdout.write(f"termination message: {len(text.encode())} bytes\n")
