@@ -17,7 +17,13 @@ import click
 
 from simtest_operator.errors import ScenarioError
 from simtest_operator.evaluation import reference as references
-from simtest_operator.openscenario import FileKind, expand_distribution, file_kind
+from simtest_operator.openscenario import (
+    Deviation,
+    FileKind,
+    LoadOptions,
+    expand_distribution,
+    file_kind,
+)
 from simtest_operator.runner import execution, summaries
 from simtest_operator.settings import Settings
 from simtest_operator.sim import SutConfig, Takeover
@@ -30,6 +36,19 @@ _TAKEOVER = click.option(
     show_default=True,
     help="When the SUT driver model takes the ego over.",
 )
+
+
+_STRICT = click.option(
+    "--strict",
+    is_flag=True,
+    help="Refuse deviations from the OpenSCENARIO schema that players accept (parameterType "
+    "'int', a heading in degrees, ...): the scenario is Invalid instead of running with a warning.",
+)
+
+
+def _short(deviation: Deviation) -> str:
+    line = deviation.line if deviation.line is not None else "?"
+    return f"line {line}: {deviation.message} [{deviation.code}]"
 
 
 @click.group("scenario")
@@ -48,11 +67,14 @@ def scenario() -> None:
 )
 @click.option("--no-record", is_flag=True, help="Do not write the omega-prime recording.")
 @_TAKEOVER
-def run(file: Path, out: Path | None, no_record: bool, takeover: str) -> None:
-    """Run FILE and print its verdict, reason and metrics.
+@_STRICT
+def run(file: Path, out: Path | None, no_record: bool, takeover: str, strict: bool) -> None:
+    """Run FILE and print its verdict, reason, accepted deviations and metrics.
 
-    Exit code, as for `simtest run`: 0 passed, 1 failed or timed out (a verdict on the system
-    under test), 2 error or invalid input (the scenario could not be judged).
+    Exit code, as for `simtest run`: 0 passed, 1 failed or timed out (verdict Failed or
+    Timeout: a verdict on the system under test), 2 error or invalid input (Error, Invalid,
+    Skipped: the scenario could not be judged). Accepted deviations from the schema do not change
+    the exit code unless --strict makes them Invalid.
     """
     settings = Settings.from_env()
     report = execution.run_scenario(
@@ -63,11 +85,14 @@ def run(file: Path, out: Path | None, no_record: bool, takeover: str) -> None:
             simulation=settings.simulation,
             output_dir=out,
             record=not no_record,
+            loading=LoadOptions(strict=strict),
         )
     )
     outcome = report.outcome
     click.echo(f"verdict: {outcome.verdict}")
     click.echo(f"reason: {outcome.reason}")
+    for deviation in report.deviations:
+        click.echo(f"warning: {deviation.describe()}")
     for key, value in sorted(outcome.metrics.items()):
         click.echo(f"{key}: {value:g}")
     if outcome.ignored_elements:
@@ -79,7 +104,9 @@ def run(file: Path, out: Path | None, no_record: bool, takeover: str) -> None:
     )
 
 
-def _requests(directory: Path, settings: Settings, sut: SutConfig) -> list[execution.RunRequest]:
+def _requests(
+    directory: Path, settings: Settings, sut: SutConfig, loading: LoadOptions
+) -> list[execution.RunRequest]:
     requests = []
     for path in sorted(directory.rglob("*.xosc")):
         overrides_list: list[tuple[str, Path, Mapping[str, str]]]
@@ -112,6 +139,7 @@ def _requests(directory: Path, settings: Settings, sut: SutConfig) -> list[execu
                     sut=sut,
                     simulation=settings.simulation,
                     record=False,
+                    loading=loading,
                 )
             )
     return requests
@@ -152,20 +180,26 @@ def _comparison(
     help="esmini-reference.json to compare end times and paths with.",
 )
 @_TAKEOVER
-def check(directory: Path, jobs: int | None, reference: Path | None, takeover: str) -> None:
-    """Run every scenario under DIRECTORY in parallel and print a table."""
+@_STRICT
+def check(
+    directory: Path, jobs: int | None, reference: Path | None, takeover: str, strict: bool
+) -> None:
+    """Run every scenario under DIRECTORY in parallel and print a table with each verdict and
+    the schema deviations accepted in the file (warnings)."""
     # Only `check` prints a table: `scenario run` starts without rich.
     from rich.console import Console
+    from rich.markup import escape
     from rich.table import Table
 
     settings = Settings.from_env()
-    requests = _requests(directory, settings, SutConfig(takeover=Takeover(takeover)))
+    loading = LoadOptions(strict=strict)
+    requests = _requests(directory, settings, SutConfig(takeover=Takeover(takeover)), loading)
     ref = references.load(reference) if reference is not None else None
     reports: dict[int, execution.RunReport] = {}
     for index, report in execution.run_many(requests, jobs=jobs or os.cpu_count() or 1):
         reports[index] = report
     table = Table(title=f"scenarios under {directory}")
-    columns = ["file", "verdict", "reason", "simulated s", "wall s"]
+    columns = ["file", "verdict", "reason", "warnings", "simulated s", "wall s"]
     if ref is not None:
         columns += ["end Δ s", "median err m", "max err m", "match", "intended differences"]
     for column in columns:
@@ -179,6 +213,7 @@ def check(directory: Path, jobs: int | None, reference: Path | None, takeover: s
             outcome.scenario_id,
             outcome.verdict.value,
             outcome.reason,
+            "\n".join(_short(d) for d in reports[index].deviations),
             f"{outcome.simulated_seconds:.2f}",
             f"{outcome.wall_seconds:.2f}",
         ]
@@ -197,9 +232,12 @@ def check(directory: Path, jobs: int | None, reference: Path | None, takeover: s
                     "yes" if comparison.match else "no",
                     "; ".join(comparison.intended),
                 ]
-        table.add_row(*row)
+        table.add_row(*(escape(cell) for cell in row))
     Console(width=max(Console().width, 200 if ref is not None else 160)).print(table)
     if ref is not None:
         click.echo(f"{matched} of {compared} compared scenarios match the reference")
     ran = sum(counts[v] for v in Verdict if v.counts_as_ran)
+    warned = sum(1 for report in reports.values() if report.deviations)
     click.echo(f"{ran} ran, {counts[Verdict.INVALID]} invalid, {counts[Verdict.ERROR]} errors")
+    if warned:
+        click.echo(f"{warned} scenarios accepted with deviations from the schema (see warnings)")

@@ -15,6 +15,7 @@ from simtest_operator import xmlsafe
 from simtest_operator.errors import ScenarioError
 from simtest_operator.openscenario import headers, parameters, reading
 from simtest_operator.openscenario.catalogs import Catalogs
+from simtest_operator.openscenario.deviations import Deviations
 from simtest_operator.openscenario.headers import FileKind
 from simtest_operator.openscenario.model import common as m
 from simtest_operator.openscenario.model import entities as e
@@ -45,7 +46,24 @@ def file_kind(path: Path) -> FileKind:
     return kind
 
 
-def load_scenario(path: Path, *, overrides: Mapping[str, str] | None = None) -> s.Scenario:
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class LoadOptions:
+    """How strictly and from where a scenario is loaded (the caller's policy, not the file's)."""
+
+    strict: bool = False
+    """Refuse accepted deviations from the schema (see :mod:`.deviations`) instead of listing
+    them: for authors who want files every player reads."""
+
+
+DEFAULT_OPTIONS = LoadOptions()
+
+
+def load_scenario(
+    path: Path,
+    *,
+    overrides: Mapping[str, str] | None = None,
+    options: LoadOptions = DEFAULT_OPTIONS,
+) -> s.Scenario:
     """Load the scenario at ``path``; ``overrides`` replace global parameter values (as text).
 
     Raises ScenarioError (file, element, line) for unusable input: unsafe or malformed XML, a
@@ -60,7 +78,7 @@ def load_scenario(path: Path, *, overrides: Mapping[str, str] | None = None) -> 
     if kind is not FileKind.SCENARIO:
         hint = " (use expand_distribution)" if kind is FileKind.DISTRIBUTION else ""
         raise ScenarioError(f"file is a {kind.value}, not a scenario{hint}", file=file)
-    findings = reading.Findings()
+    findings = reading.Findings(deviations=Deviations(strict=options.strict))
     ctx = reading.Context(
         file=file,
         scope=parameters.EMPTY,
@@ -87,6 +105,7 @@ def load_scenario(path: Path, *, overrides: Mapping[str, str] | None = None) -> 
         unsupported_nodes=tuple(findings.unsupported),
         ignored_kinds=tuple(sorted(findings.ignored)),
         notes=tuple(findings.notes),
+        deviations=tuple(findings.deviations.found),
         line=root.sourceline,
     )
 
@@ -111,7 +130,8 @@ def _variables(root: Element, ctx: reading.Context) -> tuple[m.ParameterDeclarat
         values = [decl.get(attr) for attr in ("name", "variableType", "value")]
         if any(value is None for value in values):
             raise ctx.error(decl, "VariableDeclaration needs name, variableType and value")
-        entries.append((str(values[0]), str(values[1]), str(values[2]), decl.sourceline))
+        kind = ctx.parameter_type(decl, "variableType")
+        entries.append((str(values[0]), kind, str(values[2]), decl.sourceline))
     try:
         _, decls = parameters.declare(entries, ctx.scope)
     except ScenarioError as exc:

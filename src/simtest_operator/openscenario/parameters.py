@@ -51,6 +51,13 @@ class Scope:
 
 EMPTY = Scope({})
 
+TYPE_ALIASES: Mapping[str, ParameterType] = {
+    "int": ParameterType.INTEGER,
+    "bool": ParameterType.BOOLEAN,
+}
+"""Non-schema ``parameterType`` spellings that esmini and other players accept; readers map them
+(reporting a deviation) before declaring."""
+
 
 def parse_type(raw: str) -> ParameterType:
     """The ParameterType for ``parameterType`` text (raises ScenarioError when unknown)."""

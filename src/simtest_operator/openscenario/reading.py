@@ -2,8 +2,9 @@
 
 Every reader function takes a :class:`Context`, which knows the file being read (catalog entries
 come from other files), the parameter scope visible at the current element, the catalogs, and a
-shared :class:`Findings` collector for unsupported and ignored elements. Errors raised through it
-name the file, the element and the line.
+shared :class:`Findings` collector for unsupported and ignored elements and accepted deviations
+(:meth:`Context.deviation`, see :mod:`~simtest_operator.openscenario.deviations`). Errors raised
+through it name the file, the element and the line.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from typing import TYPE_CHECKING, TypeVar
 
 from simtest_operator.errors import ScenarioError
 from simtest_operator.openscenario import parameters
+from simtest_operator.openscenario.deviations import Deviation, Deviations
 from simtest_operator.openscenario.model.common import (
     ParameterDeclaration,
     ParameterValue,
@@ -31,11 +33,13 @@ T = TypeVar("T")
 
 @dataclasses.dataclass(slots=True)
 class Findings:
-    """Mutable collector shared by one load: unsupported nodes and ignored element kinds."""
+    """Mutable collector shared by one load: unsupported nodes, ignored element kinds, notes
+    and accepted deviations (``Findings(deviations=Deviations(strict=True))`` refuses them)."""
 
     unsupported: list[Unsupported] = dataclasses.field(default_factory=list)
     ignored: set[str] = dataclasses.field(default_factory=set)
     notes: list[str] = dataclasses.field(default_factory=list)
+    deviations: Deviations = dataclasses.field(default_factory=Deviations)
 
 
 def children(el: Element) -> Iterator[Element]:
@@ -254,7 +258,7 @@ class Context:
         entries = [
             (
                 self._plain(decl, "name"),
-                self._plain(decl, "parameterType"),
+                self.parameter_type(decl, "parameterType"),
                 self._plain(decl, "value"),
                 decl.sourceline,
             )
@@ -280,6 +284,29 @@ class Context:
                 line=exc.line or block.sourceline,
             ) from exc
         return self.with_scope(scope), decls
+
+    def parameter_type(self, el: Element, name: str) -> str:
+        """The type attribute of a Parameter/VariableDeclaration, with accepted aliases
+        (``int``, ``bool``) mapped to the schema's spelling and reported as deviations."""
+        raw = self._plain(el, name)
+        alias = parameters.TYPE_ALIASES.get(raw)
+        if alias is None:
+            return raw
+        self.deviation(
+            el, f"parameter-type-{raw}", f"{name} {raw!r} read as {alias.value!r} (schema spelling)"
+        )
+        return alias.value
+
+    def deviation(self, el: Element, code: str, message: str) -> None:
+        """Report an accepted deviation from the schema at ``el`` (raises under strict mode).
+
+        See :mod:`simtest_operator.openscenario.deviations` for when to use it.
+        """
+        self.findings.deviations.report(
+            Deviation(
+                code=code, message=message, file=self.file, element=str(el.tag), line=el.sourceline
+            )
+        )
 
     def note(self, el: Element | None, message: str) -> None:
         """Record a non-fatal remark about the input (shown with the result)."""

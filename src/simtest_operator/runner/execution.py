@@ -21,6 +21,7 @@ from pathlib import Path
 
 from simtest_operator import evaluation, provenance, recording
 from simtest_operator.errors import ScenarioError, SimtestError
+from simtest_operator.openscenario import Deviation, LoadOptions
 from simtest_operator.settings import SimulationSettings
 from simtest_operator.sim import BackendChoice, Simulation, SutConfig, open_simulation
 from simtest_operator.snapshots import WorldSnapshot
@@ -50,6 +51,8 @@ class RunRequest:
     wall_clock_limit: float | None = None
     """Seconds of wall time after which the run stops as ``Timeout``."""
     backend: BackendChoice = BackendChoice.SUMO
+    loading: LoadOptions = dataclasses.field(default_factory=LoadOptions)
+    """Strict mode, source root and map libraries for reading the scenario."""
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
@@ -67,6 +70,8 @@ class RunReport:
     net_from_cache: bool = False
     startup_seconds: float = 0.0
     """Wall time to load the scenario, map and network and start the backend."""
+    deviations: tuple[Deviation, ...] = ()
+    """Accepted deviations from the OpenSCENARIO schema (empty under strict mode)."""
 
 
 class _Samples:
@@ -107,6 +112,7 @@ def run_scenario(request: RunRequest) -> RunReport:
             nets_dir=request.nets_dir,
             overrides=request.overrides,
             backend=request.backend,
+            loading=request.loading,
         )
     except SimtestError as exc:
         verdict = Verdict.INVALID if isinstance(exc, ScenarioError) else Verdict.ERROR
@@ -120,6 +126,8 @@ def run_scenario(request: RunRequest) -> RunReport:
         )
         return RunReport(outcome=outcome, storyboard_complete=False)
     simulation = opened.simulation
+    deviations = opened.scenario.deviations
+    log.extend(f"accepted deviation: {d.describe()}" for d in deviations)
     log.append(
         f"network {opened.net_file} (cache {'hit' if opened.net_from_cache else 'miss'}, "
         f"{opened.net_seconds:.2f} s); ego {simulation.ego}"
@@ -191,6 +199,7 @@ def run_scenario(request: RunRequest) -> RunReport:
         intended=simulation.intended_differences,
         net_from_cache=opened.net_from_cache,
         startup_seconds=startup,
+        deviations=deviations,
     )
     if out is not None:
         _write_outputs(out, report, log)
@@ -250,6 +259,8 @@ def _write_outputs(out: Path, report: RunReport, log: list[str]) -> None:
     (out / "run.log").write_text("\n".join(log) + "\n", encoding="utf-8")
     result = outcome.to_json()
     result["artifacts"] = {**dict(outcome.artifacts), "log": str(out / "run.log")}
+    if report.deviations:
+        result["deviations"] = [d.describe() for d in report.deviations]
     (out / "result.json").write_text(
         json.dumps(result, indent=2, sort_keys=True) + "\n", encoding="utf-8"
     )

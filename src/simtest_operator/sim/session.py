@@ -17,7 +17,7 @@ from collections.abc import Mapping
 from pathlib import Path
 
 from simtest_operator.opendrive import RoadNetwork
-from simtest_operator.openscenario import load_scenario, model
+from simtest_operator.openscenario import LoadOptions, load_scenario, model
 from simtest_operator.settings import SimulationSettings
 from simtest_operator.sim import netcache
 from simtest_operator.sim.backends import Backend, BackendConfig
@@ -68,9 +68,11 @@ def open_simulation(
     nets_dir: Path,
     overrides: Mapping[str, str] | None = None,
     backend: BackendChoice = BackendChoice.SUMO,
+    loading: LoadOptions | None = None,
 ) -> Opened:
-    """Load ``path`` and prepare its simulation (ScenarioError on bad input)."""
-    scenario = load_scenario(path, overrides=overrides)
+    """Load ``path`` (with ``loading`` options) and prepare its simulation (ScenarioError on bad
+    input)."""
+    scenario = load_scenario(path, overrides=overrides, options=loading or LoadOptions())
     logic_file = scenario.road_network.logic_file
     roads = RoadNetwork.from_file(logic_file) if logic_file is not None else None
     net_file: Path | None = None

@@ -12,6 +12,7 @@ import dataclasses
 import enum
 from pathlib import Path
 
+from simtest_operator.openscenario.deviations import Deviation
 from simtest_operator.openscenario.model.actions import Action, GlobalAction, PrivateAction
 from simtest_operator.openscenario.model.common import ParameterDeclaration, Unsupported
 from simtest_operator.openscenario.model.conditions import Trigger
@@ -160,6 +161,10 @@ class Scenario:
     notes: tuple[str, ...] = ()
     """Non-fatal remarks about the input (e.g. a parameter value kept as text because it does
     not fit its declared type), each naming file and line."""
+    deviations: tuple[Deviation, ...] = ()
+    """Deviations from the schema that were accepted with their clear meaning (``int`` for
+    ``integer``, a heading in degrees, ...), in reading order; empty under strict mode, which
+    refuses them."""
     line: int | None = None
 
     def unsupported(self) -> tuple[Unsupported, ...]:
