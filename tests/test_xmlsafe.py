@@ -94,3 +94,31 @@ def test_load_scenario_rejects_hostile_file(tmp_path: Path) -> None:
     path.write_bytes(BILLION_LAUGHS)
     with pytest.raises(ScenarioError, match="DOCTYPE declarations are not allowed"):
         load_scenario(path)
+
+
+def test_streamed_parsing_applies_the_same_protections() -> None:
+    for hostile in (BILLION_LAUGHS, EXTERNAL_FILE):
+        with pytest.raises(ScenarioError, match="DOCTYPE"):
+            list(xmlsafe.stream_children(hostile, source="x.xodr"))
+    with pytest.raises(ScenarioError, match="Entity 'undefined' not defined") as caught:
+        list(xmlsafe.stream_children(b"<a>\n<b v='&undefined;'/></a>", source="x.xodr"))
+    assert caught.value.line == 2
+    with pytest.raises(ScenarioError, match="limit"):
+        list(xmlsafe.stream_children(b"<a/>", source="x.xodr", max_bytes=2))
+    with pytest.raises(ScenarioError, match="malformed") as caught:
+        list(xmlsafe.stream_children(b"<a>\n<b>\n</a>", source="x.xodr"))
+    assert caught.value.line == 3
+
+
+def test_streamed_children_are_freed_after_use() -> None:
+    data = b"<root k='v'>\n<x n='1'><y/></x>\n<x n='2'/>\n</root>"
+    stream = xmlsafe.stream_children(data, source="s.xml")
+    root = next(stream)
+    assert (root.tag, root.get("k")) == ("root", "v")
+    seen = []
+    previous = None
+    for child in stream:
+        seen.append((child.get("n"), child.sourceline, len(list(child))))
+        assert previous is None or (previous not in list(root) and len(previous) == 0)
+        previous = child
+    assert seen == [("1", 2, 1), ("2", 3, 0)]

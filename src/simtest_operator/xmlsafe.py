@@ -8,6 +8,7 @@ rather than parsed carefully. Source line numbers stay available as ``element.so
 
 from __future__ import annotations
 
+import io
 import re
 from collections.abc import Iterator
 from pathlib import Path
@@ -100,6 +101,56 @@ def parse_bytes(
     _strip_namespaces(root)
     result: Element = root
     return result
+
+
+def stream_children(
+    data: bytes, *, source: str, max_bytes: int = MAX_BYTES, what: str = "scenario"
+) -> Iterator[Element]:
+    """Parse ``data`` incrementally: yield the root first (attributes only, no children yet),
+    then each child of the root once it is complete, freeing it when the consumer moves on.
+
+    Peak memory is one top-level element's tree instead of the whole document's, which for large
+    road networks is several times the file size (see docs/security.md for the figures). The same
+    protections as :func:`parse_bytes` apply: size limit, no declarations, no entities, no network.
+    """
+    if len(data) > max_bytes:
+        raise ScenarioError(
+            f"document is larger than the {max_bytes // (1024 * 1024)} MB limit", file=source
+        )
+    reject_declarations(data, source, what=what)
+    events = etree.iterparse(
+        io.BytesIO(data),
+        events=("start", "end"),
+        resolve_entities=False,
+        no_network=True,
+        load_dtd=False,
+        huge_tree=False,
+        remove_comments=True,
+        remove_pis=True,
+        collect_ids=False,
+    )
+    depth = 0
+    root: etree._Element | None = None
+    try:
+        for event, element in events:
+            if event == "start":
+                depth += 1
+                if depth == 1:
+                    root = element
+                    yield element
+                continue
+            depth -= 1
+            if depth == 1 and root is not None:
+                yield element
+                # Freed once handled: the streamed document never holds more than one child.
+                element.clear(keep_tail=False)
+                root.remove(element)
+    except etree.XMLSyntaxError as exc:
+        # iterparse reports some errors (undefined entities) as "no element found" at line 0;
+        # libxml2's own last error says what and where.
+        last = exc.error_log.last_error
+        message, line = (last.message, last.line) if last is not None else (exc.msg, exc.lineno)
+        raise ScenarioError(f"malformed XML: {message}", file=source, line=line) from exc
 
 
 def parse_file(path: Path, *, max_bytes: int = MAX_BYTES, what: str = "scenario") -> Element:

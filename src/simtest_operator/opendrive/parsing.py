@@ -1,14 +1,18 @@
 """Safe parsing of OpenDRIVE 1.4-1.8 (``.xodr``) into :mod:`~simtest_operator.opendrive.models`.
 
 Road files come from users (scenario repositories, uploads), so the XML is untrusted: no DTDs, no
-entity expansion, no network access, a size limit, and lxml's huge-tree protection stays on. Bad
-files raise :class:`~simtest_operator.errors.ScenarioError` naming the element and its line.
+entity expansion, no network access, a size limit, and lxml's huge-tree protection stays on. The
+document is streamed one top-level element at a time (a whole lxml tree costs about 12x the file
+size), and every number is checked against :class:`~simtest_operator.opendrive.limits.Limits` so
+geometry work stays bounded. Bad files raise :class:`~simtest_operator.errors.ScenarioError` naming
+the element and its line.
 """
 
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable
+import math
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import TypeVar
 
@@ -16,27 +20,35 @@ from lxml import etree
 
 from simtest_operator import xmlsafe
 from simtest_operator.errors import ScenarioError
-from simtest_operator.opendrive import models
+from simtest_operator.opendrive import limits, models
 
-MAX_BYTES = 128 * 1024 * 1024
-"""Largest accepted .xodr (real HD maps reach tens of MB; anything bigger is refused)."""
+MAX_BYTES = limits.DEFAULT.max_bytes
+"""Largest accepted .xodr by default (real HD maps reach tens of MB; anything bigger is refused)."""
 
 _T = TypeVar("_T")
 
 
-def load(path: Path, *, max_bytes: int = MAX_BYTES) -> models.OpenDrive:
+def load(
+    path: Path, *, max_bytes: int | None = None, bounds: limits.Limits = limits.DEFAULT
+) -> models.OpenDrive:
     """Parse the OpenDRIVE file at ``path``."""
+    size = bounds.max_bytes if max_bytes is None else max_bytes
     return parse(
-        xmlsafe.read_bytes(path, max_bytes=max_bytes), source=str(path), max_bytes=max_bytes
+        xmlsafe.read_bytes(path, max_bytes=size), source=str(path), max_bytes=size, bounds=bounds
     )
 
 
-def parse(data: bytes, *, source: str = "<xodr>", max_bytes: int = MAX_BYTES) -> models.OpenDrive:
+def parse(
+    data: bytes,
+    *,
+    source: str = "<xodr>",
+    max_bytes: int | None = None,
+    bounds: limits.Limits = limits.DEFAULT,
+) -> models.OpenDrive:
     """Parse OpenDRIVE XML given as bytes (``source`` names it in error messages)."""
-    root = _root(data, source=source, max_bytes=max_bytes)
-    if _local(root) != "OpenDRIVE":
-        raise ScenarioError(f"root element is <{_local(root)}>, expected <OpenDRIVE>", file=source)
-    return _Reader(source).document(root)
+    size = bounds.max_bytes if max_bytes is None else max_bytes
+    elements = xmlsafe.stream_children(data, source=source, max_bytes=size, what="OpenDRIVE")
+    return _Reader(source, bounds).document(elements)
 
 
 def _root(data: bytes, *, source: str, max_bytes: int) -> etree._Element:
@@ -68,10 +80,12 @@ def _child(element: etree._Element, name: str) -> etree._Element | None:
 class _Reader:
     """Converts elements, remembering the source for error messages."""
 
-    __slots__ = ("_source",)
+    __slots__ = ("_limits", "_source", "_total_length")
 
-    def __init__(self, source: str) -> None:
+    def __init__(self, source: str, bounds: limits.Limits) -> None:
         self._source = source
+        self._limits = bounds
+        self._total_length = 0.0
 
     def _error(self, element: etree._Element, message: str) -> ScenarioError:
         return ScenarioError(
@@ -92,11 +106,36 @@ class _Reader:
             return default
         try:
             return convert(raw.strip())
-        except ValueError as exc:
+        except (ValueError, OverflowError) as exc:
             raise self._error(element, f"attribute {name}={raw!r} is invalid") from exc
 
     def _float(self, element: etree._Element, name: str, default: float | None = None) -> float:
-        return self._attr(element, name, float, default)
+        value = self._attr(element, name, float, default)
+        if not math.isfinite(value):
+            raise self._error(element, f"attribute {name}={element.get(name)!r} is not finite")
+        return value
+
+    def _bounded(
+        self, element: etree._Element, name: str, limit: float, *, low: float | None = None
+    ) -> float:
+        """A finite attribute within ``[low, limit]`` (``[-limit, limit]`` without ``low``)."""
+        value = self._float(element, name)
+        floor = -limit if low is None else low
+        if not floor <= value <= limit:
+            raise self._error(
+                element, f"{name} {element.get(name)} is outside [{floor:g}, {limit:g}]"
+            )
+        return value
+
+    def _check_peak(
+        self, element: etree._Element, poly: models.Poly3, span: float, limit: float, what: str
+    ) -> None:
+        """Refuse a cubic record whose value leaves ``[-limit, limit]`` over its ``span``."""
+        peak = limits.cubic_peak(poly, span)
+        if not peak <= limit:
+            raise self._error(
+                element, f"{what} reaches {peak:.3g} m within {span:g} m (limit {limit:g} m)"
+            )
 
     def _int(self, element: etree._Element, name: str) -> int:
         return self._attr(element, name, lambda raw: int(float(raw)))
@@ -110,23 +149,40 @@ class _Reader:
             d=self._float(element, "d", 0.0),
         )
 
-    def document(self, root: etree._Element) -> models.OpenDrive:
-        header = _child(root, "header")
-        rev_major = self._int(header, "revMajor") if header is not None else 1
-        rev_minor = self._int(header, "revMinor") if header is not None else 4
-        roads = tuple(self.road(element) for element in _children(root, "road"))
+    def document(self, elements: Iterator[etree._Element]) -> models.OpenDrive:
+        """The document from a stream: the root, then its children one at a time."""
+        root = next(elements, None)
+        if root is None or _local(root) != "OpenDRIVE":
+            name = _local(root) if root is not None else ""
+            raise ScenarioError(
+                f"root element is <{name}>, expected <OpenDRIVE>", file=self._source
+            )
+        rev_major, rev_minor, name = 1, 4, ""
+        roads: list[models.Road] = []
+        junctions: list[models.Junction] = []
         seen: set[str] = set()
-        for road in roads:
-            if road.id in seen:
-                raise ScenarioError(f"duplicate road id {road.id!r}", file=self._source)
-            seen.add(road.id)
-        junctions = tuple(self.junction(element) for element in _children(root, "junction"))
+        for element in elements:
+            kind = _local(element)
+            if kind == "header":
+                rev_major, rev_minor = (
+                    self._int(element, "revMajor"),
+                    self._int(element, "revMinor"),
+                )
+                name = element.get("name") or ""
+            elif kind == "road":
+                road = self.road(element)
+                if road.id in seen:
+                    raise self._error(element, f"duplicate road id {road.id!r}")
+                seen.add(road.id)
+                roads.append(road)
+            elif kind == "junction":
+                junctions.append(self.junction(element))
         return models.OpenDrive(
             rev_major=rev_major,
             rev_minor=rev_minor,
-            name=(header.get("name") or "") if header is not None else "",
-            roads=roads,
-            junctions=junctions,
+            name=name,
+            roads=tuple(roads),
+            junctions=tuple(junctions),
         )
 
     def road(self, element: etree._Element) -> models.Road:
@@ -138,6 +194,14 @@ class _Reader:
         plan_view = _child(element, "planView")
         if plan_view is None:
             raise self._error(element, f"road {road_id!r} has no <planView>")
+        length = self._bounded(element, "length", self._limits.max_length, low=0.0)
+        self._total_length += length
+        if self._total_length > self._limits.max_total_length:
+            raise self._error(
+                element,
+                f"roads add up to more than {self._limits.max_total_length / 1000:g} km "
+                "(the road network limit)",
+            )
         geometries = tuple(self.geometry(child) for child in _children(plan_view, "geometry"))
         if not geometries:
             raise self._error(plan_view, f"road {road_id!r} has no <geometry>")
@@ -145,34 +209,60 @@ class _Reader:
         lanes = _child(element, "lanes")
         if lanes is None:
             raise self._error(element, f"road {road_id!r} has no <lanes>")
-        sections = tuple(self.lane_section(child) for child in _children(lanes, "laneSection"))
-        if not sections:
+        section_elements = _children(lanes, "laneSection")
+        if not section_elements:
             raise self._error(lanes, f"road {road_id!r} has no <laneSection>")
+        starts = sorted(self._float(child, "s") for child in section_elements)
+        sections = tuple(
+            self.lane_section(child, self._section_span(child, starts, length))
+            for child in section_elements
+        )
         return models.Road(
             id=road_id,
             name=element.get("name") or "",
-            length=self._float(element, "length"),
+            length=length,
             junction=(element.get("junction") or "-1").strip(),
             rule=models.TrafficRule(rule_raw),
             predecessor=self.road_link(link, "predecessor"),
             successor=self.road_link(link, "successor"),
             geometries=tuple(sorted(geometries, key=lambda geometry: geometry.s)),
-            elevations=tuple(
-                sorted(
-                    (self._poly(child) for child in _children(elevation, "elevation")),
-                    key=lambda poly: poly.s,
-                )
-            )
-            if elevation is not None
-            else (),
-            lane_offsets=tuple(
-                sorted(
-                    (self._poly(child) for child in _children(lanes, "laneOffset")),
-                    key=lambda poly: poly.s,
-                )
+            elevations=self._records(
+                _children(elevation, "elevation") if elevation is not None else [],
+                "s",
+                length,
+                self._limits.max_coordinate,
+                "elevation",
+            ),
+            lane_offsets=self._records(
+                _children(lanes, "laneOffset"), "s", length, self._limits.max_lane_width, "offset"
             ),
             lane_sections=tuple(sorted(sections, key=lambda section: section.s)),
         )
+
+    def _section_span(self, element: etree._Element, starts: list[float], length: float) -> float:
+        """Length of the lane section ``element`` (up to the next section or the road's end)."""
+        start = self._float(element, "s")
+        later = [value for value in starts if value > start]
+        return max((later[0] if later else length) - start, 0.0)
+
+    def _records(
+        self,
+        elements: list[etree._Element],
+        s_name: str,
+        end: float,
+        limit: float,
+        what: str,
+    ) -> tuple[models.Poly3, ...]:
+        """Cubic records sorted by start, each bounded by ``limit`` up to the next (or ``end``)."""
+        pairs = sorted(
+            ((self._poly(child, s_name), child) for child in elements),
+            key=lambda pair: pair[0].s,
+        )
+        for (poly, child), span in zip(
+            pairs, limits.spans([poly.s for poly, _ in pairs], end), strict=True
+        ):
+            self._check_peak(child, poly, span, limit, what)
+        return tuple(poly for poly, _ in pairs)
 
     def road_link(self, link: etree._Element | None, which: str) -> models.RoadLink | None:
         element = _child(link, which) if link is not None else None
@@ -194,13 +284,14 @@ class _Reader:
         return models.ContactPoint(raw.strip())
 
     def geometry(self, element: etree._Element) -> models.Geometry:
+        bounds = self._limits
         base = models.Geometry(
             kind=models.GeometryKind.LINE,
             s=self._float(element, "s"),
-            x=self._float(element, "x"),
-            y=self._float(element, "y"),
+            x=self._bounded(element, "x", bounds.max_coordinate),
+            y=self._bounded(element, "y", bounds.max_coordinate),
             heading=self._float(element, "hdg"),
-            length=self._float(element, "length"),
+            length=self._bounded(element, "length", bounds.max_length, low=0.0),
         )
         shape = next((child for child in element if _local(child)), None)
         kind = _local(shape) if shape is not None else "line"
@@ -208,31 +299,67 @@ class _Reader:
             return base
         if kind == "arc":
             return dataclasses.replace(
-                base, kind=models.GeometryKind.ARC, curvature=self._float(shape, "curvature")
+                base,
+                kind=models.GeometryKind.ARC,
+                curvature=self._bounded(shape, "curvature", bounds.max_curvature),
             )
         if kind == "spiral":
-            return dataclasses.replace(
-                base,
-                kind=models.GeometryKind.SPIRAL,
-                curv_start=self._float(shape, "curvStart"),
-                curv_end=self._float(shape, "curvEnd"),
-            )
+            return self._spiral(shape, base)
         if kind == "poly3":
-            return dataclasses.replace(
-                base, kind=models.GeometryKind.POLY3, v=self._coefficients(shape, "")
+            return self._polynomial(
+                shape,
+                dataclasses.replace(
+                    base, kind=models.GeometryKind.POLY3, v=self._coefficients(shape, "")
+                ),
             )
         if kind == "paramPoly3":
             p_range = (shape.get("pRange") or "normalized").strip()
             if p_range not in ("arcLength", "normalized"):
                 raise self._error(shape, f"pRange={p_range!r} is not arcLength or normalized")
-            return dataclasses.replace(
-                base,
-                kind=models.GeometryKind.PARAM_POLY3,
-                u=self._coefficients(shape, "U"),
-                v=self._coefficients(shape, "V"),
-                normalized=p_range == "normalized",
+            return self._polynomial(
+                shape,
+                dataclasses.replace(
+                    base,
+                    kind=models.GeometryKind.PARAM_POLY3,
+                    u=self._coefficients(shape, "U"),
+                    v=self._coefficients(shape, "V"),
+                    normalized=p_range == "normalized",
+                ),
             )
         raise self._error(shape, f"unsupported planView geometry <{kind}>")
+
+    def _spiral(self, shape: etree._Element, base: models.Geometry) -> models.Geometry:
+        """A clothoid whose total turn, and so its quadrature work per query, is bounded."""
+        bounds = self._limits
+        start = self._bounded(shape, "curvStart", bounds.max_curvature)
+        end = self._bounded(shape, "curvEnd", bounds.max_curvature)
+        turn = limits.spiral_turn(start, end, base.length)
+        if turn > bounds.max_spiral_turn:
+            raise self._error(
+                shape,
+                f"curvStart {shape.get('curvStart')} to curvEnd {shape.get('curvEnd')} over "
+                f"{base.length:g} m turns {turn:.3g} rad (limit {bounds.max_spiral_turn:g} rad)",
+            )
+        return dataclasses.replace(
+            base, kind=models.GeometryKind.SPIRAL, curv_start=start, curv_end=end
+        )
+
+    def _polynomial(self, shape: etree._Element, geometry: models.Geometry) -> models.Geometry:
+        """Refuse (param)poly3 coefficients that carry the curve beyond the coordinate limit
+        (or overflow) within the element: each term is bounded at the parameter's end."""
+        p_end = 1.0 if geometry.normalized else geometry.length
+        limit = self._limits.max_coordinate
+        param = geometry.kind is models.GeometryKind.PARAM_POLY3
+        for axis, coefficients in (("U", geometry.u), ("V", geometry.v)):
+            for power, value in enumerate(coefficients):
+                if abs(value) * p_end**power > limit:
+                    name = "abcd"[power] + (axis if param else "")
+                    raise self._error(
+                        shape,
+                        f"{name} {value:g} moves the curve more than {limit:g} m "
+                        f"within the element",
+                    )
+        return geometry
 
     def _coefficients(
         self, element: etree._Element, suffix: str
@@ -240,12 +367,12 @@ class _Reader:
         a, b, c, d = (self._float(element, f"{name}{suffix}", 0.0) for name in "abcd")
         return (a, b, c, d)
 
-    def lane_section(self, element: etree._Element) -> models.LaneSection:
+    def lane_section(self, element: etree._Element, span: float) -> models.LaneSection:
         def lanes(side: str, sign: int) -> tuple[models.Lane, ...]:
             container = _child(element, side)
             if container is None:
                 return ()
-            result = [self.lane(child) for child in _children(container, "lane")]
+            result = [self.lane(child, span) for child in _children(container, "lane")]
             for lane in result:
                 if lane.id * sign <= 0:
                     raise self._error(container, f"lane id {lane.id} does not belong in <{side}>")
@@ -258,7 +385,7 @@ class _Reader:
             single_side=(element.get("singleSide") or "false").strip() == "true",
         )
 
-    def lane(self, element: etree._Element) -> models.Lane:
+    def lane(self, element: etree._Element, span: float) -> models.Lane:
         link = _child(element, "link")
 
         def linked(which: str) -> tuple[int, ...]:
@@ -269,21 +396,21 @@ class _Reader:
         return models.Lane(
             id=self._int(element, "id"),
             type=(element.get("type") or "none").strip(),
-            widths=tuple(
-                sorted(
-                    (self._poly(child, "sOffset") for child in _children(element, "width")),
-                    key=lambda poly: poly.s,
-                )
-            ),
-            borders=tuple(
-                sorted(
-                    (self._poly(child, "sOffset") for child in _children(element, "border")),
-                    key=lambda poly: poly.s,
-                )
+            widths=self._widths(element, span),
+            borders=self._records(
+                _children(element, "border"), "sOffset", span, self._limits.max_lane_width, "border"
             ),
             predecessors=linked("predecessor"),
             successors=linked("successor"),
         )
+
+    def _widths(self, element: etree._Element, span: float) -> tuple[models.Poly3, ...]:
+        """Width records: non-negative where they start and bounded over the lane section."""
+        children = _children(element, "width")
+        for child in children:
+            if self._float(child, "a", 0.0) < 0.0:
+                raise self._error(child, f"lane width a={child.get('a')} is negative")
+        return self._records(children, "sOffset", span, self._limits.max_lane_width, "width")
 
     def junction(self, element: etree._Element) -> models.Junction:
         connections = []

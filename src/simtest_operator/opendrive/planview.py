@@ -27,6 +27,9 @@ _GL_NODES, _GL_WEIGHTS = (
 )
 _PARAM_TABLE_STEPS = 256
 _MAX_HEADING_STEP = 0.5
+_MAX_CHUNKS = 256
+"""Quadrature sub-intervals per spiral query: the parser's turn limit (64 rad) needs 128; the cap
+keeps a query's cost bounded even for a model that did not come through the parser."""
 
 
 class _Evaluator(Protocol):
@@ -86,7 +89,7 @@ class _Spiral:
     def at(self, ds: float) -> RefPoint:
         k0, c, h0 = self._k0, self._c, self._heading
         turn = abs(k0) * ds + 0.5 * abs(c) * ds * ds
-        chunks = max(1, math.ceil(turn / _MAX_HEADING_STEP))
+        chunks = min(max(1, math.ceil(turn / _MAX_HEADING_STEP)), _MAX_CHUNKS)
         width = ds / chunks
         half = 0.5 * width
         x = y = 0.0

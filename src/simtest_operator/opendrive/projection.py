@@ -25,6 +25,9 @@ GRID_CELL = 20.0
 """Cell size of the search grid, metres."""
 _CANDIDATE_SLACK = 1.0
 _MAX_CANDIDATES = 6
+_MAX_SEGMENT_CELLS = 256
+"""Grid cells one segment may enter; wider segments (absurdly wide roads) are scanned with every
+query instead, so building the grid stays linear in the number of segments."""
 
 _Array = npt.NDArray[np.float64]
 
@@ -44,7 +47,7 @@ class Projection:
 class RoadIndex:
     """Sampled segments of every road, for nearest-road search."""
 
-    __slots__ = ("_bounds", "_ends", "_grid", "_layouts", "_lines", "_seg", "_spans")
+    __slots__ = ("_bounds", "_ends", "_grid", "_layouts", "_lines", "_seg", "_spans", "_wide")
 
     def __init__(
         self, lines: Sequence[planview.ReferenceLine], layouts: Sequence[lanes.RoadLayout]
@@ -78,6 +81,7 @@ class RoadIndex:
         nonempty = [(first, last) for first, last in spans if last > first]
         self._ends = [last for _, last in nonempty]
         self._bounds = self._road_bounds()
+        self._wide: npt.NDArray[np.intp] = np.zeros(0, dtype=np.intp)
         self._grid = self._build_grid()
 
     def _road_bounds(self) -> _Array:
@@ -111,11 +115,19 @@ class RoadIndex:
         low_y = np.floor((np.minimum(y0, y1) - grow) / GRID_CELL).astype(np.int64)
         high_y = np.floor((np.maximum(y0, y1) + grow) / GRID_CELL).astype(np.int64)
         cells: dict[tuple[int, int], list[int]] = {}
+        wide: list[int] = []
         for k in range(seg.shape[1]):
+            if (high_x[k] - low_x[k] + 1) * (high_y[k] - low_y[k] + 1) > _MAX_SEGMENT_CELLS:
+                wide.append(k)
+                continue
             for i in range(int(low_x[k]), int(high_x[k]) + 1):
                 for j in range(int(low_y[k]), int(high_y[k]) + 1):
                     cells.setdefault((i, j), []).append(k)
-        return {cell: np.array(members, dtype=np.intp) for cell, members in cells.items()}
+        self._wide = np.array(wide, dtype=np.intp)
+        return {
+            cell: np.concatenate((np.array(members, dtype=np.intp), self._wide))
+            for cell, members in cells.items()
+        }
 
     def candidates(self, x: float, y: float) -> list[tuple[int, float]]:
         """(road index, approximate s) of the roads nearest to the point, best first."""
