@@ -64,6 +64,10 @@ class Settings:
 
     cache: CacheSettings
     simulation: SimulationSettings = dataclasses.field(default_factory=SimulationSettings)
+    maps: tuple[Path, ...] = ()
+    """User map libraries (``SIMTEST_MAP_PATH``, folders separated by ``:``): folders of
+    ``<name>.xodr`` a scenario names with ``<LogicFile filepath="<name>"/>``, searched before
+    the CARLA towns shipped with the product."""
 
     @classmethod
     def from_env(cls, env: Mapping[str, str] | None = None) -> Settings:
@@ -80,4 +84,7 @@ class Settings:
                 root=Path(cache_root) if cache_root else _default_cache_dir(env),
             ),
             simulation=simulation,
+            maps=tuple(
+                Path(p) for p in env.get(f"{ENV_PREFIX}MAP_PATH", "").split(os.pathsep) if p
+            ),
         )

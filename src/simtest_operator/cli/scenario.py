@@ -24,6 +24,7 @@ from simtest_operator.openscenario import (
     expand_distribution,
     file_kind,
 )
+from simtest_operator.openscenario.confinement import default_root
 from simtest_operator.runner import execution, summaries
 from simtest_operator.settings import Settings
 from simtest_operator.sim import SutConfig, Takeover
@@ -44,6 +45,22 @@ _STRICT = click.option(
     help="Refuse deviations from the OpenSCENARIO schema that players accept (parameterType "
     "'int', a heading in degrees, ...): the scenario is Invalid instead of running with a warning.",
 )
+
+
+_MAPS = click.option(
+    "--maps",
+    "maps",
+    multiple=True,
+    type=click.Path(exists=True, file_okay=False, path_type=Path),
+    help='A map library: folder of <name>.xodr files that <LogicFile filepath="<name>"/> '
+    "names (repeatable; searched before SIMTEST_MAP_PATH and the shipped CARLA towns).",
+)
+
+
+def _loading(
+    settings: Settings, strict: bool, root: Path | None, maps: tuple[Path, ...]
+) -> LoadOptions:
+    return LoadOptions(strict=strict, source_root=root, maps=(*maps, *settings.maps))
 
 
 def _short(deviation: Deviation) -> str:
@@ -68,7 +85,23 @@ def scenario() -> None:
 @click.option("--no-record", is_flag=True, help="Do not write the omega-prime recording.")
 @_TAKEOVER
 @_STRICT
-def run(file: Path, out: Path | None, no_record: bool, takeover: str, strict: bool) -> None:
+@_MAPS
+@click.option(
+    "--root",
+    type=click.Path(exists=True, file_okay=False, path_type=Path),
+    default=None,
+    help="Source root: files the scenario references (road network, catalogs) must be inside it "
+    "[default: the enclosing git work tree, else FILE's folder].",
+)
+def run(
+    file: Path,
+    out: Path | None,
+    no_record: bool,
+    takeover: str,
+    strict: bool,
+    maps: tuple[Path, ...],
+    root: Path | None,
+) -> None:
     """Run FILE and print its verdict, reason, accepted deviations and metrics.
 
     Exit code, as for `simtest run`: 0 passed, 1 failed or timed out (verdict Failed or
@@ -85,7 +118,7 @@ def run(file: Path, out: Path | None, no_record: bool, takeover: str, strict: bo
             simulation=settings.simulation,
             output_dir=out,
             record=not no_record,
-            loading=LoadOptions(strict=strict),
+            loading=_loading(settings, strict, root or default_root(file), maps),
         )
     )
     outcome = report.outcome
@@ -181,18 +214,25 @@ def _comparison(
 )
 @_TAKEOVER
 @_STRICT
+@_MAPS
 def check(
-    directory: Path, jobs: int | None, reference: Path | None, takeover: str, strict: bool
+    directory: Path,
+    jobs: int | None,
+    reference: Path | None,
+    takeover: str,
+    strict: bool,
+    maps: tuple[Path, ...],
 ) -> None:
     """Run every scenario under DIRECTORY in parallel and print a table with each verdict and
-    the schema deviations accepted in the file (warnings)."""
+    the schema deviations accepted in the file (warnings). Files the scenarios reference must be
+    inside DIRECTORY (or a map library)."""
     # Only `check` prints a table: `scenario run` starts without rich.
     from rich.console import Console
     from rich.markup import escape
     from rich.table import Table
 
     settings = Settings.from_env()
-    loading = LoadOptions(strict=strict)
+    loading = _loading(settings, strict, directory, maps)
     requests = _requests(directory, settings, SutConfig(takeover=Takeover(takeover)), loading)
     ref = references.load(reference) if reference is not None else None
     reports: dict[int, execution.RunReport] = {}

@@ -4,6 +4,11 @@ Catalog files are found through the scenario's ``CatalogLocations`` (directories
 .xosc), parsed once per load, and indexed by catalog name and entry name. Real files often use a
 ``catalogName`` that differs from the catalog's declared ``name`` (esmini resolves by entry name),
 so an exact (catalog, entry) match is preferred and a unique-by-entry-name match is accepted.
+
+Catalog directories must lie inside the scenario's source root (:mod:`.confinement`); one that
+points outside is never read, and a catalog file that is a symlink out of its directory is
+skipped. Catalog files from before 1.0 (``revMajor="0"``, CARLA's 0.9 catalogs) hold the same
+entries and are read with a deviation.
 """
 
 from __future__ import annotations
@@ -15,6 +20,7 @@ from pathlib import Path
 from simtest_operator import xmlsafe
 from simtest_operator.errors import ScenarioError
 from simtest_operator.openscenario import parameters, reading
+from simtest_operator.openscenario.confinement import Confinement
 from simtest_operator.xmlsafe import Element
 
 LOCATION_KINDS: Mapping[str, str] = {
@@ -48,19 +54,39 @@ class _Directory:
     path: Path
     kind: str
     line: int | None
+    outside: bool = False
+    """Outside the source root: never read."""
 
 
 class Catalogs:
     """The catalogs of one scenario load (parses catalog files lazily, once)."""
 
-    def __init__(self, directories: tuple[_Directory, ...], *, scenario_file: str) -> None:
+    def __init__(
+        self,
+        directories: tuple[_Directory, ...],
+        *,
+        scenario_file: str,
+        max_bytes: int = xmlsafe.MAX_BYTES,
+        refusal: str = "",
+    ) -> None:
         self._directories = directories
+        self._refusal = refusal
         self._scenario_file = scenario_file
+        self._max_bytes = max_bytes
         self._entries: dict[Path, tuple[Entry, ...]] = {}
 
     @classmethod
-    def from_locations(cls, root: Element, ctx: reading.Context, base: Path) -> Catalogs:
-        """Read ``CatalogLocations`` of the scenario ``root``; directories relative to ``base``."""
+    def from_locations(
+        cls,
+        root: Element,
+        ctx: reading.Context,
+        base: Path,
+        *,
+        confinement: Confinement,
+        max_bytes: int = xmlsafe.MAX_BYTES,
+    ) -> Catalogs:
+        """Read ``CatalogLocations`` of the scenario ``root``; directories relative to ``base``,
+        confined to ``confinement``; catalog files up to ``max_bytes``."""
         found: list[_Directory] = []
         block = reading.child(root, "CatalogLocations")
         for location in reading.children(block) if block is not None else ():
@@ -68,9 +94,15 @@ class Catalogs:
             if kind is None:
                 raise ctx.error(location, "unknown catalog location kind")
             directory = ctx.require(location, "Directory")
-            path = Path(ctx.string(directory, "path"))
-            found.append(_Directory((base / path).resolve(), kind, directory.sourceline))
-        return cls(tuple(found), scenario_file=ctx.file)
+            path = (base / ctx.string(directory, "path")).resolve()
+            outside = not confinement.allows(path)
+            found.append(_Directory(path, kind, directory.sourceline, outside))
+        return cls(
+            tuple(found),
+            scenario_file=ctx.file,
+            max_bytes=max_bytes,
+            refusal=confinement.describe(),
+        )
 
     @classmethod
     def empty(cls, *, scenario_file: str) -> Catalogs:
@@ -128,7 +160,11 @@ class Catalogs:
         ordered = sorted(self._directories, key=lambda d: d.kind not in expected)
         by_name: list[Entry] = []
         missing: list[str] = []
+        refused: list[str] = []
         for directory in ordered:
+            if directory.outside:
+                refused.append(str(directory.path))
+                continue
             if not directory.path.is_dir():
                 missing.append(str(directory.path))
                 continue
@@ -141,6 +177,8 @@ class Catalogs:
         if by_name:
             return by_name[0]
         where = "; missing directories: " + ", ".join(missing) if missing else ""
+        if refused:
+            where += f"; refused ({self._refusal}): " + ", ".join(refused)
         raise ctx.error(
             ref,
             f"catalog {catalog_name!r} has no {kinds} entry {entry_name!r} in "
@@ -154,10 +192,13 @@ class Catalogs:
             return cached
         entries: list[Entry] = []
         for path in sorted(directory.path.glob("*.xosc")):
-            root = xmlsafe.parse_file(path)
+            if not path.resolve().is_relative_to(directory.path):
+                continue  # a symlink out of the catalog directory
+            root = xmlsafe.parse_file(path, max_bytes=self._max_bytes)
             catalog = reading.child(root, "Catalog")
             if catalog is None:
                 continue
+            _check_revision(root, ctx, str(path))
             name = catalog.get("name") or ""
             for element in reading.children(catalog):
                 entry_name = element.get("name")
@@ -172,3 +213,13 @@ class Catalogs:
         result = tuple(entries)
         self._entries[directory.path] = result
         return result
+
+
+def _check_revision(root: Element, ctx: reading.Context, file: str) -> None:
+    header = reading.child(root, "FileHeader")
+    if header is None or header.get("revMajor") != "0":
+        return
+    # OpenSCENARIO 0.9 (CARLA's catalogs) wrote catalog entries as 1.0 does.
+    at_file = dataclasses.replace(ctx, file=file)
+    minor = header.get("revMinor") or "?"
+    at_file.deviation(header, "catalog-revision-0", f"0.{minor} catalog header read as 1.0")

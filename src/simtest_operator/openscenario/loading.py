@@ -13,8 +13,10 @@ from pathlib import Path
 
 from simtest_operator import xmlsafe
 from simtest_operator.errors import ScenarioError
+from simtest_operator.maps import MapLibraries
 from simtest_operator.openscenario import headers, parameters, reading
 from simtest_operator.openscenario.catalogs import Catalogs
+from simtest_operator.openscenario.confinement import Confinement
 from simtest_operator.openscenario.deviations import Deviations
 from simtest_operator.openscenario.headers import FileKind
 from simtest_operator.openscenario.model import common as m
@@ -46,6 +48,12 @@ def file_kind(path: Path) -> FileKind:
     return kind
 
 
+MAX_SCENARIO_BYTES = 8 * 1024 * 1024
+"""Default size limit of scenario and catalog files: real ones are below 1 MB; 8 MB parse in
+about 200 MB, which fits a simulator pod's memory request beside SUMO (docs/openscenario-support.md
+has the measurements)."""
+
+
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
 class LoadOptions:
     """How strictly and from where a scenario is loaded (the caller's policy, not the file's)."""
@@ -53,6 +61,14 @@ class LoadOptions:
     strict: bool = False
     """Refuse accepted deviations from the schema (see :mod:`.deviations`) instead of listing
     them: for authors who want files every player reads."""
+    source_root: Path | None = None
+    """Folder every referenced file (road network, catalogs) must be in; None: the enclosing git
+    work tree, else only system folders refused (see :mod:`.confinement`)."""
+    maps: tuple[Path, ...] = ()
+    """User map libraries (folders of ``<name>.xodr``) searched before the shipped CARLA towns
+    for a ``LogicFile`` that names a map."""
+    max_bytes: int = MAX_SCENARIO_BYTES
+    """Size limit of the scenario and of each catalog file (parsing takes ~25x in memory)."""
 
 
 DEFAULT_OPTIONS = LoadOptions()
@@ -73,7 +89,10 @@ def load_scenario(
     """
     path = path.resolve()
     file = str(path)
-    root = xmlsafe.parse_file(path)
+    confinement = Confinement.for_scenario(path, options.source_root)
+    if not confinement.allows(path):
+        raise ScenarioError(f"scenario is {confinement.describe()}", file=file)
+    root = xmlsafe.parse_file(path, max_bytes=options.max_bytes)
     kind = file_kind_of(root, file=file)
     if kind is not FileKind.SCENARIO:
         hint = " (use expand_distribution)" if kind is FileKind.DISTRIBUTION else ""
@@ -87,11 +106,15 @@ def load_scenario(
     )
     ctx, declared = _globals(root, ctx, dict(overrides or {}))
     variables = _variables(root, ctx)
-    ctx = dataclasses.replace(
-        ctx, catalogs=Catalogs.from_locations(root, ctx, path.parent), root_scope=ctx.scope
+    catalogs = Catalogs.from_locations(
+        root, ctx, path.parent, confinement=confinement, max_bytes=options.max_bytes
     )
+    ctx = dataclasses.replace(ctx, catalogs=catalogs, root_scope=ctx.scope)
     header = _header(ctx.require(root, "FileHeader"), ctx)
-    road = _road_network(reading.child(root, "RoadNetwork"), ctx, path.parent)
+    libraries = MapLibraries.with_user(options.maps)
+    road = _road_network(
+        reading.child(root, "RoadNetwork"), ctx, path.parent, confinement, libraries
+    )
     objects = _entities(ctx.require(root, "Entities"), ctx)
     board = storyboards.storyboard(ctx.require(root, "Storyboard"), ctx)
     return s.Scenario(
@@ -153,7 +176,13 @@ def _header(el: Element, ctx: reading.Context) -> s.FileHeader:
     )
 
 
-def _road_network(el: Element | None, ctx: reading.Context, base: Path) -> s.RoadNetwork:
+def _road_network(
+    el: Element | None,
+    ctx: reading.Context,
+    base: Path,
+    confinement: Confinement,
+    libraries: MapLibraries,
+) -> s.RoadNetwork:
     if el is None:
         return s.RoadNetwork()
     logic = reading.child(el, "LogicFile")
@@ -167,11 +196,28 @@ def _road_network(el: Element | None, ctx: reading.Context, base: Path) -> s.Roa
     if not raw.strip():
         return s.RoadNetwork(line=el.sourceline)
     candidates = _road_candidates(raw, base)
+    outside = [c for c in candidates if not confinement.allows(c)]
     for target in candidates:
-        if target.is_file():
+        if target not in outside and target.is_file():
             return s.RoadNetwork(logic_file=target, line=el.sourceline)
-    looked = ", ".join(str(c) for c in candidates)
-    raise ctx.error(logic, f"road network file {raw!r} not found (looked for {looked})")
+    # CARLA names its towns ("Town01"); other names come from the user's map libraries.
+    name = raw.replace("\\", "/").rsplit("/", 1)[-1]
+    found = libraries.find(name)
+    if found is not None:
+        return s.RoadNetwork(logic_file=found, line=el.sourceline)
+    looked = ", ".join(str(c) for c in candidates if c not in outside)
+    libs = ", ".join(str(f) for f in libraries.folders)
+    libs += f"; maps there: {', '.join(libraries.names()) or 'none'}"
+    refused = (
+        f"; refused {', '.join(str(c) for c in outside)}: {confinement.describe()}"
+        if outside
+        else ""
+    )
+    raise ctx.error(
+        logic,
+        f"road network file {raw!r} not found (looked for {looked}; "
+        f"map {name!r} in {libs}){refused}",
+    )
 
 
 def _road_candidates(raw: str, base: Path) -> list[Path]:
