@@ -22,6 +22,7 @@ from pathlib import Path
 from simtest_operator import evaluation, provenance, recording
 from simtest_operator.errors import ScenarioError, SimtestError
 from simtest_operator.openscenario import Deviation, LoadOptions
+from simtest_operator.runner import suts
 from simtest_operator.settings import SimulationSettings
 from simtest_operator.sim import BackendChoice, Simulation, SutConfig, open_simulation
 from simtest_operator.snapshots import WorldSnapshot
@@ -141,9 +142,17 @@ def run_scenario(request: RunRequest) -> RunReport:
     error: str | None = None
     wall_hit = False
     startup = 0.0
+    link = suts.SutLink(request.sut)
+    logic = opened.scenario.road_network.logic_file
     try:
+        link.attach(
+            simulation,
+            scenario_id=scenario_id,
+            settings=request.simulation,
+            map_reference=logic.name if logic is not None else "map",
+            versions=versions,
+        )
         if out is not None and request.record:
-            logic = opened.scenario.road_network.logic_file
             recorder = recording.Recorder(
                 out / "recording.mcap",
                 info=recording.RecordingInfo(
@@ -165,6 +174,7 @@ def run_scenario(request: RunRequest) -> RunReport:
     except Exception as exc:
         error = f"internal error: {type(exc).__name__}: {exc}"
     finally:
+        link.close()
         simulation.close()
         if recorder is not None:
             recorder.close()
@@ -179,11 +189,17 @@ def run_scenario(request: RunRequest) -> RunReport:
         ignored_elements=simulation.ignored,
     )
     judgement = evaluation.judge(evaluator, facts)
+    extra = link.metrics(
+        simulated=simulation.time,
+        loop_seconds=wall - startup,
+        pace=request.simulation.real_time_factor,
+    )
+    log.extend(note for note in (suts.behind_note(extra),) if note)
     outcome = ScenarioOutcome(
         scenario_id=scenario_id,
         verdict=judgement.verdict,
         reason=judgement.reason,
-        metrics=judgement.metrics,
+        metrics={**judgement.metrics, **extra},
         simulated_seconds=simulation.time,
         wall_seconds=wall,
         artifacts=artifacts,

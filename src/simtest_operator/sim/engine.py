@@ -25,7 +25,7 @@ from simtest_operator.sim.backends import ActorSpec, Backend, BackendConfig
 from simtest_operator.sim.conditions import Conditions
 from simtest_operator.sim.dispatch import Dispatcher
 from simtest_operator.sim.storyboard import Storyboard
-from simtest_operator.sim.sut import DriverModel, SutConfig, Takeover
+from simtest_operator.sim.sut import DriverModel, Pilot, PilotView, SutConfig, Takeover
 from simtest_operator.sim.traffic import Traffic
 from simtest_operator.sim.trajectories import PathRun
 from simtest_operator.sim.world import World
@@ -57,7 +57,9 @@ class Simulation:
         "_conditions",
         "_dispatcher",
         "_external_ids",
+        "_pilot",
         "_scenario",
+        "_snapshot",
         "_steps",
         "_storyboard",
         "_sut",
@@ -77,6 +79,7 @@ class Simulation:
         sut: SutConfig,
     ) -> None:
         self._scenario = scenario
+        self._pilot: Pilot | None = None
         self._backend = backend
         self._backend_config = backend_config
         self._sut = sut
@@ -112,6 +115,7 @@ class Simulation:
         self._steps = 0
         self._external_ids: dict[str, int] = {}
         self._sut_engaged = False
+        self._snapshot = WorldSnapshot(time=0.0, entities=())
 
     # --- public -------------------------------------------------------------------------------
 
@@ -207,6 +211,11 @@ class Simulation:
         world.refresh()
         return self._sync()
 
+    def attach_pilot(self, pilot: Pilot) -> None:
+        """Let an external SUT decide the ego's steps instead of the in-process driver model
+        (before :meth:`start`; the takeover policy still decides when it drives)."""
+        self._pilot = pilot
+
     def close(self) -> None:
         self._backend.close()
 
@@ -253,13 +262,21 @@ class Simulation:
         driver = actor.driver
         if longitudinal is not None:
             longitudinal.step(world, dt)
+        elif driver is not None and self._pilot is not None:
+            view = PilotView(
+                snapshot=self._snapshot, ego_id=actor.id, set_speed=driver.set_speed, dt=dt
+            )
+            order = self._pilot.drive(view)
+            actor.speed = max(order.speed, 0.0)
+            if lateral is None and actor.mode is Mode.ROAD:
+                actor.offset += order.lateral
         elif driver is not None:
             ahead = perception.leader(world, actor, self._sut.sensor_range)
             command = driver.command(speed=actor.speed, leader=ahead)
             actor.speed = max(actor.speed + command.acceleration * dt, 0.0)
         if lateral is not None and lateral is not longitudinal:
             lateral.step(world, dt)
-        elif lateral is None and driver is not None and actor.mode is Mode.ROAD:
+        elif lateral is None and driver is not None and actor.mode is Mode.ROAD and not self._pilot:
             actor.offset = driver.lateral_offset(actor.offset, dt)
         # A trajectory placed the actor for the end of this step (also when it just ended and
         # the actor rejoined its lane): it must not move a second time.
@@ -310,7 +327,8 @@ class Simulation:
                 )
             )
         self.world.traffic = tuple(traffic)
-        return WorldSnapshot(time=self.world.time, entities=(*entities, *traffic))
+        self._snapshot = WorldSnapshot(time=self.world.time, entities=(*entities, *traffic))
+        return self._snapshot
 
 
 __all__ = ["Simulation", "pick_ego"]

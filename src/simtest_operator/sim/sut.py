@@ -9,6 +9,11 @@ the point of testing a SUT.
 
 The fields mirror the campaign's ``spec.environment.sut.driverModel`` (the api layer converts it),
 plus how and when the ego is handed to the model (:class:`Takeover`).
+
+A SUT outside the engine (another process speaking the OSI protocol of :mod:`simtest_operator.sut`)
+plugs in as a :class:`Pilot`: the engine hands it the world as it was at t (:class:`PilotView`)
+and applies the :class:`Order` it returns with its own vehicle model (speed along the lane, a
+lateral displacement). :class:`ExternalSut` says where that SUT comes from.
 """
 
 from __future__ import annotations
@@ -16,6 +21,10 @@ from __future__ import annotations
 import dataclasses
 import enum
 import math
+from collections.abc import Mapping
+from typing import Protocol
+
+from simtest_operator.snapshots import WorldSnapshot
 
 
 class Takeover(enum.StrEnum):
@@ -63,6 +72,74 @@ class SutConfig:
     """AEB braking (m/s^2)."""
     sensor_range: float = 200.0
     """How far ahead (m) the model sees other road users."""
+    external: ExternalSut | None = None
+    """Where an external SUT runs; None drives the ego with the in-process model above."""
+
+
+class Launch(enum.StrEnum):
+    """How the runner reaches an external SUT."""
+
+    LOCAL = "local"
+    """Start ``command`` as a local process for every run and connect to it."""
+    SIDECAR = "sidecar"
+    """A container next to the simulator (``SIMTEST_SUT_ENDPOINT`` in the pod says where);
+    outside a pod the runner starts ``command`` locally instead."""
+    ENDPOINT = "endpoint"
+    """Connect to ``endpoint``; nothing is started."""
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class ExternalSut:
+    """An external system under test reached through the OSI SUT protocol."""
+
+    launch: Launch
+    command: tuple[str, ...] = ()
+    """Process to start (local) or the sidecar's command; gets ``SIMTEST_SUT_PORT``."""
+    endpoint: str | None = None
+    """``host:port`` to connect to."""
+    port: int = 7460
+    """Port a sidecar listens on."""
+    image: str | None = None
+    """Sidecar image (identity for the results)."""
+    env: Mapping[str, str] = dataclasses.field(default_factory=dict)
+    step_deadline: float = 0.1
+    """Seconds the SUT may take to answer one step before the run ends Error."""
+    startup_timeout: float = 60.0
+    """Seconds the SUT may take to accept the connection and answer the handshake."""
+    perception_range: float | None = None
+    """Radius (m) around the ego beyond which other objects are left out of the SensorView."""
+    config: Mapping[str, str] = dataclasses.field(default_factory=dict)
+    """Free-form configuration sent to the SUT in the handshake."""
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class PilotView:
+    """What the engine knows at t when an external SUT must decide the ego's next step."""
+
+    snapshot: WorldSnapshot
+    """Every entity (and background vehicle) at t."""
+    ego_id: int
+    set_speed: float
+    """The scenario's current speed request to the ego (SpeedActions change it)."""
+    dt: float
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Order:
+    """An external SUT's decision for one step, in the engine's vehicle model."""
+
+    speed: float
+    """Ego speed (m/s) at t + dt, along its lane."""
+    lateral: float = 0.0
+    """Lateral displacement (m, left positive) to apply during the step."""
+
+
+class Pilot(Protocol):
+    """An external SUT as the engine sees it: one decision per step, in lockstep."""
+
+    def drive(self, view: PilotView) -> Order:
+        """The ego's order for the step from t to t + dt (raises SimtestError subclasses)."""
+        ...
 
 
 IDM_DELTA = 4.0

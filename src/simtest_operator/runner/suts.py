@@ -1,0 +1,83 @@
+"""The external SUT of one run, as the runner sees it: connect it to the simulation before the
+first step, name it in the results, release it afterwards, and report its round trips and the
+real-time factor the run achieved.
+
+The in-process driver model (``sut.external`` unset) needs none of this: :class:`SutLink` then
+does nothing, so default runs keep their speed and results.
+"""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import Mapping, MutableMapping
+
+from simtest_operator.settings import SimulationSettings
+from simtest_operator.sim import Simulation, SutConfig
+from simtest_operator.sut import client, launching, runs
+
+KEEP_UP_TOLERANCE = 0.95
+"""A paced run that achieves less than this share of its real-time factor fell behind."""
+
+
+class SutLink:
+    """Opens the external SUT for a run (if any) and closes it; use :meth:`attach` then
+    :meth:`close`."""
+
+    __slots__ = ("_pilot", "_stack", "sut")
+
+    def __init__(self, sut: SutConfig) -> None:
+        self.sut = sut
+        self._stack = contextlib.ExitStack()
+        self._pilot: client.RemotePilot | None = None
+
+    def attach(
+        self,
+        simulation: Simulation,
+        *,
+        scenario_id: str,
+        settings: SimulationSettings,
+        map_reference: str,
+        versions: MutableMapping[str, str],
+    ) -> None:
+        """Start/connect the SUT, handshake and let it drive the ego (SutError on failure)."""
+        external = self.sut.external
+        if external is None or simulation.ego is None:
+            return
+        hello = runs.hello(
+            self.sut,
+            ego_id=simulation.world.actors[simulation.ego].id,
+            step=settings.step_length,
+            scenario_id=scenario_id,
+            seed=settings.seed,
+        )
+        self._pilot = self._stack.enter_context(
+            launching.open_pilot(external, hello=hello, map_reference=map_reference)
+        )
+        simulation.attach_pilot(self._pilot)
+        versions.update(runs.provenance(self.sut, self._pilot.identity))
+
+    def close(self) -> None:
+        self._stack.close()
+
+    def metrics(self, *, simulated: float, loop_seconds: float, pace: float) -> Mapping[str, float]:
+        """Round trips of the SUT and the real-time factor of the stepping loop."""
+        out: dict[str, float] = {}
+        if self._pilot is not None:
+            out.update(runs.round_trip_metrics(self._pilot.round_trips))
+        if loop_seconds > 0 and simulated > 0 and (pace > 0 or self._pilot is not None):
+            achieved = simulated / loop_seconds
+            out["loopRealTimeFactor"] = round(achieved, 2)
+            if pace > 0:
+                out["realTimeFactorTarget"] = pace
+                out["realTimeBehind"] = 1.0 if achieved < pace * KEEP_UP_TOLERANCE else 0.0
+        return out
+
+
+def behind_note(metrics: Mapping[str, float]) -> str | None:
+    """A log line when a paced run could not keep up, else None."""
+    if metrics.get("realTimeBehind") != 1.0:
+        return None
+    return (
+        f"could not keep up: real-time factor {metrics['realTimeFactorTarget']:g} asked, "
+        f"{metrics['loopRealTimeFactor']:g} achieved"
+    )

@@ -1,0 +1,127 @@
+"""Reaching an external SUT for one run: start it (local process) or find it (sidecar,
+endpoint), wait until it is ready, hand out a connected :class:`RemotePilot`, clean up.
+
+Readiness is two checks, no sleeps: the SUT accepts the TCP connection (polled) and answers the
+HELLO with READY within the start-up timeout. A local process that exits while we wait ends the
+wait at once with its exit code and the tail of its stderr.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import socket
+import subprocess
+import sys
+import tempfile
+from collections.abc import Iterator, Mapping
+from typing import IO, Any
+
+from simtest_operator.sim.sut import ExternalSut, Launch
+from simtest_operator.sut import client
+from simtest_operator.sut.errors import SutError
+
+ENDPOINT_ENV = "SIMTEST_SUT_ENDPOINT"
+"""Set in the simulator container of a pod with a SUT sidecar: where the sidecar listens."""
+_STDERR_TAIL = 400
+
+
+def free_port() -> int:
+    """A loopback port nobody listens on right now (the SUT binds it moments later)."""
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:
+        probe.bind(("127.0.0.1", 0))
+        port: int = probe.getsockname()[1]
+        return port
+
+
+class _Process:
+    """A local SUT process with its stderr kept for error messages."""
+
+    def __init__(self, command: tuple[str, ...], env: Mapping[str, str], port: int) -> None:
+        self._stderr: IO[bytes] = tempfile.TemporaryFile()  # noqa: SIM115 (lives with the process)
+        environment = {
+            **os.environ,
+            **env,
+            "SIMTEST_SUT_HOST": "127.0.0.1",
+            "SIMTEST_SUT_PORT": str(port),
+        }
+        try:
+            self.process = subprocess.Popen(
+                command,
+                env=environment,
+                stdin=subprocess.DEVNULL,
+                stdout=subprocess.DEVNULL,
+                stderr=self._stderr,
+            )
+        except OSError as exc:
+            self._stderr.close()
+            raise SutError(f"cannot start the SUT {command[0]!r}: {exc.strerror or exc}") from exc
+
+    def fate(self) -> str | None:
+        """None while it runs; else how it ended and what it said last."""
+        code = self.process.poll()
+        if code is None:
+            return None
+        how = f"killed by signal {-code}" if code < 0 else f"exited with code {code}"
+        self._stderr.seek(0)
+        tail = " ".join(self._stderr.read().decode("utf-8", "replace").split())[-_STDERR_TAIL:]
+        return f"the SUT process {how}" + (f": {tail}" if tail else "")
+
+    def stop(self) -> None:
+        if self.process.poll() is None:
+            self.process.terminate()
+            try:
+                self.process.wait(timeout=3)
+            except subprocess.TimeoutExpired:
+                self.process.kill()
+                self.process.wait()
+        self._stderr.close()
+
+
+@contextlib.contextmanager
+def open_pilot(
+    external: ExternalSut, *, hello: Mapping[str, Any], map_reference: str = "map"
+) -> Iterator[client.RemotePilot]:
+    """A connected, handshaken pilot for one run (SutError when the SUT cannot be reached)."""
+    process: _Process | None = None
+    endpoint = external.endpoint
+    if external.launch is Launch.SIDECAR:
+        endpoint = os.environ.get(ENDPOINT_ENV) or None
+    try:
+        if endpoint is None:
+            if not external.command:
+                raise SutError(
+                    f"the {external.launch} SUT has no command to start here "
+                    f"(and {ENDPOINT_ENV} is not set)"
+                )
+            port = free_port()
+            command = tuple(part.replace("{port}", str(port)) for part in external.command)
+            process = _Process(command, external.env, port)
+            endpoint = f"127.0.0.1:{port}"
+        sock = client.connect(
+            endpoint,
+            timeout=external.startup_timeout,
+            alive=process.fate if process is not None else None,
+        )
+        pilot = client.RemotePilot(
+            sock,
+            step_deadline=external.step_deadline,
+            perception_range=external.perception_range,
+            map_reference=map_reference,
+        )
+        if process is not None:
+            pilot.postmortem = process.fate
+        with pilot:
+            pilot.handshake(hello, timeout=external.startup_timeout)
+            yield pilot
+    finally:
+        if process is not None:
+            process.stop()
+
+
+def reference_command() -> tuple[str, ...]:
+    """The command that starts the Python reference SUT with this interpreter."""
+    return (sys.executable, "-m", "simtest_operator.sut.reference")
+
+
+__all__ = ["ENDPOINT_ENV", "free_port", "open_pilot", "reference_command"]
