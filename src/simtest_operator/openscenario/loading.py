@@ -48,6 +48,9 @@ def file_kind(path: Path) -> FileKind:
     return kind
 
 
+CARLA_PREFIX = "CARLA:"
+"""FileHeader description prefix that puts a file's positions in CARLA's frame."""
+
 MAX_SCENARIO_BYTES = 8 * 1024 * 1024
 """Default size limit of scenario and catalog files: real ones are below 1 MB; 8 MB parse in
 about 200 MB, which fits a simulator pod's memory request beside SUMO (docs/openscenario-support.md
@@ -111,6 +114,10 @@ def load_scenario(
     )
     ctx = dataclasses.replace(ctx, catalogs=catalogs, root_scope=ctx.scope)
     header = _header(ctx.require(root, "FileHeader"), ctx)
+    if header.description.startswith(CARLA_PREFIX):
+        # CARLA ScenarioRunner's convention: such a file's positions are in CARLA's frame.
+        ctx = dataclasses.replace(ctx, carla_frame=True)
+        ctx.note(root, "positions read in CARLA's left-handed frame (description 'CARLA:')")
     libraries = MapLibraries.with_user(options.maps)
     road = _road_network(
         reading.child(root, "RoadNetwork"), ctx, path.parent, confinement, libraries

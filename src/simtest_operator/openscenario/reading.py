@@ -81,6 +81,9 @@ class Context:
     """ParameterAssignments pending for the catalog entry about to be read."""
     depth: int = 0
     """How many catalog references deep we are."""
+    carla_frame: bool = False
+    """The file gives positions in CARLA's left-handed frame (FileHeader description starting
+    with ``CARLA:``): y, headings and lateral offsets are negated while reading."""
 
     def with_scope(self, scope: parameters.Scope) -> Context:
         """The same context with another parameter scope."""

@@ -127,7 +127,42 @@ def resolve(world: World, position: model.Position) -> Placement:
         from simtest_operator.sim import routes
 
         return routes.resolve(world, position)
+    if isinstance(position, model.TrajectoryPosition):
+        return _trajectory(world, position)
     raise UnsupportedFeatureError(f"position {type(position).__name__} is not supported")
+
+
+def _trajectory(world: World, position: model.TrajectoryPosition) -> Placement:
+    """``s`` along the trajectory's shape, ``t`` to its left; facing along it."""
+    trajectory = position.trajectory
+    if isinstance(trajectory, model.Unsupported):
+        raise unsupported(trajectory)
+    if _starts_at_an_entity(trajectory.shape):
+        raise ScenarioError(
+            f"TrajectoryPosition on trajectory {trajectory.name!r}, whose shape starts where the "
+            "following entity is: give the shape a start position",
+            element="TrajectoryPosition",
+            line=position.line,
+        )
+    from simtest_operator.sim import shapes
+
+    origin = Placement(x=0.0, y=0.0, z=0.0, heading=0.0)  # never used: checked above
+    path = shapes.sample(trajectory.shape, lambda p: resolve(world, p), origin)
+    x, y, heading = path.at_distance(position.s)
+    return Placement(
+        x=x - position.t * math.sin(heading),
+        y=y + position.t * math.cos(heading),
+        z=0.0,
+        heading=_orient(heading, position.orientation),
+    )
+
+
+def _starts_at_an_entity(shape: model.Shape) -> bool:
+    if isinstance(shape, model.Clothoid):
+        return shape.position is None
+    if isinstance(shape, model.ClothoidSpline):
+        return not shape.segments or shape.segments[0].position_start is None
+    return False
 
 
 def road_coordinates(world: World, actor: Actor) -> tuple[str, float, float, int]:

@@ -121,6 +121,7 @@ from simtest_operator.openscenario.model.positions import (
     Route,
     RoutePosition,
     RouteStrategy,
+    TrajectoryPosition,
     Waypoint,
     WorldPosition,
 )
@@ -291,6 +292,7 @@ __all__ = [
     "TrafficStopAction",
     "TrafficSwarmAction",
     "Trajectory",
+    "TrajectoryPosition",
     "TransitionDynamics",
     "TraveledDistanceCondition",
     "Trigger",

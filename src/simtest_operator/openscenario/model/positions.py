@@ -9,8 +9,12 @@ from __future__ import annotations
 
 import dataclasses
 import enum
+from typing import TYPE_CHECKING
 
 from simtest_operator.openscenario.model.common import Orientation, Unsupported
+
+if TYPE_CHECKING:  # trajectories hold positions: the model modules import each other
+    from simtest_operator.openscenario.model.trajectories import Trajectory
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
@@ -166,6 +170,17 @@ class RoutePosition:
     line: int | None = None
 
 
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class TrajectoryPosition:
+    """A position along a trajectory (1.1+): ``s`` along its shape, ``t`` to its left."""
+
+    trajectory: Trajectory | Unsupported
+    s: float
+    t: float = 0.0
+    orientation: Orientation | None = None
+    line: int | None = None
+
+
 Position = (
     WorldPosition
     | RelativeWorldPosition
@@ -175,6 +190,7 @@ Position = (
     | LanePosition
     | RelativeLanePosition
     | RoutePosition
+    | TrajectoryPosition
     | Unsupported
 )
-"""Any position; GeoPosition and TrajectoryPosition arrive as :class:`Unsupported`."""
+"""Any position; GeoPosition arrives as :class:`Unsupported`."""

@@ -1,6 +1,16 @@
-"""Reading positions, orientations and routes into the model."""
+"""Reading positions, orientations and routes into the model.
+
+Two conventions of files written for CARLA are read here. A file whose FileHeader description
+starts with ``CARLA:`` gives positions in CARLA's left-handed frame (ScenarioRunner's
+``use_carla_coordinate_system``): y, dy, headings and lateral offsets (``t``, ``dt``,
+``offset``) are negated into OpenDRIVE's frame. A whole-number heading beyond one turn
+(``h="180"``, ``h="-90"``) is degrees, which CARLA files write; it is converted with a deviation.
+Fractional ones stay radians (esmini's tests write ``h="7.853981633974483"``, 2.5 pi).
+"""
 
 from __future__ import annotations
+
+import math
 
 from simtest_operator.openscenario import reading
 from simtest_operator.openscenario.model import common as m
@@ -14,11 +24,30 @@ def orientation(el: Element | None, ctx: reading.Context) -> m.Orientation | Non
         return None
     return m.Orientation(
         type=ctx.opt_enum(el, "type", m.ReferenceContext),
-        h=ctx.double_or(el, "h", 0.0),
+        h=_heading(el, ctx, "h") or 0.0,
         p=ctx.double_or(el, "p", 0.0),
         r=ctx.double_or(el, "r", 0.0),
         line=el.sourceline,
     )
+
+
+TURN = 2.0 * math.pi
+"""A whole-number heading beyond one turn is read as degrees."""
+
+
+def _heading(el: Element, ctx: reading.Context, name: str) -> float | None:
+    value = ctx.opt_double(el, name)
+    if value is None:
+        return None
+    if abs(value) > TURN and value.is_integer():
+        ctx.deviation(el, "heading-in-degrees", f"{name}={value:g} read as degrees")
+        value = math.radians(value)
+    return -value if ctx.carla_frame else value
+
+
+def _lateral(ctx: reading.Context, value: float) -> float:
+    """A y or lateral offset: CARLA's frame has y (and left) the other way."""
+    return -value if ctx.carla_frame else value
 
 
 def _orientation_of(el: Element, ctx: reading.Context) -> m.Orientation | None:
@@ -37,9 +66,9 @@ def position_choice(el: Element, ctx: reading.Context) -> p.Position:
     if tag == "WorldPosition":
         return p.WorldPosition(
             x=ctx.double(el, "x"),
-            y=ctx.double(el, "y"),
+            y=_lateral(ctx, ctx.double(el, "y")),
             z=ctx.opt_double(el, "z"),
-            h=ctx.opt_double(el, "h"),
+            h=_heading(el, ctx, "h"),
             p=ctx.opt_double(el, "p"),
             r=ctx.opt_double(el, "r"),
             line=line,
@@ -51,7 +80,7 @@ def position_choice(el: Element, ctx: reading.Context) -> p.Position:
         return kind(
             entity_ref=ctx.string(el, "entityRef"),
             dx=ctx.double(el, "dx"),
-            dy=ctx.double(el, "dy"),
+            dy=_lateral(ctx, ctx.double(el, "dy")),
             dz=ctx.opt_double(el, "dz"),
             orientation=_orientation_of(el, ctx),
             line=line,
@@ -60,7 +89,7 @@ def position_choice(el: Element, ctx: reading.Context) -> p.Position:
         return p.RoadPosition(
             road_id=ctx.string(el, "roadId"),
             s=ctx.double(el, "s"),
-            t=ctx.double(el, "t"),
+            t=_lateral(ctx, ctx.double(el, "t")),
             orientation=_orientation_of(el, ctx),
             line=line,
         )
@@ -68,7 +97,7 @@ def position_choice(el: Element, ctx: reading.Context) -> p.Position:
         return p.RelativeRoadPosition(
             entity_ref=ctx.string(el, "entityRef"),
             ds=ctx.double(el, "ds"),
-            dt=ctx.double(el, "dt"),
+            dt=_lateral(ctx, ctx.double(el, "dt")),
             orientation=_orientation_of(el, ctx),
             line=line,
         )
@@ -77,7 +106,7 @@ def position_choice(el: Element, ctx: reading.Context) -> p.Position:
             road_id=ctx.string(el, "roadId"),
             lane_id=ctx.integer(el, "laneId"),
             s=ctx.double(el, "s"),
-            offset=ctx.double_or(el, "offset", 0.0),
+            offset=_lateral(ctx, ctx.double_or(el, "offset", 0.0)),
             orientation=_orientation_of(el, ctx),
             line=line,
         )
@@ -91,15 +120,30 @@ def position_choice(el: Element, ctx: reading.Context) -> p.Position:
             d_lane=ctx.integer(el, "dLane"),
             ds=ds,
             ds_lane=ds_lane,
-            offset=ctx.double_or(el, "offset", 0.0),
+            offset=_lateral(ctx, ctx.double_or(el, "offset", 0.0)),
             orientation=_orientation_of(el, ctx),
             line=line,
         )
     if tag == "RoutePosition":
         return _route_position(el, ctx)
-    if tag in ("GeoPosition", "TrajectoryPosition"):
-        return ctx.unsupported(el, f"{tag} is not supported (needs geo/trajectory projection)")
+    if tag == "TrajectoryPosition":
+        return _trajectory_position(el, ctx)
+    if tag == "GeoPosition":
+        return ctx.unsupported(el, f"{tag} is not supported (needs a geo projection)")
     return ctx.unsupported(el, f"unknown position kind {tag}")
+
+
+def _trajectory_position(el: Element, ctx: reading.Context) -> p.TrajectoryPosition:
+    # Trajectories hold positions: the two readers import each other.
+    from simtest_operator.openscenario.readers.trajectories import trajectory_or_ref
+
+    return p.TrajectoryPosition(
+        trajectory=trajectory_or_ref(ctx.choice(ctx.require(el, "TrajectoryRef")), ctx),
+        s=ctx.double(el, "s"),
+        t=_lateral(ctx, ctx.double_or(el, "t", 0.0)),
+        orientation=_orientation_of(el, ctx),
+        line=el.sourceline,
+    )
 
 
 def _route_position(el: Element, ctx: reading.Context) -> p.RoutePosition:
