@@ -2,10 +2,11 @@
 
 Covers: exit 0 (all passed), 1 (some failed, naming the first), 2 (an Error verdict; an invalid
 manifest with the field path; a missing manifest; conflicting options) via the fake engine;
-plain progress lines and the summary; a secret read from ``SIMTEST_SECRET_*``; SIGINT sent to a
-running ``simtest run`` process stops it with exit 2, kills its workers, leaves consistent outputs
-(every scenario has a result, unfinished ones Skipped), and running the same command again
-resumes and finishes.
+plain progress lines and the summary; a secret read from ``SIMTEST_SECRET_*``; SIGINT or SIGTERM
+(issue 12: SIGTERM used to kill it, leaving the campaign ``running``) sent to a running
+``simtest run`` process stops it with exit 2, kills its workers, leaves consistent outputs (every
+scenario has a result, unfinished ones Skipped, the campaign ``interrupted``, no traceback), and
+running the same command again resumes and finishes.
 """
 
 from __future__ import annotations
@@ -78,7 +79,10 @@ def test_env_secrets() -> None:
         env_secrets({})(ref)
 
 
-def test_sigint_stops_cleanly_and_the_same_command_resumes(tmp_path: Path) -> None:
+@pytest.mark.parametrize("stop_signal", [signal.SIGINT, signal.SIGTERM], ids=lambda s: s.name)
+def test_stop_signal_stops_cleanly_and_the_same_command_resumes(
+    tmp_path: Path, stop_signal: signal.Signals
+) -> None:
     behaviours = {"a": "pass", **{f"slow{i}": "sleep:1.5" for i in range(5)}}
     manifest = write_campaign(tmp_path, behaviours, batch_size=3)
     out = tmp_path / "out"
@@ -94,11 +98,12 @@ def test_sigint_stops_cleanly_and_the_same_command_resumes(tmp_path: Path) -> No
         if line.startswith("[1/6]"):
             break
     time.sleep(0.5)
-    process.send_signal(signal.SIGINT)
+    process.send_signal(stop_signal)
     rest, _ = process.communicate(timeout=60)
     output = "".join(lines) + rest
     assert process.returncode == 2, output
-    assert "stopping: killing workers" in output
+    assert f"stopping ({stop_signal.name}): killing workers" in output
+    assert "Traceback" not in output
     assert "interrupted after" in output.rstrip().splitlines()[-1]
     state = json.loads((out / "campaign.json").read_text())
     assert state["state"] == "interrupted"

@@ -10,6 +10,7 @@ none of stdout/stderr, campaign.json, report.html or any other file written; an 
 from __future__ import annotations
 
 import json
+import socket
 from pathlib import Path
 
 import pytest
@@ -90,3 +91,27 @@ def test_an_ambiguous_database_is_refused_before_anything_is_written(
     assert dsnforms.PASSWORD not in output
     assert not (tmp_path / "out").exists()
     assert _files_holding(tmp_path, dsnforms.PASSWORD) == []
+
+
+def test_an_unreachable_database_fails_the_run_in_one_line_and_the_state_says_so(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # Issue 12 item 7: campaign.json stayed "running" and libpq's error spanned two lines.
+    monkeypatch.chdir(tmp_path)
+    with socket.socket() as probe:  # a port nothing listens on
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    manifest = write_campaign(tmp_path, {"a": "pass"})
+    target = f"postgresql://u:{dsnforms.PASSWORD}@127.0.0.1:{port}/x?connect_timeout=5"
+    code, output = _run(tmp_path, manifest, "--db", target)
+    assert code == 2, output
+    assert output.startswith("error: ResultsError: cannot connect to the results database")
+    assert output.count("\n") == 1 and "Traceback" not in output
+    assert dsnforms.PASSWORD not in output
+    state = json.loads((tmp_path / "out/campaign.json").read_text())
+    assert (state["state"], state["exitCode"]) == ("failed", 2)
+    assert state["reason"].startswith("cannot connect to the results database")
+    assert _files_holding(tmp_path, dsnforms.PASSWORD) == []
+    code, output = _run(tmp_path, manifest)  # fixed (default store): the same output resumes
+    assert code == 0, output
+    assert json.loads((tmp_path / "out/campaign.json").read_text())["state"] == "finished"

@@ -32,6 +32,7 @@ from simtest_operator.scenarios import (
     PathSource,
     SecretRef,
     SourceLimits,
+    gitfetching,
     resolve,
     uris,
 )
@@ -121,6 +122,37 @@ def test_git_unknown_revision_and_folder(ctx: FetchContext, repo: Path) -> None:
         resolve(GitSource(url=str(repo), revision="no-such-branch"), ctx)
     with pytest.raises(SourceError, match="does not exist"):
         resolve(GitSource(url=str(repo), path="missing"), ctx)
+
+
+def test_git_errors_show_the_cause_in_one_line(ctx: FetchContext, tmp_path: Path) -> None:
+    # Issue 12: only git's last stderr line was shown, e.g. "and the repository exists.".
+    not_a_repo = tmp_path / "plain-folder"
+    not_a_repo.mkdir()
+    with pytest.raises(SourceError) as caught:
+        resolve(GitSource(url=str(not_a_repo)), ctx)
+    message = str(caught.value)
+    assert "does not appear to be a git repository" in message, message
+    assert "Could not read from remote repository" in message
+    assert "\n" not in message and "Please make sure" not in message
+    with pytest.raises(SourceError) as caught:
+        resolve(GitSource(url="https://bot:hunter2@127.0.0.1:1/suite.git"), ctx)
+    message = str(caught.value)
+    assert "unable to access" in message and "hunter2" not in message, message
+
+
+def test_git_stderr_summary() -> None:
+    summary = gitfetching.stderr_summary(
+        "Cloning into 'x'...\nfatal: 'r' does not appear to be a git repository\n"
+        "fatal: Could not read from remote repository.\n\nPlease make sure you have the "
+        "correct access rights\nand the repository exists.\n"
+    )
+    assert summary == (
+        "fatal: 'r' does not appear to be a git repository; "
+        "fatal: Could not read from remote repository."
+    )
+    assert gitfetching.stderr_summary("something odd\nhappened\n") == "something odd; happened"
+    assert gitfetching.stderr_summary("") == ""
+    assert len(gitfetching.stderr_summary("fatal: " + "x" * 2000)) == 500
 
 
 def test_git_repository_symlink_escaping_is_refused(ctx: FetchContext, repo: Path) -> None:

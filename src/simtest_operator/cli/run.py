@@ -9,8 +9,9 @@ Every piece of user text (paths, campaign and scenario names, reasons, YAML erro
 through :func:`rich.markup.escape` or is printed with markup off: a scenario called ``[/x]`` once
 crashed the CLI with a MarkupError and exit 1, which CI reads as "the SUT failed" (issue 12).
 
-The first Ctrl-C stops the run in order (workers killed, unfinished scenarios marked as not run,
-outputs consistent; the same command resumes); a second one aborts at once.
+The first Ctrl-C or SIGTERM (CI cancelling a job, ``timeout``, ``docker stop``) stops the run in
+order (workers killed, unfinished scenarios marked as not run, the campaign ``interrupted``,
+report written; the same command resumes); a second one aborts at once.
 """
 
 from __future__ import annotations
@@ -178,25 +179,31 @@ def _fail(errors: Console, reason: str) -> NoReturn:
     raise SystemExit(summaries.EXIT_ERROR)
 
 
+_STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+
 @contextmanager
 def _graceful_interrupt(stop: threading.Event, errors: Console) -> Iterator[None]:
+    # SIGTERM's default action killed the process mid-run: campaign.json stayed "running" and no
+    # report was written (issue 12). Both signals now take the same orderly path.
     def handler(signum: int, frame: FrameType | None) -> None:
         if stop.is_set():
             raise KeyboardInterrupt
         stop.set()
         errors.print(
-            "stopping: killing workers, marking unfinished scenarios as not run "
-            "(Ctrl-C again to abort at once)"
+            f"stopping ({signal.Signals(signum).name}): killing workers, marking unfinished "
+            "scenarios as not run (Ctrl-C again to abort at once)"
         )
 
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    previous = signal.signal(signal.SIGINT, handler)
+    previous = {number: signal.signal(number, handler) for number in _STOP_SIGNALS}
     try:
         yield
     finally:
-        signal.signal(signal.SIGINT, previous)
+        for number, action in previous.items():
+            signal.signal(number, action)
 
 
 class _Counts:

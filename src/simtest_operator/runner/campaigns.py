@@ -20,7 +20,7 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
 from simtest_operator import recording
-from simtest_operator.errors import ResultsError, ScenarioError, SourceError
+from simtest_operator.errors import ResultsError, ScenarioError, SimtestError, SourceError
 from simtest_operator.results import details, dsn, publishing
 from simtest_operator.runner import executing, outputs, storing, summaries, tasks
 from simtest_operator.runner import preparing as prep
@@ -133,6 +133,26 @@ def _run(
     if request.database:
         dsn.classify(request.database)  # refuse an ambiguous --db before the output is written
     plan = prep.prepare(request, now=now())
+    try:
+        return _run_planned(request, plan, on_event=on_event, stop=stop, now=now, started=started,
+                            early=early)  # fmt: skip
+    except SimtestError as exc:
+        # The output exists by now: campaign.json must not keep saying "running" (issue 12: an
+        # unreachable results database did that). The same command resumes once it is fixed.
+        _write_failure(plan, str(exc), now())
+        raise
+
+
+def _run_planned(
+    request: LocalRunRequest,
+    plan: prep.Plan,
+    *,
+    on_event: Callable[[Event], None],
+    stop: threading.Event,
+    now: Callable[[], datetime.datetime],
+    started: float,
+    early: list[Worker],
+) -> LocalRunResult:
     out = plan.output
     notes = list(plan.notes)
     parallel = _parallel(request, plan)
@@ -328,6 +348,23 @@ def _write_state(
             wall_seconds=wall,
             exit_code=summary.exit_code,
             reason=summary.reason,
+        )
+    )
+
+
+def _write_failure(plan: prep.Plan, reason: str, finished_at: datetime.datetime) -> None:
+    previous = plan.output.read_state() if plan.output.exists() else None
+    plan.output.write_state(
+        outputs.RunState(
+            campaign=plan.name,
+            manifest_sha256=plan.manifest_sha256,
+            state="failed",
+            started_at=plan.started_at.isoformat(),
+            finished_at=finished_at.isoformat(),
+            run_key=previous.run_key if previous is not None else "",
+            store=previous.store if previous is not None else "",
+            exit_code=summaries.EXIT_ERROR,
+            reason=reason,
         )
     )
 

@@ -4,7 +4,7 @@
 
     <out>/manifest.yaml        the manifest as read (a rerun needs nothing else)
     <out>/frozen.json          the frozen scenario list (``--frozen`` takes it back)
-    <out>/campaign.json        run state: running / interrupted / finished, counts, store, run key
+    <out>/campaign.json        state (running/interrupted/finished/failed), counts, store, run key
     <out>/results.sqlite       the results database (unless a DSN was given)
     <out>/junit.xml            JUnit XML for CI
     <out>/report.html          the HTML report
@@ -55,7 +55,8 @@ class RunState:
     campaign: str
     manifest_sha256: str
     state: str
-    """``running``, ``interrupted`` or ``finished``."""
+    """``running``, ``interrupted``, ``finished`` or ``failed`` (the run stopped on an error
+    outside any scenario, e.g. an unreachable results database; ``reason`` says which)."""
     started_at: str
     finished_at: str = ""
     run_key: str = ""

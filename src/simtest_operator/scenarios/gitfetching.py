@@ -178,9 +178,25 @@ def _git(
             f"{limits.git_timeout:.0f} s"
         ) from exc
     if done.returncode != 0:
-        detail = done.stderr.decode(errors="replace").strip().splitlines()
-        message = detail[-1] if detail else f"exit code {done.returncode}"
+        message = stderr_summary(done.stderr.decode(errors="replace")) or (
+            f"exit code {done.returncode}"
+        )
         if url:
             message = message.replace(url, redact(url))
         raise SourceError(f"git failed for {redact(url) or 'the cache'}: {message}")
     return done.stdout.decode() if stdout is None else ""
+
+
+_MESSAGE_PREFIXES = ("fatal:", "error:", "remote:", "ssh:", "warning:")
+_MAX_MESSAGE = 500
+
+
+def stderr_summary(stderr: str) -> str:
+    """git's diagnostics as one line: its ``fatal:``/``error:``/``remote:`` lines (all lines if
+    there are none), joined. The last line alone was often advice ("and the repository exists.")
+    rather than the cause (issue 12)."""
+    lines = [line.strip() for line in stderr.splitlines() if line.strip()]
+    chosen = [line for line in lines if line.lower().startswith(_MESSAGE_PREFIXES)] or lines
+    unique = list(dict.fromkeys(chosen))
+    joined = "; ".join(unique)
+    return joined if len(joined) <= _MAX_MESSAGE else joined[: _MAX_MESSAGE - 3] + "..."
