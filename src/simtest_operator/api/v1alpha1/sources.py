@@ -16,6 +16,9 @@ from simtest_operator.api.v1alpha1.common import ApiModel, DnsLabel, SecretKeyRe
 SOURCE_KINDS = ("path", "configMap", "git", "http", "graphql")
 
 NonEmpty = Annotated[str, StringConstraints(min_length=1, max_length=4096)]
+MAX_PATTERNS = 256
+"""Glob patterns per include/exclude list: every file of every source is matched against each
+one, so an unbounded list is unbounded work (and API server storage)."""
 Url = Annotated[str, StringConstraints(pattern=r"^(https?|file|ssh|git)://.+", max_length=4096)]
 
 
@@ -103,7 +106,7 @@ class ScenarioSelector(ApiModel):
     """Selects scenarios by the tags and labels in their file headers."""
 
     match_tags: list[Annotated[str, StringConstraints(min_length=1, max_length=63)]] = Field(
-        default_factory=list
+        default_factory=list, max_length=64
     )
     """Every one of these tags must be present (``simtest:tags`` header property)."""
     match_labels: dict[str, str] = Field(default_factory=dict)
@@ -115,10 +118,10 @@ class ScenarioSelection(ApiModel):
 
     sources: Annotated[list[ScenarioSource], Field(min_length=1, max_length=64)]
     """Where to find scenario files; resolved once, in order, when the campaign starts."""
-    include: list[NonEmpty] = Field(default_factory=lambda: ["**/*.xosc"])
-    """Glob patterns (relative to each source root) a file must match."""
-    exclude: list[NonEmpty] = Field(default_factory=list)
-    """Glob patterns that remove files the include patterns matched."""
+    include: list[NonEmpty] = Field(default_factory=lambda: ["**/*.xosc"], max_length=MAX_PATTERNS)
+    """Glob patterns (relative to each source root) a file must match (at most 256)."""
+    exclude: list[NonEmpty] = Field(default_factory=list, max_length=MAX_PATTERNS)
+    """Glob patterns that remove files the include patterns matched (at most 256)."""
     selector: ScenarioSelector | None = None
     """Optional tag/label selector applied after the globs."""
     overrides: dict[str, str] = Field(default_factory=dict)
