@@ -88,6 +88,9 @@ def real_operator(
         workdir=tmp_path,
         extra_env={
             "SIMTEST_OPERATOR_SCENARIO_CLAIM": scenario_claim,
+            # The product's default: a real kubelet enforces activeDeadlineSeconds and needs the
+            # pod's termination grace period (10 s) to kill it; the backstop must come later.
+            "SIMTEST_OPERATOR_BACKSTOP_GRACE": "30",
         },
     )
     process.start()
