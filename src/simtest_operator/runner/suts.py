@@ -9,6 +9,7 @@ does nothing, so default runs keep their speed and results.
 from __future__ import annotations
 
 import contextlib
+import time
 from collections.abc import Mapping, MutableMapping
 
 from simtest_operator.settings import SimulationSettings
@@ -23,12 +24,13 @@ class SutLink:
     """Opens the external SUT for a run (if any) and closes it; use :meth:`attach` then
     :meth:`close`."""
 
-    __slots__ = ("_pilot", "_stack", "sut")
+    __slots__ = ("_closing", "_pilot", "_stack", "sut")
 
     def __init__(self, sut: SutConfig) -> None:
         self.sut = sut
         self._stack = contextlib.ExitStack()
         self._pilot: client.RemotePilot | None = None
+        self._closing = 0.0
 
     def attach(
         self,
@@ -57,11 +59,16 @@ class SutLink:
         versions.update(runs.provenance(self.sut, self._pilot.identity))
 
     def close(self) -> None:
+        """Say goodbye and stop a local SUT process (timed: not part of the stepping loop)."""
+        started = time.perf_counter()
         self._stack.close()
+        self._closing = time.perf_counter() - started
 
     def metrics(self, *, simulated: float, loop_seconds: float, pace: float) -> Mapping[str, float]:
-        """Round trips of the SUT and the real-time factor of the stepping loop."""
+        """Round trips of the SUT and the real-time factor of the stepping loop
+        (``loop_seconds`` may include :meth:`close`, which is taken out)."""
         out: dict[str, float] = {}
+        loop_seconds -= self._closing
         if self._pilot is not None:
             out.update(runs.round_trip_metrics(self._pilot.round_trips))
         if loop_seconds > 0 and simulated > 0 and (pace > 0 or self._pilot is not None):

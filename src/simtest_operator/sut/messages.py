@@ -120,8 +120,8 @@ class SensorViewEncoder:
 
 def traffic_command(*, nanos: int, ego_id: int, action_id: int, target_speed: float) -> bytes:
     """TrafficCommand with one SpeedAction: the scenario asks the ego for ``target_speed``."""
-    header = osiwire.length_delimited(1, osiwire.identifier(action_id))
-    speed = header + osiwire.double_field(2, target_speed)
+    header = osiwire.length_delimited(1, osiwire.identifier(action_id))  # ActionHeader.action_id
+    speed = osiwire.length_delimited(1, header) + osiwire.double_field(2, target_speed)
     action = osiwire.length_delimited(5, speed)
     return (
         osiwire.ground_truth_head(nanos=nanos)

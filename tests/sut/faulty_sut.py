@@ -1,0 +1,60 @@
+"""A SUT that misbehaves on purpose, for the fault tests: ``python faulty_sut.py MODE [STEP]``.
+
+Modes: ``crash`` (dies at STEP), ``slow`` (answers STEP after 1 s), ``garbage`` (answers STEP
+with a malformed MotionRequest), ``refuse`` (reports an ERROR at STEP), ``exit`` (exits with
+code 3 before listening), ``silent`` (listens but never answers HELLO), ``version`` (speaks
+protocol 2). Until STEP it behaves like the reference SUT.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import socket
+import sys
+import time
+
+from simtest_operator.sut import framing, reference
+from simtest_operator.sut.framing import Kind
+
+
+def main() -> None:
+    mode = sys.argv[1]
+    at = int(sys.argv[2]) if len(sys.argv) > 2 else 5
+    if mode == "exit":
+        print("faulty SUT: licence server unreachable", file=sys.stderr)
+        sys.exit(3)
+    port = int(os.environ["SIMTEST_SUT_PORT"])
+    with socket.create_server(("127.0.0.1", port)) as server:
+        conn, _ = server.accept()
+        with conn:
+            session: reference.Session | None = None
+            while True:
+                frame = framing.receive(conn)
+                if frame.kind is Kind.HELLO:
+                    if mode == "silent":
+                        time.sleep(60)
+                    hello = json.loads(frame.payload)
+                    session = reference.Session(reference.config_from(hello), dt=hello["step"])
+                    ready = {"protocol": 2 if mode == "version" else 1, "name": "faulty"}
+                    framing.send(conn, Kind.READY, 0, json.dumps(ready).encode())
+                elif frame.kind is Kind.SENSOR_VIEW and session is not None:
+                    if frame.sequence == at:
+                        if mode == "crash":
+                            os._exit(9)
+                        if mode == "slow":
+                            time.sleep(1.0)
+                        if mode == "garbage":
+                            framing.send(conn, Kind.MOTION_REQUEST, at, b"\x22\x40\x00")
+                            continue
+                        if mode == "refuse":
+                            framing.send(conn, Kind.ERROR, at, b"planner diverged")
+                            continue
+                    answer = session.answer(frame.payload)
+                    framing.send(conn, Kind.MOTION_REQUEST, frame.sequence, answer)
+                elif frame.kind is Kind.GOODBYE:
+                    return
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,129 @@
+"""An external SUT in lockstep with the simulation, end to end through the runner: the reference
+SUT as a separate process gives the in-process model's verdicts and the same recording; two SUT
+configurations give different verdicts and the result names the SUT; a SUT that does not start,
+crashes, is too slow, answers garbage or gives up ends the run ``Error`` with a reason saying
+so (retried per spec, never ``Failed``)."""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+import sys
+from pathlib import Path
+
+import pytest
+from mcap.reader import make_reader
+
+from simtest_operator.runner import execution
+from simtest_operator.settings import SimulationSettings
+from simtest_operator.sim import BackendChoice, SutConfig
+from simtest_operator.sim.sut import ExternalSut, Launch
+from simtest_operator.sut.launching import reference_command
+from simtest_operator.verdicts import Verdict
+
+SCENARIO = Path(__file__).parents[1] / "sim" / "data" / "hard_braking_lead.xosc"
+FAULTY = Path(__file__).parent / "faulty_sut.py"
+NO_AEB = SutConfig(acc=False, aeb=False)
+AEB = SutConfig(acc=False, aeb=True, aeb_ttc_threshold=2.5, aeb_deceleration=9.0)
+
+
+def external(command: tuple[str, ...], **extra: float) -> ExternalSut:
+    options: dict[str, float] = {"step_deadline": 0.5, "startup_timeout": 20.0, **extra}
+    return ExternalSut(launch=Launch.LOCAL, command=command, **options)  # type: ignore[arg-type]
+
+
+def run(sut: SutConfig, out: Path | None, **simulation: float) -> execution.RunReport:
+    return execution.run_scenario(
+        execution.RunRequest(
+            scenario=SCENARIO,
+            nets_dir=out or Path(),
+            sut=sut,
+            output_dir=out,
+            record=out is not None,
+            backend=BackendChoice.MEMORY,
+            simulation=SimulationSettings(**simulation),  # type: ignore[arg-type]
+        )
+    )
+
+
+def frames(path: Path) -> list[tuple[str, int, bytes]]:
+    with path.open("rb") as stream:
+        return [(c.topic, m.log_time, m.data) for _, c, m in make_reader(stream).iter_messages()]
+
+
+@pytest.mark.parametrize("config", [NO_AEB, AEB], ids=["no-aeb", "aeb"])
+def test_reference_sut_out_of_process_matches_the_in_process_model(
+    config: SutConfig, tmp_path: Path
+) -> None:
+    inside = run(config, tmp_path / "inside")
+    outside = run(
+        dataclasses.replace(config, external=external(reference_command())), tmp_path / "outside"
+    )
+    assert outside.outcome.verdict is inside.outcome.verdict
+    assert outside.outcome.reason == inside.outcome.reason
+    recorded = frames(tmp_path / "outside" / "recording.mcap")
+    assert len(recorded) > 50
+    assert recorded == frames(tmp_path / "inside" / "recording.mcap")  # bit for bit
+    metrics = outside.outcome.metrics
+    assert metrics["sutSteps"] > 100
+    assert 0.0 < metrics["sutRoundTripP50Ms"] <= metrics["sutRoundTripP99Ms"]
+    versions = outside.outcome.versions
+    assert versions["sut.reported"] == "simtest-reference-sut 1.0.0"
+    assert versions["sut.configHash"].startswith("sha256:")
+    assert "sutSteps" not in inside.outcome.metrics
+
+
+def test_two_external_sut_versions_give_different_verdicts_and_say_which(
+    tmp_path: Path,
+) -> None:
+    old = run(
+        dataclasses.replace(NO_AEB, version="1.0", external=external(reference_command())), None
+    )
+    new = run(dataclasses.replace(AEB, version="2.0", external=external(reference_command())), None)
+    assert (old.outcome.verdict, new.outcome.verdict) == (Verdict.FAILED, Verdict.PASSED)
+    assert old.outcome.reason.startswith("Ego collided with Lead")
+    assert old.outcome.versions["sut"] == "idm-driver 1.0"
+    assert new.outcome.versions["sut"] == "idm-driver 2.0"
+    assert old.outcome.versions["sut.configHash"] != new.outcome.versions["sut.configHash"]
+
+
+@pytest.mark.parametrize(
+    ("mode", "reason"),
+    [
+        ("crash", r"closed the connection .* step 5 .* killed by signal 9|exited with code 9"),
+        ("slow", r"missed the 500 ms deadline for step 5 \(t=0\.200 s\)"),
+        ("garbage", r"MOTION_REQUEST at step 5 is malformed: field 4 claims 64 bytes"),
+        ("refuse", r"reported an error during step 5 .*: planner diverged"),
+        ("exit", r"did not start: the SUT process exited with code 3: .*licence server"),
+        ("version", r"speaks protocol 2, the simulator 1"),
+    ],
+)
+def test_a_faulty_sut_ends_the_run_error_saying_why(mode: str, reason: str) -> None:
+    sut = dataclasses.replace(AEB, external=external((sys.executable, str(FAULTY), mode, "5")))
+    outcome = run(sut, None).outcome
+    assert outcome.verdict is Verdict.ERROR
+    assert re.search(reason, outcome.reason), outcome.reason
+
+
+def test_a_sut_that_never_answers_the_handshake_times_out_at_start_up() -> None:
+    sut = dataclasses.replace(
+        AEB,
+        external=external((sys.executable, str(FAULTY), "silent"), startup_timeout=1.0),
+    )
+    outcome = run(sut, None).outcome
+    assert outcome.verdict is Verdict.ERROR
+    assert "missed the 1000 ms deadline for the handshake (READY)" in outcome.reason
+
+
+def test_a_paced_run_records_the_achieved_factor_and_flags_falling_behind() -> None:
+    sut = dataclasses.replace(AEB, external=external(reference_command()))
+    kept = run(sut, None, real_time_factor=50.0).outcome.metrics
+    assert kept["realTimeFactorTarget"] == 50.0
+    assert kept["realTimeBehind"] == 0.0
+    assert kept["loopRealTimeFactor"] == pytest.approx(50.0, rel=0.1)
+    slow = dataclasses.replace(
+        AEB, external=external((sys.executable, str(FAULTY), "slow", "3"), step_deadline=2.0)
+    )
+    behind = run(slow, None, real_time_factor=50.0).outcome.metrics
+    assert behind["realTimeBehind"] == 1.0
+    assert behind["loopRealTimeFactor"] < 47.5
