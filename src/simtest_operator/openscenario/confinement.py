@@ -47,7 +47,7 @@ class Confinement:
     def describe(self) -> str:
         """Where references may point, for error messages."""
         if self.source_root is None:
-            return "a system folder (" + ", ".join(str(s) for s in SYSTEM) + ")"
+            return "in a system folder (" + ", ".join(str(s) for s in SYSTEM) + ")"
         return f"outside the scenario's source root {self.source_root}"
 
 

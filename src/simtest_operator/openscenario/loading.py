@@ -212,18 +212,18 @@ def _road_network(
     found = libraries.find(name)
     if found is not None:
         return s.RoadNetwork(logic_file=found, line=el.sourceline)
+    if candidates[0] in outside:
+        raise ctx.error(
+            logic,
+            f"road network file {raw!r} refused: {candidates[0]} is {confinement.describe()} "
+            f"(and no map {name!r} in the map libraries)",
+        )
     looked = ", ".join(str(c) for c in candidates if c not in outside)
     libs = ", ".join(str(f) for f in libraries.folders)
-    libs += f"; maps there: {', '.join(libraries.names()) or 'none'}"
-    refused = (
-        f"; refused {', '.join(str(c) for c in outside)}: {confinement.describe()}"
-        if outside
-        else ""
-    )
     raise ctx.error(
         logic,
-        f"road network file {raw!r} not found (looked for {looked}; "
-        f"map {name!r} in {libs}){refused}",
+        f"road network file {raw!r} not found (looked for {looked}; map {name!r} in {libs}, "
+        f"which hold {', '.join(libraries.names()) or 'no maps'})",
     )
 
 
