@@ -47,7 +47,7 @@ def test_absolute_and_symlinked_escapes_are_refused(
         with pytest.raises(ScenarioError, match=f"refused: {secret} is outside"):
             load_scenario(path, options=options)
     proc = write_scenario(road='<LogicFile filepath="/proc/self/environ"/>')
-    with pytest.raises(ScenarioError, match="refused: /proc/[0-9]+/environ is in a system folder"):
+    with pytest.raises(ScenarioError, match=r"refused: /proc/[0-9]+/environ is in a system folder"):
         load_scenario(proc)
 
 
