@@ -4,8 +4,7 @@ Covers: a LogicFile ``../../etc/passwd`` (the carla/ test file) and an absolute 
 are refused with the reason and never opened; a symlink inside the tree that points out is
 refused; ``../`` inside the tree keeps working; CatalogLocations outside the root are not read
 (the error says refused); a catalog file symlinked out of its folder is skipped; with no root
-given, system folders are still refused; ``root_from_id`` gives a campaign scenario's source
-root from its id; the scenario size limit is configurable.
+given, system folders are still refused; the scenario size limit is configurable.
 """
 
 from __future__ import annotations
@@ -16,7 +15,6 @@ import pytest
 
 from simtest_operator.errors import ScenarioError
 from simtest_operator.openscenario import LoadOptions, load_scenario
-from simtest_operator.openscenario.confinement import root_from_id
 from tests.openscenario.conftest import ScenarioWriter
 
 CARLA_DIR = Path(__file__).resolve().parent / "carla"
@@ -103,13 +101,3 @@ def test_scenario_size_limit(write_scenario: ScenarioWriter) -> None:
     assert load_scenario(path, options=LoadOptions(max_bytes=size)).entities
     with pytest.raises(ScenarioError, match="larger than"):
         load_scenario(path, options=LoadOptions(max_bytes=size - 1))
-
-
-def test_root_from_campaign_ids() -> None:
-    scenario = Path("/cache/tree/library/cut-in/a.xosc")
-    assert root_from_id(scenario, "library/cut-in/a.xosc") == Path("/cache/tree")
-    assert root_from_id(scenario, "library/cut-in/a.xosc~2") == Path("/cache/tree")
-    assert root_from_id(scenario, "a.xosc") == Path("/cache/tree/library/cut-in")
-    assert root_from_id(scenario, "other/a.xosc") is None
-    assert root_from_id(scenario, "d.xosc#1-abcd") is None
-    assert root_from_id(scenario, "../cut-in/a.xosc") is None

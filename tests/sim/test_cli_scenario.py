@@ -67,6 +67,8 @@ def test_check_with_reference(tmp_path: Path, env: dict[str, str]) -> None:
             "never",
             "--reference",
             str(CORPUS / "esmini-reference.json"),
+            "--root",  # the roads are in a sibling of the checked folder
+            str(tmp_path / "esmini"),
         ],
         env=env,
     )

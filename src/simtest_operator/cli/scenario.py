@@ -215,6 +215,13 @@ def _comparison(
 @_TAKEOVER
 @_STRICT
 @_MAPS
+@click.option(
+    "--root",
+    type=click.Path(exists=True, file_okay=False, path_type=Path),
+    default=None,
+    help="Source root: files the scenarios reference (roads, catalogs) must be inside it "
+    "[default: DIRECTORY].",
+)
 def check(
     directory: Path,
     jobs: int | None,
@@ -222,17 +229,18 @@ def check(
     takeover: str,
     strict: bool,
     maps: tuple[Path, ...],
+    root: Path | None,
 ) -> None:
     """Run every scenario under DIRECTORY in parallel and print a table with each verdict and
     the schema deviations accepted in the file (warnings). Files the scenarios reference must be
-    inside DIRECTORY (or a map library)."""
+    inside DIRECTORY (or --root) or come from a map library."""
     # Only `check` prints a table: `scenario run` starts without rich.
     from rich.console import Console
     from rich.markup import escape
     from rich.table import Table
 
     settings = Settings.from_env()
-    loading = _loading(settings, strict, directory, maps)
+    loading = _loading(settings, strict, root or directory, maps)
     requests = _requests(directory, settings, SutConfig(takeover=Takeover(takeover)), loading)
     ref = references.load(reference) if reference is not None else None
     reports: dict[int, execution.RunReport] = {}

@@ -7,11 +7,11 @@ land inside the scenario's *source root*; road networks may also come from a map
 (:mod:`simtest_operator.maps`).
 
 The source root is the caller's to give (``LoadOptions.source_root``): the folder
-``simtest scenario check`` was pointed at; ``--root`` of ``simtest scenario run`` (default: the
-enclosing git work tree, else the scenario's folder); for a campaign scenario its source's root
-(:func:`root_from_id`). Relative references within a tree (``../catalogs``) keep working. A
-library caller that gives none gets the enclosing git work tree, or -- outside any -- only the
-system folders (:data:`SYSTEM`) refused.
+``simtest scenario check`` was pointed at (or its ``--root``); ``--root`` of
+``simtest scenario run`` (default: the enclosing git work tree, else the scenario's folder).
+Relative references within a tree (``../catalogs``) keep working. A caller that gives none --
+today the campaign runner, whose fetched sources do not pass their root down yet -- gets the
+enclosing git work tree, or outside any only the system folders (:data:`SYSTEM`) refused.
 """
 
 from __future__ import annotations
@@ -63,21 +63,3 @@ def git_root(scenario: Path) -> Path | None:
 def default_root(scenario: Path) -> Path:
     """The scenario's own tree: its enclosing git work tree, else its folder."""
     return git_root(scenario) or scenario.resolve().parent
-
-
-def root_from_id(scenario: Path, scenario_id: str) -> Path | None:
-    """The source root of a campaign scenario whose id is its path inside its source.
-
-    Campaign ids are ``<path inside the source>`` with an optional ``~<n>`` clash suffix
-    (``#<k>-<hash>`` for distribution runs, whose file is another one): the root is what is left
-    of ``scenario`` after taking the id's path off its end. None when the id does not match.
-    """
-    if "#" in scenario_id:
-        return None
-    ident = scenario_id.rsplit("~", 1)[0] if "~" in scenario_id else scenario_id
-    parts = Path(ident).parts
-    if not parts or ".." in parts or Path(ident).is_absolute():
-        return None
-    if scenario.parts[-len(parts) :] != parts:
-        return None
-    return scenario.parents[len(parts) - 1]

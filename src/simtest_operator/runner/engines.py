@@ -10,7 +10,6 @@ executor's kill is the backstop for a simulator that stops responding altogether
 from __future__ import annotations
 
 from simtest_operator.openscenario import LoadOptions
-from simtest_operator.openscenario.confinement import root_from_id
 from simtest_operator.runner import execution
 from simtest_operator.runner.tasks import ScenarioTask
 from simtest_operator.verdicts import ScenarioOutcome
@@ -34,9 +33,6 @@ def execute(task: ScenarioTask) -> ScenarioOutcome:
         output_dir=task.out_dir,
         record=task.record,
         wall_clock_limit=soft_limit(task.timeout_seconds),
-        loading=LoadOptions(
-            source_root=root_from_id(task.scenario_path, task.scenario_id),
-            maps=task.settings.maps,
-        ),
+        loading=LoadOptions(maps=task.settings.maps),
     )
     return execution.run_scenario(request).outcome

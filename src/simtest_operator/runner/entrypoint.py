@@ -56,7 +56,6 @@ from simtest_operator.errors import (
     SourceError,
 )
 from simtest_operator.openscenario import LoadOptions
-from simtest_operator.openscenario.confinement import root_from_id
 from simtest_operator.render import RunSpec, ScenarioRef, messages, runspecs
 from simtest_operator.render.inputs import STARTUP_ALLOWANCE_SECONDS
 from simtest_operator.runner import execution
@@ -126,7 +125,7 @@ def requests_for(job: Job, scenario: ScenarioRef, path: Path) -> execution.RunRe
         output_dir=job.artifacts / safe_name(scenario.id),
         record=simulator.record,
         wall_clock_limit=max(spec.timeout_seconds * 0.95, spec.timeout_seconds - 2.0),
-        loading=LoadOptions(source_root=root_from_id(path, scenario.id), maps=job.settings.maps),
+        loading=LoadOptions(maps=job.settings.maps),
     )
 
 
