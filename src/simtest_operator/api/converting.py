@@ -13,7 +13,7 @@ from simtest_operator.evaluation import DEFAULT_TIME_LIMIT, Criteria
 from simtest_operator.scenarios import batching, globbing, specs
 from simtest_operator.scenarios.pinned import PinnedScenario
 from simtest_operator.settings import SimulationSettings
-from simtest_operator.sim.sut import SutConfig, Takeover
+from simtest_operator.sim.sut import ExternalSut, Launch, SutConfig, Takeover
 
 
 def selection(spec: sources.ScenarioSelection) -> specs.Selection:
@@ -46,6 +46,12 @@ def source(spec: sources.ScenarioSource) -> specs.SourceSpec:
             query=spec.graphql.query,
             variables=dict(spec.graphql.variables),
             secret=specs.SecretRef(name=ref.name, key=ref.key) if ref else None,
+        )
+    if spec.rest is not None:
+        rest_ref = spec.rest.secret_ref
+        return specs.RestSource(
+            url=spec.rest.url,
+            secret=specs.SecretRef(name=rest_ref.name, key=rest_ref.key) if rest_ref else None,
         )
     assert spec.config_map is not None
     return specs.ConfigMapSource(name=spec.config_map.name, keys=tuple(spec.config_map.keys))
@@ -111,6 +117,29 @@ def sut(spec: environment.SutConfig) -> SutConfig:
         aeb=model.aeb.enabled,
         aeb_ttc_threshold=model.aeb.ttc_threshold,
         aeb_deceleration=model.aeb.deceleration,
+        external=external_sut(spec.external, spec.config) if spec.external else None,
+    )
+
+
+def external_sut(spec: environment.ExternalSut, config: dict[str, str]) -> ExternalSut:
+    """How the runner reaches an external SUT: a sidecar (image), an endpoint, or a process it
+    starts next to the simulator (command only)."""
+    launch = Launch.LOCAL
+    if spec.endpoint is not None:
+        launch = Launch.ENDPOINT
+    elif spec.image is not None:
+        launch = Launch.SIDECAR
+    return ExternalSut(
+        launch=launch,
+        command=tuple(spec.command),
+        endpoint=spec.endpoint,
+        port=spec.port,
+        image=spec.image,
+        env=dict(spec.env),
+        step_deadline=spec.step_deadline_milliseconds / 1000.0,
+        startup_timeout=float(spec.startup_timeout_seconds),
+        perception_range=spec.perception_range,
+        config=dict(config),
     )
 
 

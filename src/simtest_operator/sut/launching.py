@@ -95,7 +95,10 @@ def open_pilot(
                     f"(and {ENDPOINT_ENV} is not set)"
                 )
             port = free_port()
-            command = tuple(part.replace("{port}", str(port)) for part in external.command)
+            command = tuple(
+                part.replace("{port}", str(port)).replace("{python}", sys.executable)
+                for part in external.command
+            )
             process = _Process(command, external.env, port)
             endpoint = f"127.0.0.1:{port}"
         sock = client.connect(

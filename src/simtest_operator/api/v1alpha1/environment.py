@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import enum
-from typing import Annotated, Any
+import re
+from typing import Annotated, Any, ClassVar
 
-from pydantic import Field, StringConstraints
+from pydantic import Field, StringConstraints, model_validator
 
-from simtest_operator.api.v1alpha1.common import ApiModel, DnsLabel
+from simtest_operator.api.v1alpha1.common import ApiModel, DnsLabel, Quantity, cel
 
 PositiveFloat = Annotated[float, Field(gt=0)]
 
@@ -66,6 +67,83 @@ class Takeover(enum.StrEnum):
     """The ego stays scripted; the SUT settings have no effect (reproduces a reference player)."""
 
 
+ENDPOINT = r"^[A-Za-z0-9]([-A-Za-z0-9.]*[A-Za-z0-9])?:[0-9]{1,5}$"
+ENV_NAME = r"^[A-Za-z_][A-Za-z0-9_]*$"
+
+
+class SutResourceList(ApiModel):
+    """CPU and memory of the SUT sidecar."""
+
+    cpu: Quantity = "500m"
+    """CPU, e.g. ``250m`` or ``1``."""
+    memory: Quantity = "256Mi"
+    """Memory, e.g. ``256Mi``."""
+
+
+class SutResources(ApiModel):
+    """Requests and limits of the SUT sidecar (limits default to the requests)."""
+
+    requests: SutResourceList = Field(default_factory=SutResourceList)
+    """What the scheduler reserves for the SUT."""
+    limits: SutResourceList | None = None
+    """Upper bounds; unset means equal to the requests."""
+
+
+class ExternalSut(ApiModel):
+    """A system under test outside the simulator, speaking the OSI SUT protocol
+    (docs/sut-interface.md). ``image``: a sidecar container in the simulator pod; ``endpoint``:
+    a SUT already listening somewhere; neither: ``command`` started next to the simulator."""
+
+    cel_rules: ClassVar[tuple[dict[str, str], ...]] = (
+        cel(
+            "!(has(self.image) && has(self.endpoint))",
+            "set image (sidecar) or endpoint, not both",
+        ),
+        cel(
+            "has(self.image) || has(self.endpoint) "
+            "|| (has(self.command) && size(self.command) > 0)",
+            "an external SUT needs an image, an endpoint or a command",
+        ),
+    )
+
+    image: Annotated[str, StringConstraints(min_length=1, max_length=512)] | None = None
+    """Container image of the SUT, run as a sidecar of the simulator pod."""
+    command: Annotated[
+        list[Annotated[str, StringConstraints(min_length=1, max_length=1024)]],
+        Field(max_length=64),
+    ] = Field(default_factory=list)
+    """Command of the sidecar (default: the image's entrypoint), or the process the runner
+    starts next to the simulator when no image is set (``simtest run`` starts it locally for a
+    sidecar SUT too). It gets ``SIMTEST_SUT_PORT``; ``{port}`` in an argument is replaced."""
+    env: Annotated[
+        dict[str, Annotated[str, StringConstraints(max_length=4096)]], Field(max_length=64)
+    ] = Field(default_factory=dict)
+    """Environment variables of the SUT (names: letters, digits, ``_``)."""
+    resources: SutResources = Field(default_factory=SutResources)
+    """Requests and limits of the sidecar (they count towards the pod's)."""
+    port: Annotated[int, Field(ge=1024, le=65535)] = 7460
+    """Port the sidecar listens on (loopback inside the pod)."""
+    endpoint: Annotated[str, StringConstraints(pattern=ENDPOINT, max_length=260)] | None = None
+    """``host:port`` of a SUT that is already running; nothing is started."""
+    step_deadline_milliseconds: Annotated[int, Field(ge=1, le=60000)] = 100
+    """Time the SUT has to answer one step; a late answer ends the run Error."""
+    startup_timeout_seconds: Annotated[int, Field(ge=1, le=600)] = 60
+    """Time the SUT has to accept the connection and answer the handshake."""
+    perception_range: Annotated[float, Field(gt=0, le=10000)] | None = None
+    """Objects farther than this (m) from the ego are left out of the SensorView."""
+
+    @model_validator(mode="after")
+    def _one_way_to_reach(self) -> ExternalSut:
+        bad = sorted(name for name in self.env if not re.fullmatch(ENV_NAME, name))
+        if bad:
+            raise ValueError(f"env names must match {ENV_NAME}: {', '.join(bad)}")
+        if self.image is not None and self.endpoint is not None:
+            raise ValueError("set image (sidecar) or endpoint, not both")
+        if self.image is None and self.endpoint is None and not self.command:
+            raise ValueError("an external SUT needs an image, an endpoint or a command")
+        return self
+
+
 class SutConfig(ApiModel):
     """The system under test: identity for the results and the driver-model parameters."""
 
@@ -83,7 +161,11 @@ class SutConfig(ApiModel):
     driver_model: DriverModel = Field(default_factory=DriverModel)
     """Parameters of the stand-in driver model that drives the ego."""
     config: dict[str, str] = Field(default_factory=dict)
-    """Free-form configuration override passed to the SUT components."""
+    """Free-form configuration override passed to the SUT components (an external SUT receives
+    it in the protocol's handshake; its hash is stored with every result)."""
+    external: ExternalSut | None = None
+    """An external SUT behind the OSI SUT protocol; unset drives the ego with the in-process
+    driver model."""
 
 
 class SimulatorSettings(ApiModel):
