@@ -3,7 +3,7 @@
 Covers: a file with ``parameterType="int"`` runs with a warning line naming code and line (run)
 and a warnings cell (check), and is Invalid under ``--strict`` (exit 2); a file named
 ``a[/x].xosc`` and a reason holding ``[bold]`` print verbatim in the check table (no rich markup,
-no MarkupError).
+no MarkupError); --max-scenario-mb and a LogicFile out to /etc/passwd make `run` Invalid (exit 2).
 """
 
 from __future__ import annotations
@@ -95,3 +95,15 @@ def test_check_lists_warnings_and_never_reads_markup(tmp_path: Path) -> None:
     code, output = _invoke(tmp_path, "check", str(folder), "-j", "1", "--strict")
     assert "0 ran, 2 invalid, 0 errors" in output
     shutil.rmtree(folder)
+
+
+def test_size_limit_and_escapes_are_invalid(tmp_path: Path) -> None:
+    path = tmp_path / "int.xosc"
+    path.write_text(OPEN_SPACE, encoding="utf-8")
+    code, output = _invoke(tmp_path, "run", str(path), "--no-record", "--max-scenario-mb", "0.001")
+    assert code == 2, output
+    assert output.startswith("verdict: Invalid\nreason: file is larger than the")
+    escape = Path(__file__).resolve().parents[1] / "openscenario" / "carla" / "escape_passwd.xosc"
+    code, output = _invoke(tmp_path, "run", str(escape), "--no-record")
+    assert code == 2, output
+    assert "reason: road network file '../../../../../../../../etc/passwd' refused" in output

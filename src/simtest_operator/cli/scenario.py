@@ -25,6 +25,7 @@ from simtest_operator.openscenario import (
     file_kind,
 )
 from simtest_operator.openscenario.confinement import default_root
+from simtest_operator.openscenario.loading import MAX_SCENARIO_BYTES
 from simtest_operator.runner import execution, summaries
 from simtest_operator.settings import Settings
 from simtest_operator.sim import SutConfig, Takeover
@@ -57,10 +58,25 @@ _MAPS = click.option(
 )
 
 
+_MAX_SIZE = click.option(
+    "--max-scenario-mb",
+    "max_mb",
+    type=click.FloatRange(min=0.001),
+    default=MAX_SCENARIO_BYTES / 2**20,
+    show_default=True,
+    help="Size limit of scenario and catalog files (parsing takes about 25x in memory).",
+)
+
+
 def _loading(
-    settings: Settings, strict: bool, root: Path | None, maps: tuple[Path, ...]
+    settings: Settings, strict: bool, root: Path | None, maps: tuple[Path, ...], max_mb: float
 ) -> LoadOptions:
-    return LoadOptions(strict=strict, source_root=root, maps=(*maps, *settings.maps))
+    return LoadOptions(
+        strict=strict,
+        source_root=root,
+        maps=(*maps, *settings.maps),
+        max_bytes=int(max_mb * 2**20),
+    )
 
 
 def _short(deviation: Deviation) -> str:
@@ -86,6 +102,7 @@ def scenario() -> None:
 @_TAKEOVER
 @_STRICT
 @_MAPS
+@_MAX_SIZE
 @click.option(
     "--root",
     type=click.Path(exists=True, file_okay=False, path_type=Path),
@@ -101,6 +118,7 @@ def run(
     strict: bool,
     maps: tuple[Path, ...],
     root: Path | None,
+    max_mb: float,
 ) -> None:
     """Run FILE and print its verdict, reason, accepted deviations and metrics.
 
@@ -118,7 +136,7 @@ def run(
             simulation=settings.simulation,
             output_dir=out,
             record=not no_record,
-            loading=_loading(settings, strict, root or default_root(file), maps),
+            loading=_loading(settings, strict, root or default_root(file), maps, max_mb),
         )
     )
     outcome = report.outcome
@@ -215,6 +233,7 @@ def _comparison(
 @_TAKEOVER
 @_STRICT
 @_MAPS
+@_MAX_SIZE
 @click.option(
     "--root",
     type=click.Path(exists=True, file_okay=False, path_type=Path),
@@ -230,6 +249,7 @@ def check(
     strict: bool,
     maps: tuple[Path, ...],
     root: Path | None,
+    max_mb: float,
 ) -> None:
     """Run every scenario under DIRECTORY in parallel and print a table with each verdict and
     the schema deviations accepted in the file (warnings). Files the scenarios reference must be
@@ -240,7 +260,7 @@ def check(
     from rich.table import Table
 
     settings = Settings.from_env()
-    loading = _loading(settings, strict, root or directory, maps)
+    loading = _loading(settings, strict, root or directory, maps, max_mb)
     requests = _requests(directory, settings, SutConfig(takeover=Takeover(takeover)), loading)
     ref = references.load(reference) if reference is not None else None
     reports: dict[int, execution.RunReport] = {}
