@@ -1,0 +1,117 @@
+"""Benchmark of the SUT interface: the 20-vehicle simulator bench (bench/simulator.py's
+scenario) with the ego driven by the in-process driver model vs by the reference SUT as a
+separate process on loopback (OSI SUT protocol v1, lockstep).
+
+Each run is a fresh process (libsumo is one simulation per process), in ``--repeat`` rounds
+alternating the order of the variants. Per variant: the median run's stepping time, steps per
+second, real-time factor of the stepping loop; for the external SUT also the round trip per step
+(p50/p99, measured by the simulator from sending the SensorView to receiving the MotionRequest,
+which includes encoding nothing but does include the SUT's own work) and whether the verdicts
+agree. Prints a table and writes JSON::
+
+    python bench/sut.py [--vehicles 20] [--seconds 60] [--repeat 3] [--json FILE]
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import json
+import statistics
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+_CHILD = r"""
+import json, sys, time
+from pathlib import Path
+from simtest_operator.runner import execution
+from simtest_operator.sim import BackendChoice, SutConfig, Takeover
+from simtest_operator.sim.sut import ExternalSut, Launch
+from simtest_operator.sut.launching import reference_command
+path, nets, variant = Path(sys.argv[1]), Path(sys.argv[2]), sys.argv[3]
+external = None
+if variant == "external":
+    external = ExternalSut(launch=Launch.LOCAL, command=reference_command(), step_deadline=1.0)
+sut = SutConfig(takeover=Takeover.AFTER_INIT, external=external)
+request = execution.RunRequest(scenario=path, nets_dir=nets, sut=sut, record=False,
+                               backend=BackendChoice.SUMO)
+t1 = time.perf_counter()
+report = execution.run_scenario(request)
+wall = time.perf_counter() - t1
+o = report.outcome
+print(json.dumps({"variant": variant, "verdict": o.verdict.value, "reason": o.reason,
+                  "simulated": o.simulated_seconds, "wall": wall, "startup": report.startup_seconds,
+                  "metrics": dict(o.metrics)}))
+"""
+
+
+def _scenario_text(vehicles: int, seconds: float) -> str:
+    spec = importlib.util.spec_from_file_location(
+        "bench_simulator", Path(__file__).with_name("simulator.py")
+    )
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    text: str = module.scenario_text(vehicles, seconds)
+    return text
+
+
+def run_child(path: Path, nets: Path, variant: str) -> dict[str, object]:
+    result = subprocess.run(
+        [sys.executable, "-c", _CHILD, str(path), str(nets), variant],
+        check=True,
+        capture_output=True,
+        text=True,
+    )
+    return dict(json.loads(result.stdout.strip().splitlines()[-1]))
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--vehicles", type=int, default=20)
+    parser.add_argument("--seconds", type=float, default=60.0)
+    parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--json", type=Path)
+    args = parser.parse_args()
+    work = Path(tempfile.mkdtemp(prefix="simtest-sut-bench-"))
+    scenario = work / "bench.xosc"
+    scenario.write_text(_scenario_text(args.vehicles, args.seconds), encoding="utf-8")
+    nets = work / "nets"
+    run_child(scenario, nets, "in-process")  # warm the network cache
+    runs: dict[str, list[dict[str, object]]] = {"in-process": [], "external": []}
+    for round_ in range(args.repeat):
+        order = ["in-process", "external"] if round_ % 2 == 0 else ["external", "in-process"]
+        for variant in order:
+            runs[variant].append(run_child(scenario, nets, variant))
+    step = 0.05
+    table = {}
+    for variant, rows in runs.items():
+        stepping = [float(r["wall"]) - float(r["startup"]) for r in rows]  # type: ignore[arg-type]
+        median = statistics.median(stepping)
+        simulated = float(rows[0]["simulated"])  # type: ignore[arg-type]
+        metrics = [dict(r["metrics"]) for r in rows]  # type: ignore[call-overload]
+        entry = {
+            "verdicts": sorted({str(r["verdict"]) for r in rows}),
+            "stepping_seconds": round(median, 3),
+            "steps_per_second": round(simulated / step / median, 1),
+            "real_time_factor": round(simulated / median, 1),
+        }
+        if variant == "external":
+            entry["round_trip_p50_ms"] = round(
+                statistics.median(float(m["sutRoundTripP50Ms"]) for m in metrics), 4
+            )
+            entry["round_trip_p99_ms"] = round(
+                statistics.median(float(m["sutRoundTripP99Ms"]) for m in metrics), 4
+            )
+        table[variant] = entry
+    print(f"{args.vehicles} vehicles, {args.seconds:g} s simulated, {args.repeat} rounds")
+    for variant, entry in table.items():
+        print(variant.ljust(11), json.dumps(entry))
+    if args.json:
+        args.json.write_text(json.dumps(table, indent=2) + "\n", encoding="utf-8")
+
+
+if __name__ == "__main__":
+    main()
