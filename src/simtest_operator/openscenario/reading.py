@@ -28,6 +28,11 @@ if TYPE_CHECKING:
     from simtest_operator.openscenario.catalogs import Catalogs
 
 E = TypeVar("E", bound=enum.StrEnum)
+
+MAX_MAGNITUDE = 1e9
+"""Largest magnitude of a double attribute. Every OpenSCENARIO double is an SI quantity (m, s,
+m/s, rad, ...) or a factor; nothing real comes near 1e9 (the esmini corpus stays below 1e6),
+while 1e308 speeds overflow the engine's arithmetic into inf and NaN."""
 T = TypeVar("T")
 
 
@@ -138,21 +143,44 @@ class Context:
         """Optional text attribute."""
         return None if el.get(name) is None else self.string(el, name)
 
-    def double(self, el: Element, name: str) -> float:
-        """Required double attribute."""
-        return self._convert(el, name, self._require(el, name), parameters.to_float)
+    def double(self, el: Element, name: str, *, minimum: float | None = None) -> float:
+        """Required double attribute: finite, at most :data:`MAX_MAGNITUDE` in size and, with
+        ``minimum``, not below it (the standard's ``[0..inf[`` ranges)."""
+        number = self._convert(el, name, self._require(el, name), parameters.to_float)
+        return self._bounded(el, name, number, minimum)
 
-    def opt_double(self, el: Element, name: str, default: float | None = None) -> float | None:
-        """Optional double attribute (``default`` when absent)."""
+    def opt_double(
+        self,
+        el: Element,
+        name: str,
+        default: float | None = None,
+        *,
+        minimum: float | None = None,
+    ) -> float | None:
+        """Optional double attribute (``default`` when absent), bounded like :meth:`double`."""
         value = self._resolved(el, name)
         if value is None:
             return default
-        return self._convert(el, name, value, parameters.to_float)
+        number = self._convert(el, name, value, parameters.to_float)
+        return self._bounded(el, name, number, minimum)
 
-    def double_or(self, el: Element, name: str, default: float) -> float:
+    def double_or(
+        self, el: Element, name: str, default: float, *, minimum: float | None = None
+    ) -> float:
         """Optional double attribute with a non-None default."""
-        value = self.opt_double(el, name, default)
+        value = self.opt_double(el, name, default, minimum=minimum)
         return default if value is None else value
+
+    def _bounded(self, el: Element, name: str, number: float, minimum: float | None) -> float:
+        if abs(number) > MAX_MAGNITUDE:
+            raise self.error(
+                el,
+                f"attribute {name!r}: {number:g} is out of range "
+                f"(magnitude above {MAX_MAGNITUDE:g})",
+            )
+        if minimum is not None and number < minimum:
+            raise self.error(el, f"attribute {name!r}: {number:g} is below its minimum {minimum:g}")
+        return number
 
     def integer(self, el: Element, name: str) -> int:
         """Required integer attribute."""

@@ -8,6 +8,22 @@ from simtest_operator.openscenario.readers import controllers
 from simtest_operator.snapshots import BoundingBox, EntityKind
 from simtest_operator.xmlsafe import Element
 
+VEHICLE_CATEGORIES = frozenset(
+    {
+        "bicycle",
+        "bus",
+        "car",
+        "motorbike",
+        "semitrailer",
+        "trailer",
+        "train",
+        "tram",
+        "truck",
+        "van",
+    }
+)
+"""The schema's VehicleCategory values."""
+
 _KINDS = {
     "Vehicle": (EntityKind.VEHICLE, "vehicleCategory"),
     "Pedestrian": (EntityKind.PEDESTRIAN, "pedestrianCategory"),
@@ -64,6 +80,12 @@ def _object(
         if kind is not EntityKind.PEDESTRIAN:
             raise inner.error(el, f"missing required attribute {category_attr!r}")
         category = "pedestrian"
+    if kind is EntityKind.VEHICLE and category not in VEHICLE_CATEGORIES:
+        inner.deviation(
+            el,
+            "vehicle-category-unknown",
+            f"vehicleCategory {category!r} is not one of the schema's; kept as written",
+        )
     props, _ = controllers.properties(reading.child(el, "Properties"), inner)
     trailer_el = reading.child(el, "Trailer")
     if trailer_el is not None and not _has_trailer(trailer_el, inner):
@@ -102,25 +124,34 @@ def _has_trailer(el: Element, ctx: reading.Context) -> bool:
 def _bounding_box(el: Element, ctx: reading.Context) -> BoundingBox:
     center = ctx.require(el, "Center")
     dims = ctx.require(el, "Dimensions")
-    return BoundingBox(
+    box = BoundingBox(
         center_x=ctx.double(center, "x"),
         center_y=ctx.double(center, "y"),
         center_z=ctx.double(center, "z"),
-        length=ctx.double(dims, "length"),
-        width=ctx.double(dims, "width"),
-        height=ctx.double(dims, "height"),
+        length=ctx.double(dims, "length", minimum=0.0),
+        width=ctx.double(dims, "width", minimum=0.0),
+        height=ctx.double(dims, "height", minimum=0.0),
     )
+    if box.length == 0.0 or box.width == 0.0:
+        # CARLA files give props and walkers no size: they are points, never in a collision.
+        ctx.deviation(
+            dims,
+            "bounding-box-zero-size",
+            f"bounding box {box.length:g} x {box.width:g} m has no area: collisions with it "
+            "are not detected",
+        )
+    return box
 
 
 def _performance(el: Element | None, ctx: reading.Context) -> e.Performance | None:
     if el is None:
         return None
     return e.Performance(
-        max_speed=ctx.double(el, "maxSpeed"),
-        max_acceleration=ctx.double(el, "maxAcceleration"),
-        max_deceleration=ctx.double(el, "maxDeceleration"),
-        max_acceleration_rate=ctx.opt_double(el, "maxAccelerationRate"),
-        max_deceleration_rate=ctx.opt_double(el, "maxDecelerationRate"),
+        max_speed=ctx.double(el, "maxSpeed", minimum=0.0),
+        max_acceleration=ctx.double(el, "maxAcceleration", minimum=0.0),
+        max_deceleration=ctx.double(el, "maxDeceleration", minimum=0.0),
+        max_acceleration_rate=ctx.opt_double(el, "maxAccelerationRate", minimum=0.0),
+        max_deceleration_rate=ctx.opt_double(el, "maxDecelerationRate", minimum=0.0),
         line=el.sourceline,
     )
 

@@ -1,0 +1,77 @@
+"""Absurd values are Invalid with element and line; what CARLA tolerates is a deviation.
+
+Covers (issue 12 item 7, issue 20 item 11): a double of 1e308 (directly and through a
+parameter), NaN and inf, and a negative maxSpeed/maxDeceleration are ScenarioErrors at the
+element and line; a zero-size bounding box and an unknown vehicleCategory load with a deviation
+(refused in strict mode); an ``r,g,b`` colour Property is plain schema and loads with none.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from simtest_operator.errors import ScenarioError
+from simtest_operator.openscenario import LoadOptions, StrictDeviationError, load_scenario
+from tests.openscenario.conftest import CAR, ScenarioWriter
+
+
+def _teleport_to(x: str) -> str:
+    return f"""<Private entityRef="Ego"><PrivateAction><TeleportAction><Position>
+    <WorldPosition x="{x}" y="0"/></Position></TeleportAction></PrivateAction></Private>"""
+
+
+@pytest.mark.parametrize(
+    ("value", "message"),
+    [
+        ("1e308", r"1e\+308 is out of range"),
+        ("-2e9", r"-2e\+09 is out of range"),
+        ("nan", "is not a finite number"),
+        ("inf", "is not a finite number"),
+    ],
+)
+def test_absurd_doubles_are_errors(
+    write_scenario: ScenarioWriter, value: str, message: str
+) -> None:
+    with pytest.raises(ScenarioError, match=message) as caught:
+        load_scenario(write_scenario(init=_teleport_to(value)))
+    assert caught.value.element == "WorldPosition"
+    assert caught.value.line is not None
+
+
+def test_absurd_value_through_a_parameter(write_scenario: ScenarioWriter) -> None:
+    path = write_scenario(
+        parameters='<ParameterDeclaration name="X" parameterType="double" value="1e308"/>',
+        init=_teleport_to("$X"),
+    )
+    with pytest.raises(ScenarioError, match="'x': 1e\\+308 is out of range"):
+        load_scenario(path)
+
+
+@pytest.mark.parametrize("attribute", ["maxSpeed", "maxDeceleration"])
+def test_negative_performance_is_an_error(write_scenario: ScenarioWriter, attribute: str) -> None:
+    car = CAR.format(name="Ego").replace(f'{attribute}="', f'{attribute}="-')
+    with pytest.raises(ScenarioError, match=f"'{attribute}': -[0-9]+ is below its minimum 0"):
+        load_scenario(write_scenario(entities=car))
+
+
+def test_carla_tolerances_are_deviations(write_scenario: ScenarioWriter) -> None:
+    car = (
+        CAR.format(name="Ego")
+        .replace('width="2" length="5" height="1.5"', 'width="0" length="0" height="0"')
+        .replace('vehicleCategory="car"', 'vehicleCategory="sedan"')
+        .replace(
+            "<Properties/>", '<Properties><Property name="color" value="255,0,0"/></Properties>'
+        )
+    )
+    path = write_scenario(entities=car)
+    scenario = load_scenario(path)
+    assert [d.code for d in scenario.deviations] == [
+        "vehicle-category-unknown",
+        "bounding-box-zero-size",
+    ]
+    ego = scenario.entity("Ego")
+    assert ego is not None and ego.category == "sedan"
+    assert ego.bounding_box.length == 0.0
+    assert [(p.name, p.value) for p in ego.properties] == [("color", "255,0,0")]
+    with pytest.raises(StrictDeviationError, match="vehicle-category-unknown"):
+        load_scenario(path, options=LoadOptions(strict=True))
