@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from simtest_operator.api import converting
 from simtest_operator.api.v1alpha1 import API_VERSION, TestCampaignSpec
 from simtest_operator.operator import names
 from simtest_operator.operator.configuration import OperatorConfig
@@ -21,6 +22,7 @@ from simtest_operator.render import (
     S3Target,
     SecretKey,
 )
+from simtest_operator.scenarios import needs
 
 
 def environment_request(
@@ -59,6 +61,10 @@ def environment_request(
         scenario_mount=str(config.sources_dir.absolute())
         if config.scenario_volume
         else "/scenarios",
+        source_needs=needs(
+            (s.source for s in env.scenarios),
+            tuple(converting.source(entry) for entry in spec.scenarios.sources),
+        ),
         results_dsn=SecretKey(name=database.name, key=database.key) if database else None,
         results_run_key=run_key if database else "",
         sut=environment.sut.to_wire(),

@@ -11,6 +11,7 @@ import dataclasses
 from collections.abc import Mapping
 from typing import Any
 
+from simtest_operator.scenarios.locating import Needs
 from simtest_operator.scenarios.pinned import PinnedScenario
 
 SIMULATOR_RESOURCE = "simtest.dev/simulator"
@@ -116,6 +117,10 @@ class EnvironmentRequest:
     scenario_volume: PvcVolume | None = None
     """Read-only volume holding ``file://`` scenario sources, mounted at ``scenario_mount``."""
     scenario_mount: str = "/scenarios"
+    source_needs: Needs = dataclasses.field(default_factory=Needs)
+    """What the pod's runner needs to fetch its scenarios beyond network reach: the ConfigMaps
+    it reads keys of (mounted read-only) and the databases it asks again (in the run spec, their
+    tokens through ``secretKeyRef`` variables)."""
     results_dsn: SecretKey | None = None
     results_run_key: str = ""
     """The campaign's run in the results database (``SIMTEST_RESULTS_RUN_KEY`` of the pod)."""

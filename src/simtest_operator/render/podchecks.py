@@ -3,7 +3,10 @@
 The operator's guarantees rest on them: one ``simtest.dev/simulator`` unit per pod (so the real
 scheduler enforces simulators per node), the Pod Security ``restricted`` profile, an owner
 reference to the SimEnvironment (so deletion cascades), a deadline (so a hung run ends as
-Timeout) and ``restartPolicy: Never`` (so a crash is observed, not hidden by a restart).
+Timeout) and ``restartPolicy: Never`` (so a crash is observed, not hidden by a restart). A pod
+whose scenarios come from ConfigMaps or scenario databases must also mount those ConfigMaps and
+pass the databases' tokens where the runner looks (:mod:`runspecs`), or every scenario of it would
+end ``Error`` — better the campaign fails its pre-flight render with the reason.
 """
 
 from __future__ import annotations
@@ -12,7 +15,22 @@ from collections.abc import Mapping
 from typing import Any
 
 from simtest_operator.errors import RenderError
+from simtest_operator.render import runspecs
 from simtest_operator.render.inputs import SIMULATOR_RESOURCE, EnvironmentRequest
+
+RESTRICTED_VOLUMES = frozenset(
+    {
+        "configMap",
+        "csi",
+        "downwardAPI",
+        "emptyDir",
+        "ephemeral",
+        "persistentVolumeClaim",
+        "projected",
+        "secret",
+    }
+)
+"""Volume types the Pod Security ``restricted`` profile allows."""
 
 
 def check_pod(pod: Mapping[str, Any], request: EnvironmentRequest) -> None:
@@ -50,6 +68,7 @@ def _problems(pod: Mapping[str, Any], request: EnvironmentRequest) -> list[str]:
         problems.append("host namespaces are not allowed")
     problems.extend(_security_problems(spec))
     problems.extend(_slot_problems(spec))
+    problems.extend(_source_problems(spec, request))
     return problems
 
 
@@ -79,8 +98,50 @@ def _security_problems(spec: Mapping[str, Any]) -> list[str]:
         if seccomp not in ("RuntimeDefault", "Localhost"):
             problems.append(f"container {name}: seccompProfile must be RuntimeDefault")
     for volume in spec.get("volumes") or []:
-        if "hostPath" in volume:
-            problems.append(f"volume {volume.get('name', '?')}: hostPath is not allowed")
+        kinds = sorted(set(volume) - {"name"} - RESTRICTED_VOLUMES)
+        if kinds:
+            problems.append(
+                f"volume {volume.get('name', '?')}: {', '.join(kinds)} is not allowed "
+                "(restricted Pod Security)"
+            )
+    return problems
+
+
+def _source_problems(spec: Mapping[str, Any], request: EnvironmentRequest) -> list[str]:
+    """The runner's container must see every ConfigMap and token its scenarios need."""
+    needs = request.source_needs
+    if not needs.config_maps and not needs.databases:
+        return []
+    runner = next(
+        (
+            c
+            for c in spec.get("containers") or []
+            if any(e.get("name") == runspecs.ENV_VAR for e in c.get("env") or [])
+        ),
+        None,
+    )
+    if runner is None:
+        return [f"no container has {runspecs.ENV_VAR}, so none can fetch the scenarios"]
+    problems: list[str] = []
+    volumes = {v.get("name"): v for v in spec.get("volumes") or []}
+    mounted = {
+        m.get("mountPath"): volumes.get(m.get("name"), {}) for m in runner.get("volumeMounts") or []
+    }
+    for entry in runspecs.config_map_volumes(needs.config_maps):
+        volume = mounted.get(entry["mountPath"]) or {}
+        if (volume.get("configMap") or {}).get("name") != entry["configMap"]:
+            problems.append(
+                f"ConfigMap {entry['configMap']} must be mounted at {entry['mountPath']} "
+                f"(the scenarios read it)"
+            )
+    env = {e.get("name"): e for e in runner.get("env") or []}
+    for ref, variable in runspecs.secret_variables(needs.databases).items():
+        key_ref = ((env.get(variable) or {}).get("valueFrom") or {}).get("secretKeyRef") or {}
+        if (key_ref.get("name"), key_ref.get("key")) != (ref.name, ref.key):
+            problems.append(
+                f"{variable} must come from Secret {ref.name} key {ref.key} "
+                "(a scenario database's token)"
+            )
     return problems
 
 

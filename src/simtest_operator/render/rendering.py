@@ -16,7 +16,7 @@ import jinja2
 import yaml
 
 from simtest_operator.errors import RenderError
-from simtest_operator.render import documents, helmfiles, naming, podchecks
+from simtest_operator.render import documents, helmfiles, naming, podchecks, runspecs
 from simtest_operator.render.inputs import EnvironmentRequest
 from simtest_operator.render.runspecs import RunSpec
 from simtest_operator.render.templates import TemplateLibrary
@@ -66,6 +66,7 @@ def run_spec_for(request: EnvironmentRequest) -> RunSpec:
         sut=request.sut,
         simulator=request.simulator,
         keep_recordings=request.artifacts.keep_recordings,
+        databases=request.source_needs.databases,
     )
 
 
@@ -193,6 +194,7 @@ def _context(request: EnvironmentRequest, run_spec: RunSpec) -> dict[str, Any]:
         "scenarioMount": request.scenario_mount,
         "resultsDsn": dataclasses.asdict(request.results_dsn) if request.results_dsn else None,
         "resultsRunKey": request.results_run_key,
+        **runspecs.source_context(request.source_needs),
     }
     return {
         "env": env,

@@ -59,7 +59,14 @@ from simtest_operator.openscenario import LoadOptions
 from simtest_operator.render import RunSpec, ScenarioRef, messages, runspecs
 from simtest_operator.render.inputs import STARTUP_ALLOWANCE_SECONDS
 from simtest_operator.runner import execution
-from simtest_operator.scenarios import FetchContext, Locator, PinnedScenario
+from simtest_operator.scenarios import (
+    FetchContext,
+    Locator,
+    MountedConfigMaps,
+    PinnedScenario,
+    SecretProvider,
+    SecretRef,
+)
 from simtest_operator.settings import Settings
 from simtest_operator.sim import sumo
 from simtest_operator.verdicts import ScenarioOutcome, Verdict
@@ -73,6 +80,8 @@ if TYPE_CHECKING:
 TERMINATION_LOG = "/dev/termination-log"
 DSN_VAR = "SIMTEST_RESULTS_DSN"
 RUN_KEY_VAR = "SIMTEST_RESULTS_RUN_KEY"
+CONFIG_MAP_ROOT = Path(runspecs.CONFIG_MAP_DIR)
+"""Where the operator mounts the ConfigMaps the pod's scenarios name."""
 DEADLINE_MARGIN_SECONDS = 10.0
 """Time kept free before the pod's activeDeadlineSeconds (pod start precedes the runner's)."""
 
@@ -148,7 +157,9 @@ def run_job(
     termination message there, so a pod killed mid-queue still reports what it finished.
     """
     spec = job.spec
-    locator = Locator(FetchContext(base_dir=Path("/"), cache_dir=job.settings.cache.sources))
+    locator = locator_for(
+        spec, cache=job.settings.cache.sources, env=os.environ, config_maps=CONFIG_MAP_ROOT
+    )
     isolated = spec.isolation == "Reuse" and len(spec.scenarios) > 1 if fork is None else fork
     if isolated and run_one is _run_one:
         warm_up()
@@ -218,6 +229,41 @@ def run_job(
         if progress is not None:
             progress(attempts)
     return attempts
+
+
+def locator_for(
+    spec: RunSpec, *, cache: Path, env: Mapping[str, str], config_maps: Path
+) -> Locator:
+    """The pod's Locator: ConfigMaps from the folders the operator mounts, the run spec's
+    databases, their tokens from the ``secretKeyRef`` variables the template sets
+    (:func:`runspecs.secret_variables`). The pod has no API access: nothing is read from the
+    cluster here."""
+    ctx = FetchContext(
+        base_dir=Path("/"),
+        cache_dir=cache,
+        config_maps=MountedConfigMaps(config_maps),
+        secrets=pod_secrets(spec, env),
+    )
+    return Locator(ctx, graphql_sources=spec.databases)
+
+
+def pod_secrets(spec: RunSpec, env: Mapping[str, str]) -> SecretProvider:
+    """Secret values from the container's variables; a missing one is a SourceError (Error)."""
+    variables = runspecs.secret_variables(spec.databases)
+
+    def provide(ref: SecretRef) -> str:
+        variable = variables.get(ref)
+        if variable is None:
+            raise SourceError(f"Secret {ref.name}/{ref.key} is not one the run spec lists")
+        value = env.get(variable, "").strip()
+        if not value:
+            raise SourceError(
+                f"Secret {ref.name}/{ref.key} is not available in the pod ({variable} is unset: "
+                "the Secret or its key is missing)"
+            )
+        return value
+
+    return provide
 
 
 def warm_up() -> None:

@@ -22,7 +22,7 @@ from simtest_operator.scenarios import selecting
 from simtest_operator.scenarios.batching import ExecutionPolicy
 from simtest_operator.scenarios.pinned import FrozenList, PinnedScenario, sha256_hex
 from simtest_operator.scenarios.resolving import FetchContext
-from simtest_operator.scenarios.specs import GraphqlSource
+from simtest_operator.scenarios.specs import DatabaseSource, GraphqlSource, RestSource
 from simtest_operator.settings import Settings
 from simtest_operator.sim.sut import SutConfig
 from simtest_operator.verdicts import ScenarioOutcome, Verdict
@@ -50,7 +50,8 @@ class Plan:
     run_key: str | None
     policy: ExecutionPolicy
     fetch: FetchContext
-    graphql_sources: tuple[GraphqlSource, ...]
+    graphql_sources: tuple[DatabaseSource, ...]
+    """The scenario databases (GraphQL and REST) asked again for inline items on a resume."""
     settings: Settings
     sut: SutConfig
     record: bool
@@ -74,7 +75,7 @@ def prepare(request: LocalRunRequest, *, now: datetime.datetime) -> Plan:
         secrets=request.secrets,
     )
     selection = converting.selection(spec.scenarios)
-    graphql = tuple(s for s in selection.sources if isinstance(s, GraphqlSource))
+    graphql = tuple(s for s in selection.sources if isinstance(s, GraphqlSource | RestSource))
     resumed = out.exists()
     notes: list[str] = []
     started_at, run_key = now, None

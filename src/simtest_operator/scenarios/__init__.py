@@ -7,6 +7,7 @@ Public API::
     selecting.matches(selector, header_properties)
     FrozenList(campaign=..., scenarios=(PinnedScenario(id=..., source=..., sha256=...), ...))
     Locator(ctx).locate(pinned)            # the local file, sha256 verified
+    needs(uris, selection.sources)         # ConfigMaps and databases a fetcher of uris needs
     batching.plan(frozen.scenarios, batch_size=...)
 
 Reading file headers and expanding parameter distributions belong to the OpenSCENARIO layer above;
@@ -14,7 +15,8 @@ Reading file headers and expanding parameter distributions belong to the OpenSCE
 """
 
 from simtest_operator.scenarios.batching import Batch, Dispatcher, ExecutionPolicy, StartPolicy
-from simtest_operator.scenarios.locating import Locator
+from simtest_operator.scenarios.locating import Locator, Needs, needs
+from simtest_operator.scenarios.mountedconfigmaps import MountedConfigMaps
 from simtest_operator.scenarios.pinned import (
     FrozenList,
     PinnedScenario,
@@ -30,10 +32,12 @@ from simtest_operator.scenarios.resolving import (
 )
 from simtest_operator.scenarios.specs import (
     ConfigMapSource,
+    DatabaseSource,
     GitSource,
     GraphqlSource,
     HttpSource,
     PathSource,
+    RestSource,
     SecretRef,
     Selection,
     Selector,
@@ -45,6 +49,7 @@ __all__ = [
     "Batch",
     "ConfigMapReader",
     "ConfigMapSource",
+    "DatabaseSource",
     "Dispatcher",
     "ExecutionPolicy",
     "FetchContext",
@@ -53,10 +58,13 @@ __all__ = [
     "GraphqlSource",
     "HttpSource",
     "Locator",
+    "MountedConfigMaps",
+    "Needs",
     "PathSource",
     "PinnedScenario",
     "ResolvedSource",
     "ResolvedSourceInfo",
+    "RestSource",
     "SecretProvider",
     "SecretRef",
     "Selection",
@@ -64,6 +72,7 @@ __all__ = [
     "SourceLimits",
     "SourceSpec",
     "StartPolicy",
+    "needs",
     "resolve",
     "sha256_hex",
 ]

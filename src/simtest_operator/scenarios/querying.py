@@ -1,10 +1,13 @@
-"""GraphQL scenario databases: POST the query, read back a list of ``{id, url | content}``.
+"""Scenario databases: ask, read back a list of ``{id, url | content}`` items.
 
-The response is untrusted like any download (bounded, strictly shaped). The list is the one field
-of ``data`` (``{"data": {"scenarios": [...]}}``), or the ``nodes``/``items``/``edges[].node`` of a
-connection object in that field. A bearer token comes from an injected secret provider (a
-Kubernetes Secret in the operator, an environment variable for ``simtest run``) and never appears
-in an error message.
+Two protocols share one item format (and this one parser of it): GraphQL (POST the query; the
+list is the one field of ``data`` — ``{"data": {"scenarios": [...]}}`` — or the
+``nodes``/``items``/``edges[].node`` of a connection object in that field) and REST (GET the URL;
+the list is the document itself or the one ``items``/``scenarios``/``results``/``data`` list of
+an object). The response is untrusted like any download (bounded, strictly shaped). A bearer
+token comes from an injected secret provider (a Kubernetes Secret in the operator, the pod's
+``secretKeyRef`` variable in a simulator pod, an environment variable for ``simtest run``) and
+never appears in an error message.
 """
 
 from __future__ import annotations
@@ -17,15 +20,21 @@ from typing import Any
 
 from simtest_operator.errors import SourceError
 from simtest_operator.scenarios import downloading
-from simtest_operator.scenarios.specs import GraphqlSource, SecretRef, SourceLimits
+from simtest_operator.scenarios.specs import (
+    DatabaseSource,
+    GraphqlSource,
+    RestSource,
+    SecretRef,
+    SourceLimits,
+)
 
 SecretProvider = Callable[[SecretRef], str]
 """Returns the value of a Secret key; raises SourceError when it is not available."""
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
-class GraphqlItem:
-    """One scenario named by the database."""
+class DatabaseItem:
+    """One scenario named by a database (GraphQL or REST)."""
 
     id: str
     url: str | None = None
@@ -34,36 +43,49 @@ class GraphqlItem:
     """The .xosc file inline."""
 
 
+REST_LIST_FIELDS = ("items", "scenarios", "results", "data")
+"""Fields of a REST response object that may hold the item list (exactly one of them must)."""
+
+
+def location(source: DatabaseSource) -> str:
+    """The URL a database source is asked at (and its inline items are pinned under)."""
+    return source.endpoint if isinstance(source, GraphqlSource) else source.url
+
+
 def query(
-    source: GraphqlSource,
+    source: DatabaseSource,
     *,
     limits: SourceLimits,
     scratch: Path,
     secrets: SecretProvider | None,
-) -> tuple[GraphqlItem, ...]:
-    """Run the source's query and return its items in response order."""
-    headers = {"Content-Type": "application/json", "Accept": "application/json"}
+) -> tuple[DatabaseItem, ...]:
+    """Ask the database and return its items in response order."""
+    where = location(source)
+    headers = {"Accept": "application/json"}
     if source.secret is not None:
         if secrets is None:
             raise SourceError(
-                f"{source.endpoint}: the source needs Secret {source.secret.name}/"
+                f"{where}: the source needs Secret {source.secret.name}/"
                 f"{source.secret.key}, but no secret provider is configured"
             )
         headers["Authorization"] = f"Bearer {secrets(source.secret)}"
-    body = json.dumps({"query": source.query, "variables": dict(source.variables)}).encode()
-    raw = downloading.fetch_bytes(
-        source.endpoint, limits=limits, scratch=scratch, data=body, headers=headers
-    )
+    body: bytes | None = None
+    if isinstance(source, GraphqlSource):
+        headers["Content-Type"] = "application/json"
+        body = json.dumps({"query": source.query, "variables": dict(source.variables)}).encode()
+    raw = downloading.fetch_bytes(where, limits=limits, scratch=scratch, data=body, headers=headers)
     try:
         document = json.loads(raw)
     except (ValueError, UnicodeDecodeError) as exc:
-        raise SourceError(f"{source.endpoint}: response is not JSON ({exc})") from exc
-    return parse_response(document, endpoint=source.endpoint, limits=limits)
+        raise SourceError(f"{where}: response is not JSON ({exc})") from exc
+    if isinstance(source, RestSource):
+        return parse_items(_rest_list(document, where), endpoint=where, limits=limits)
+    return parse_response(document, endpoint=where, limits=limits)
 
 
 def parse_response(
     document: Any, *, endpoint: str, limits: SourceLimits
-) -> tuple[GraphqlItem, ...]:
+) -> tuple[DatabaseItem, ...]:
     """The items of a GraphQL response document; SourceError when it has errors or no list."""
     if not isinstance(document, Mapping):
         raise SourceError(f"{endpoint}: response must be a JSON object")
@@ -74,10 +96,17 @@ def parse_response(
             for e in (errors if isinstance(errors, list) else [errors])
         ]
         raise SourceError(f"{endpoint}: query failed: {'; '.join(messages[:3])}")
-    rows = _the_list(document.get("data"), endpoint)
+    return parse_items(_the_list(document.get("data"), endpoint), endpoint=endpoint, limits=limits)
+
+
+def parse_items(
+    rows: list[Any], *, endpoint: str, limits: SourceLimits
+) -> tuple[DatabaseItem, ...]:
+    """The ``{id, url | content}`` items of a database's list, ids unique; SourceError naming the
+    item otherwise."""
     if len(rows) > limits.max_files:
         raise SourceError(f"{endpoint}: more than {limits.max_files} scenarios in the response")
-    items: list[GraphqlItem] = []
+    items: list[DatabaseItem] = []
     seen: set[str] = set()
     for index, row in enumerate(rows):
         item = _item(row, index=index, endpoint=endpoint)
@@ -104,7 +133,25 @@ def _the_list(data: Any, endpoint: str) -> list[Any]:
     raise SourceError(f"{endpoint}: the field in 'data' is not a list (or a connection)")
 
 
-def _item(row: Any, *, index: int, endpoint: str) -> GraphqlItem:
+def _rest_list(document: Any, endpoint: str) -> list[Any]:
+    if isinstance(document, list):
+        return document
+    if isinstance(document, Mapping):
+        found = [k for k in REST_LIST_FIELDS if isinstance(document.get(k), list)]
+        if len(found) == 1:
+            return list(document[found[0]])
+        if len(found) > 1:
+            raise SourceError(
+                f"{endpoint}: response has several item lists ({', '.join(found)}); "
+                "expected exactly one"
+            )
+    raise SourceError(
+        f"{endpoint}: response must be a JSON list of scenarios or an object with one of the "
+        f"list fields {', '.join(REST_LIST_FIELDS)}"
+    )
+
+
+def _item(row: Any, *, index: int, endpoint: str) -> DatabaseItem:
     where = f"{endpoint}: item {index}"
     if not isinstance(row, Mapping):
         raise SourceError(f"{where} is not an object")
@@ -118,7 +165,7 @@ def _item(row: Any, *, index: int, endpoint: str) -> GraphqlItem:
         if not isinstance(url, str):
             raise SourceError(f"{where} ({ident}) has a non-string 'url'")
         downloading.check_http_url(url)
-        return GraphqlItem(id=str(ident), url=url)
+        return DatabaseItem(id=str(ident), url=url)
     if not isinstance(content, str):
         raise SourceError(f"{where} ({ident}) has a non-string 'content'")
-    return GraphqlItem(id=str(ident), content=content.encode("utf-8"))
+    return DatabaseItem(id=str(ident), content=content.encode("utf-8"))

@@ -25,6 +25,7 @@ from simtest_operator.scenarios.specs import (
     GraphqlSource,
     HttpSource,
     PathSource,
+    RestSource,
     SourceLimits,
     SourceSpec,
 )
@@ -82,8 +83,8 @@ def resolve(source: SourceSpec, ctx: FetchContext) -> ResolvedSource:
         return _git(source, ctx)
     if isinstance(source, HttpSource):
         return _http(source, ctx)
-    if isinstance(source, GraphqlSource):
-        return _graphql(source, ctx)
+    if isinstance(source, GraphqlSource | RestSource):
+        return _database(source, ctx)
     return _configmap(source, ctx)
 
 
@@ -204,8 +205,13 @@ def _http(source: HttpSource, ctx: FetchContext) -> ResolvedSource:
     return ResolvedSource(info=info, root=body.root, files=files, uris=mapping)
 
 
-def _graphql(source: GraphqlSource, ctx: FetchContext) -> ResolvedSource:
-    scratch_parent = ctx.cache_dir / "graphql"
+def _database(source: GraphqlSource | RestSource, ctx: FetchContext) -> ResolvedSource:
+    """Query a scenario database: items with a URL are downloaded and pinned by that URL, inline
+    items are pinned under the database (``graphql+``/``rest+``), so a fetcher asks it again."""
+    where = querying.location(source)
+    graphql = isinstance(source, GraphqlSource)
+    kind = "graphql" if graphql else "rest"
+    scratch_parent = ctx.cache_dir / kind
     scratch_parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(dir=scratch_parent) as scratch:
         items = querying.query(
@@ -214,15 +220,24 @@ def _graphql(source: GraphqlSource, ctx: FetchContext) -> ResolvedSource:
         staging = Path(scratch) / "root"
         mapping: dict[str, str] = {}
         for item in items:
-            rel = graphql_file_name(item.id, source.endpoint)
+            rel = graphql_file_name(item.id, where)
+            if rel in mapping:
+                raise SourceError(f"{where}: items {item.id!r} and another share the file {rel}")
             target = staging / rel
             target.parent.mkdir(parents=True, exist_ok=True)
             if item.url is not None:
                 downloading.download(item.url, target, limits=ctx.limits)
                 mapping[rel] = uris.http_uri(item.url)
             else:
-                target.write_bytes(item.content or b"")
-                mapping[rel] = uris.graphql_uri(source.endpoint, item.id)
+                content = item.content or b""
+                if len(content) > ctx.limits.max_scenario_bytes:
+                    raise SourceError(
+                        f"{where}: item {item.id!r} is larger than "
+                        f"{ctx.limits.max_scenario_bytes} bytes"
+                    )
+                target.write_bytes(content)
+                inline = uris.graphql_uri if graphql else uris.rest_uri
+                mapping[rel] = inline(where, item.id)
         staging.mkdir(exist_ok=True)
         listing = "\n".join(
             f"{rel} {mapping[rel]} {sha256_hex((staging / rel).read_bytes())}"
@@ -232,7 +247,7 @@ def _graphql(source: GraphqlSource, ctx: FetchContext) -> ResolvedSource:
         if not root.is_dir():
             _publish(staging, root)
     files = tuple(sorted(mapping))
-    info = ResolvedSourceInfo(kind="graphql", location=source.endpoint, files=len(files))
+    info = ResolvedSourceInfo(kind=kind, location=where, files=len(files))
     return ResolvedSource(info=info, root=root, files=files, uris=mapping)
 
 

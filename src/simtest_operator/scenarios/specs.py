@@ -61,6 +61,20 @@ class GraphqlSource:
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class RestSource:
+    """A scenario database answering a GET with JSON: a list of ``{id, url | content}`` items,
+    top-level or in the one ``items``/``scenarios``/``results``/``data`` field of an object."""
+
+    url: str
+    secret: SecretRef | None = None
+    """Bearer token for the endpoint."""
+
+
+DatabaseSource = GraphqlSource | RestSource
+"""A scenario database: queried once to resolve, and again by whoever fetches an inline item."""
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
 class ConfigMapSource:
     """Scenario files stored as ConfigMap keys; reading them needs a cluster."""
 
@@ -69,7 +83,7 @@ class ConfigMapSource:
     """Keys to use; empty means every key ending in ``.xosc``."""
 
 
-SourceSpec = PathSource | GitSource | HttpSource | GraphqlSource | ConfigMapSource
+SourceSpec = PathSource | GitSource | HttpSource | GraphqlSource | RestSource | ConfigMapSource
 """Exactly one kind of location."""
 
 
@@ -106,7 +120,7 @@ class SourceLimits:
     """Bounds on what an untrusted source may make us download, extract or list."""
 
     max_download_bytes: int = 256 * 1024 * 1024
-    """Largest HTTP body (archive, file or GraphQL response) we read."""
+    """Largest HTTP body (archive, file, GraphQL or REST response) we read."""
     max_archive_members: int = 20_000
     """Most entries an archive may hold (files, folders and links together)."""
     max_extracted_bytes: int = 1024 * 1024 * 1024

@@ -8,7 +8,8 @@ bytes again, so a URI carries everything resolution decided (the git commit, the
 ``git+https://host/repo.git@<commit>#<path>``  a file in a repository at a commit (40 hex digits)
 ``https://host/suite.tgz#<member>``            a member of an HTTP archive
 ``https://host/a.xosc``                        a single file over HTTP (no fragment)
-``graphql+https://host/graphql#<item id>``     inline content of a scenario-database item
+``graphql+https://host/graphql#<item id>``     inline content of a GraphQL database item
+``rest+https://host/api/scenarios#<item id>``  inline content of a REST database item
 ``configmap:<name>/<key>``                     a key of a ConfigMap in the campaign's namespace
 =============================================  ==================================================
 
@@ -54,9 +55,17 @@ class HttpUri:
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
 class GraphqlUri:
-    """Inline content of one scenario-database item."""
+    """Inline content of one GraphQL database item."""
 
     endpoint: str
+    item: str
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class RestUri:
+    """Inline content of one REST database item; ``url`` is the source's URL (query included)."""
+
+    url: str
     item: str
 
 
@@ -68,7 +77,7 @@ class ConfigMapUri:
     key: str
 
 
-SourceUri = FileUri | GitUri | HttpUri | GraphqlUri | ConfigMapUri
+SourceUri = FileUri | GitUri | HttpUri | GraphqlUri | RestUri | ConfigMapUri
 
 
 def _quote(text: str) -> str:
@@ -96,6 +105,11 @@ def graphql_uri(endpoint: str, item: str) -> str:
     return f"graphql+{endpoint}#{_quote(item)}"
 
 
+def rest_uri(url: str, item: str) -> str:
+    """URI of the inline content of item ``item`` of the REST source at ``url``."""
+    return f"rest+{url.split('#', 1)[0]}#{_quote(item)}"
+
+
 def configmap_uri(name: str, key: str) -> str:
     """URI of a ConfigMap key."""
     return f"configmap:{name}/{_quote(key)}"
@@ -114,6 +128,11 @@ def parse(uri: str) -> SourceUri:
         if not endpoint.startswith(("http://", "https://")) or not item:
             raise SourceError(f"malformed graphql source URI {uri!r}")
         return GraphqlUri(endpoint=endpoint, item=urllib.parse.unquote(item))
+    if uri.startswith("rest+"):
+        url, _, item = uri.removeprefix("rest+").partition("#")
+        if not url.startswith(("http://", "https://")) or not item:
+            raise SourceError(f"malformed rest source URI {uri!r} (rest+URL#ITEM expected)")
+        return RestUri(url=url, item=urllib.parse.unquote(item))
     if uri.startswith("configmap:"):
         name, _, key = uri.removeprefix("configmap:").partition("/")
         if not name or not key:

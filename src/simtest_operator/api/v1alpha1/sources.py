@@ -13,13 +13,14 @@ from pydantic import Field, StringConstraints, model_validator
 
 from simtest_operator.api.v1alpha1.common import ApiModel, DnsLabel, SecretKeyRef, cel
 
-SOURCE_KINDS = ("path", "configMap", "git", "http", "graphql")
+SOURCE_KINDS = ("path", "configMap", "git", "http", "graphql", "rest")
 
 NonEmpty = Annotated[str, StringConstraints(min_length=1, max_length=4096)]
 MAX_PATTERNS = 256
 """Glob patterns per include/exclude list: every file of every source is matched against each
 one, so an unbounded list is unbounded work (and API server storage)."""
 Url = Annotated[str, StringConstraints(pattern=r"^(https?|file|ssh|git)://.+", max_length=4096)]
+HttpUrl = Annotated[str, StringConstraints(pattern=r"^https?://[^#]+$", max_length=4096)]
 
 
 class ConfigMapSource(ApiModel):
@@ -64,13 +65,24 @@ class GraphqlSource(ApiModel):
     """Secret key holding a bearer token for the endpoint."""
 
 
+class RestSource(ApiModel):
+    """A scenario database answering a GET with JSON: a list of scenarios, or an object with one
+    list field (``items``, ``scenarios``, ``results`` or ``data``); each item has ``id`` and
+    ``url`` (downloaded) or ``content`` (the .xosc inline)."""
+
+    url: HttpUrl
+    """The URL to GET, query string included (no fragment)."""
+    secret_ref: SecretKeyRef | None = None
+    """Secret key holding a bearer token for the URL."""
+
+
 class ScenarioSource(ApiModel):
     """One location of scenario files. Exactly one of the fields must be set."""
 
     cel_rules: ClassVar[tuple[dict[str, str], ...]] = (
         cel(
             " + ".join(f"(has(self.{kind}) ? 1 : 0)" for kind in SOURCE_KINDS) + " == 1",
-            "exactly one of path, configMap, git, http or graphql must be set",
+            "exactly one of path, configMap, git, http, graphql or rest must be set",
         ),
     )
 
@@ -85,6 +97,8 @@ class ScenarioSource(ApiModel):
     """An archive or file downloaded over HTTP(S)."""
     graphql: GraphqlSource | None = None
     """A scenario database queried with GraphQL."""
+    rest: RestSource | None = None
+    """A scenario database read with a GET of JSON (REST)."""
 
     @model_validator(mode="after")
     def _exactly_one_kind(self) -> ScenarioSource:
@@ -92,7 +106,8 @@ class ScenarioSource(ApiModel):
         if len(chosen) != 1:
             found = ", ".join(chosen) if chosen else "none"
             raise ValueError(
-                f"exactly one of path, configMap, git, http or graphql must be set (found: {found})"
+                "exactly one of path, configMap, git, http, graphql or rest must be set "
+                f"(found: {found})"
             )
         return self
 
