@@ -311,7 +311,7 @@ def test_every_action_kind(rich: model.Scenario) -> None:
         "SetValueAction",
         "ModifyValueAction",
         "ModifyValueAction",
-        "Ignored:EnvironmentAction",
+        "EnvironmentAction",
         "TrafficSignalStateAction",
     ]
     speed, distance, sync, modify = bodies[1], bodies[2], bodies[9], bodies[17]
@@ -341,10 +341,9 @@ def test_every_action_kind(rich: model.Scenario) -> None:
         line=modify.line,
     )
     assert all(event.maximum_execution_count == 2 for event in _events(rich))
+    line = rich.storyboard.init.global_actions[0].line
     assert rich.storyboard.init.global_actions == (
-        model.IgnoredAction(
-            kind="EnvironmentAction", line=rich.storyboard.init.global_actions[0].line
-        ),
+        model.EnvironmentAction(environment=model.Environment(name="e", line=line), line=line),
     )
 
 

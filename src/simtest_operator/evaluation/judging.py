@@ -1,7 +1,8 @@
 """Judging: turn what a run produced into one verdict with a one-line reason and its metrics.
 
 Precedence, most specific first: a scenario the engine could not run is ``Invalid``; broken
-infrastructure is ``Error``; a violated criterion is ``Failed`` (even if the run also ran out of
+infrastructure is ``Error``; a violated criterion (the campaign's, or one of the scenario's own
+ScenarioRunner criteria) is ``Failed`` (even if the run also ran out of
 time, the violation is the more useful news); a storyboard that did not complete within the time
 limit is ``Timeout``; everything else ``Passed``.
 """
@@ -12,6 +13,7 @@ import dataclasses
 import math
 from collections.abc import Mapping
 
+from simtest_operator.evaluation.carla_criteria import Outcome, Status
 from simtest_operator.evaluation.online import OnlineEvaluator
 from simtest_operator.verdicts import Verdict
 
@@ -49,34 +51,71 @@ def judge(evaluator: OnlineEvaluator, facts: RunFacts) -> Judgement:
     if facts.wall_seconds > 0.0 and facts.simulated_seconds > 0.0:
         metrics["realTimeFactor"] = round(facts.simulated_seconds / facts.wall_seconds, 2)
     metrics["ignoredElements"] = float(len(facts.ignored_elements))
+    outcomes = evaluator.criterion_outcomes()
+    metrics.update(_outcome_metrics(evaluator, outcomes))
     metrics = {key: value for key, value in metrics.items() if math.isfinite(value)}
     if facts.invalid_reason is not None:
         return Judgement(verdict=Verdict.INVALID, reason=facts.invalid_reason, metrics=metrics)
     if facts.error_reason is not None:
         return Judgement(verdict=Verdict.ERROR, reason=facts.error_reason, metrics=metrics)
-    violations = evaluator.violations
-    if violations:
-        reason = violations[0].message
-        if len(violations) > 1:
-            others = ", ".join(v.criterion for v in violations[1:])
-            reason += f" (+{len(violations) - 1} more: {others})"
-        return Judgement(verdict=Verdict.FAILED, reason=reason, metrics=metrics)
+    summary = _summary(outcomes)
+    failures = sorted(
+        [(v.time, v.criterion, v.message) for v in evaluator.violations]
+        + [
+            (
+                o.time if o.time is not None else facts.simulated_seconds,
+                f"criteria_{o.name}",
+                f"criteria_{o.name} failed: {o.detail}",
+            )
+            for o in outcomes
+            if o.status is Status.FAILED
+        ],
+        key=lambda failure: failure[0],
+    )
+    if failures:
+        reason = failures[0][2]
+        if len(failures) > 1:
+            others = ", ".join(name for _, name, _ in failures[1:])
+            reason += f" (+{len(failures) - 1} more: {others})"
+        return Judgement(verdict=Verdict.FAILED, reason=reason + summary, metrics=metrics)
     if facts.wall_limit_hit:
         return Judgement(
             verdict=Verdict.TIMEOUT,
             reason=f"wall-clock limit reached after {facts.wall_seconds:.1f} s "
-            f"({facts.simulated_seconds:.2f} s simulated)",
+            f"({facts.simulated_seconds:.2f} s simulated)" + summary,
             metrics=metrics,
         )
     if not facts.storyboard_complete:
         return Judgement(
             verdict=Verdict.TIMEOUT,
             reason=f"storyboard not complete within {evaluator.criteria.time_limit:g} s "
-            "simulated time",
+            "simulated time" + summary,
             metrics=metrics,
         )
     return Judgement(
         verdict=Verdict.PASSED,
-        reason=f"storyboard complete at t={facts.simulated_seconds:.2f} s, all criteria held",
+        reason=f"storyboard complete at t={facts.simulated_seconds:.2f} s, all criteria held"
+        + summary,
         metrics=metrics,
     )
+
+
+def _outcome_metrics(evaluator: OnlineEvaluator, outcomes: tuple[Outcome, ...]) -> dict[str, float]:
+    """``criteria.<Test>`` = 1 (passed) / 0 (failed) per evaluated criterion, and the driven
+    distance when a criterion needs it."""
+    metrics = {
+        f"criteria.{o.name}": 1.0 if o.status is Status.PASSED else 0.0
+        for o in outcomes
+        if o.status is not Status.NOT_EVALUATED
+    }
+    checks = evaluator.scenario_criteria
+    if checks is not None and "DrivenDistanceTest" in checks.names:
+        metrics["drivenDistance"] = round(checks.driven_distance, 2)
+    return metrics
+
+
+def _summary(outcomes: tuple[Outcome, ...]) -> str:
+    """``; ScenarioRunner criteria: CollisionTest passed, ...`` (empty without criteria)."""
+    if not outcomes:
+        return ""
+    return "; ScenarioRunner criteria: " + ", ".join(o.describe() for o in outcomes)

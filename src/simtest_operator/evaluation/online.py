@@ -13,6 +13,7 @@ import math
 from collections.abc import Callable
 
 from simtest_operator import geometry
+from simtest_operator.evaluation.carla_criteria import Outcome, ScenarioCriteria
 from simtest_operator.evaluation.criteria import Criteria
 from simtest_operator.snapshots import BoundingBox, EntityState, WorldSnapshot
 
@@ -57,14 +58,22 @@ class OnlineEvaluator:
         "_min_ttc",
         "_off_road",
         "_radii",
+        "_scenario_criteria",
         "_steps",
         "_violations",
     )
 
     def __init__(
-        self, criteria: Criteria, *, ego: str | None, off_road: OffRoadCheck | None = None
+        self,
+        criteria: Criteria,
+        *,
+        ego: str | None,
+        off_road: OffRoadCheck | None = None,
+        scenario_criteria: ScenarioCriteria | None = None,
     ) -> None:
         self._criteria = criteria
+        self._scenario_criteria = scenario_criteria
+        """The scenario's own tests (CARLA ScenarioRunner ``criteria_*``), judged alongside."""
         self._ego = ego
         self._off_road = off_road
         self._violations: dict[str, Violation] = {}
@@ -98,6 +107,22 @@ class OnlineEvaluator:
         """Every pair of entities that touched (not only the ego), first contact each."""
         return tuple(self._collisions)
 
+    @property
+    def scenario_criteria(self) -> ScenarioCriteria | None:
+        return self._scenario_criteria
+
+    def criterion_outcomes(self) -> tuple[Outcome, ...]:
+        """Outcomes of the scenario's own criteria so far (empty without any)."""
+        if self._scenario_criteria is None:
+            return ()
+        ego = self._ego
+        hits = [
+            (c.second if c.first == ego else c.first, c.time)
+            for c in self._collisions
+            if ego in (c.first, c.second)
+        ]
+        return self._scenario_criteria.outcomes(ego=ego, collided_with=hits)
+
     def observe(self, snapshot: WorldSnapshot) -> None:
         """Update metrics and violations with one snapshot."""
         self._steps += 1
@@ -106,6 +131,8 @@ class OnlineEvaluator:
         centres = [state.box_center() for state in entities]
         self._check_collisions(snapshot.time, entities, radii, centres)
         ego = snapshot.entity(self._ego) if self._ego is not None else None
+        if self._scenario_criteria is not None:
+            self._scenario_criteria.observe(snapshot.time, ego)
         if ego is None:
             return
         ego_radius = self._radius_of(ego)

@@ -19,7 +19,7 @@ import dataclasses
 import datetime
 import math
 import operator
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from types import TracebackType
 from typing import BinaryIO
@@ -34,6 +34,8 @@ GROUND_TRUTH_TOPIC = "ground_truth"
 MAP_TOPIC = "ground_truth_map"
 OSI_TRACE_METADATA = "net.asam.osi.trace"
 RUN_METADATA = "simtest.run"
+ENVIRONMENT_METADATA = "simtest.environment"
+"""One metadata record per environment the scenario set (time, name, Element.attribute settings)."""
 _OSI_VERSION = ".".join(str(part) for part in osiwire.OSI_VERSION)
 _PROTOBUF_VERSION = "7.0.0"  # what betterosi declares for the OSI protobuf files
 _REISSUED_ID_BASE = 1_000_000_000
@@ -286,6 +288,14 @@ class Recorder:
             return
         data = osiwire.map_message(self._map_reference, self._map)
         self._writer.add_message(self._map_channel, log_time=nanos, data=data, publish_time=nanos)
+
+    def add_environment(self, time: float, name: str, settings: Sequence[tuple[str, str]]) -> None:
+        """Record an environment the scenario set at ``time`` (weather, time of day) as an MCAP
+        metadata record: the stand-in renders none, the recording says what was asked."""
+        if self._file is None:
+            return
+        data = {"time": f"{time:g}", "name": name, **dict(settings)}
+        self._writer.add_metadata(ENVIRONMENT_METADATA, data)
 
     def close(self) -> None:
         """Finish the file (summary and index); safe to call twice."""

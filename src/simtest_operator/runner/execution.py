@@ -134,7 +134,12 @@ def run_scenario(request: RunRequest) -> RunReport:
         f"{opened.net_seconds:.2f} s); ego {simulation.ego}"
     )
     evaluator = evaluation.OnlineEvaluator(
-        request.criteria, ego=simulation.ego, off_road=simulation.off_road
+        request.criteria,
+        ego=simulation.ego,
+        off_road=simulation.off_road,
+        scenario_criteria=evaluation.ScenarioCriteria.of(
+            opened.scenario, roads=simulation.world.roads
+        ),
     )
     samples = _Samples()
     recorder = None
@@ -176,6 +181,10 @@ def run_scenario(request: RunRequest) -> RunReport:
     finally:
         link.close()
         simulation.close()
+        for at, env in simulation.environments:
+            log.append(f"environment {env.name} at t={at:g} s (recorded, not rendered)")
+            if recorder is not None:
+                recorder.add_environment(at, env.name, env.settings)
         if recorder is not None:
             recorder.close()
     wall = time.perf_counter() - started

@@ -17,7 +17,7 @@ from collections.abc import Callable, Sequence
 
 from simtest_operator.errors import ScenarioError
 from simtest_operator.openscenario import model
-from simtest_operator.sim import positions, routes, routing
+from simtest_operator.sim import carla, positions, routes, routing
 from simtest_operator.sim.actors import Actor, Domain, Mode
 from simtest_operator.sim.backends import TrafficHost
 from simtest_operator.sim.following import DistanceRun, SynchronizeRun
@@ -41,7 +41,16 @@ _SUT_LONGITUDINAL = (
 class Dispatcher:
     """Starts actions on actors and keeps the per-actor, per-domain registry of runs."""
 
-    __slots__ = ("_active", "_ego", "_host", "_switch", "_traffic", "_world", "assigned")
+    __slots__ = (
+        "_active",
+        "_carla",
+        "_ego",
+        "_host",
+        "_switch",
+        "_traffic",
+        "_world",
+        "assigned",
+    )
 
     def __init__(
         self,
@@ -51,8 +60,11 @@ class Dispatcher:
         switch: ControllerSwitch,
         traffic: Traffic | None = None,
         host: TrafficHost | None = None,
+        carla_conventions: bool = False,
     ) -> None:
         self._world = world
+        self._carla = carla_conventions
+        """The file is CARLA ScenarioRunner's (``CARLA:`` header): its controller conventions."""
         self._traffic = traffic if traffic is not None else Traffic(seed=0)
         self._host = host
         self._ego = ego
@@ -128,12 +140,32 @@ class Dispatcher:
             # Traffic persists after its action completes, until a TrafficStopAction.
             self._traffic.start(world, self._host, body)
             return Done()
+        if isinstance(body, model.AddEntityAction):
+            actor = world.actor(body.entity_ref)
+            actor.speed = 0.0
+            self.teleport(actor, positions.resolve(world, body.position))
+            return Done(actor)
+        if isinstance(body, model.DeleteEntityAction):
+            self.remove(world.actor(body.entity_ref))
+            return Done()
+        if isinstance(body, model.EnvironmentAction):
+            world.environments.append((world.time, body.environment))
+            return Done()
         if isinstance(body, model.IgnoredAction):
             self._ignore(body.kind)
             return Done()
         if isinstance(body, model.Unsupported):
             raise positions.unsupported(body)
         raise ScenarioError(f"{type(body).__name__} is not a global action")
+
+    def remove(self, actor: Actor) -> None:
+        """Take ``actor`` out of the world (DeleteEntityAction): its actions stop, it has no pose
+        in the snapshots and no part in conditions until an AddEntityAction brings it back."""
+        for run in self._active.pop(actor.name, {}).values():
+            run.cancel()
+        actor.placed = False
+        actor.speed = 0.0
+        actor.driver = None
 
     def start_private(self, actor: Actor, body: model.AnyAction) -> Run:
         world = self._world
@@ -154,8 +186,7 @@ class Dispatcher:
             controller = body.controller
             if isinstance(controller, model.Unsupported):
                 raise positions.unsupported(controller)
-            self.assigned.setdefault((actor.name, controller.name), None)
-            self._activate(actor, body.activate_longitudinal, body.activate_lateral)
+            self._assign(actor, controller, body)
             return Done(actor)
         if isinstance(body, model.AssignRouteAction):
             route = body.route
@@ -245,7 +276,26 @@ class Dispatcher:
             path.cancel()
             world.attach(actor)
 
+    def _assign(
+        self, actor: Actor, controller: model.Controller, body: model.AssignControllerAction
+    ) -> None:
+        """Assign a controller; ScenarioRunner's controller modules map to built-in drivers."""
+        module = carla.module_of(controller)
+        if module is carla.Module.NPC and actor.name != self._ego:
+            return  # lane following at the SpeedActions' speed: what the engine does anyway
+        if module is carla.Module.AUTOPILOT and actor.name != self._ego:
+            carla.autopilot(actor, on=body.activate_longitudinal is not False)
+            return
+        self.assigned.setdefault((actor.name, controller.name), None)
+        self._activate(actor, body.activate_longitudinal, body.activate_lateral)
+        if module is carla.Module.EXTERNAL and actor.driver is not None:
+            carla.start_moving(actor.driver)
+
     def _activate(self, actor: Actor, longitudinal: bool | None, lateral: bool | None) -> None:
+        if actor.name != self._ego and self._carla:
+            # ScenarioRunner: ActivateControllerAction switches an actor's CARLA autopilot.
+            carla.autopilot(actor, on=longitudinal is not False or lateral is True)
+            return
         if actor.name != self._ego:
             controller = actor.obj.controller
             name = controller.name if isinstance(controller, model.Controller) else "controller"

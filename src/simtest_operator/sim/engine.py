@@ -19,7 +19,8 @@ from __future__ import annotations
 from simtest_operator.errors import ScenarioError
 from simtest_operator.opendrive import RoadNetwork
 from simtest_operator.openscenario import model
-from simtest_operator.sim import motion, perception
+from simtest_operator.openscenario.loading import CARLA_PREFIX
+from simtest_operator.sim import carla, motion, perception
 from simtest_operator.sim.actors import Actor, Domain, Mode
 from simtest_operator.sim.backends import ActorSpec, Backend, BackendConfig
 from simtest_operator.sim.conditions import Conditions
@@ -94,14 +95,16 @@ class Simulation:
             variables={v.name: v.value for v in scenario.variables},
         )
         self._traffic = Traffic(seed=backend_config.seed)
+        header = scenario.header
+        scenario_runner = header.description.startswith(CARLA_PREFIX)
         self._dispatcher = Dispatcher(
             self.world,
             ego=self.ego,
             switch=self._switch_driver,
             traffic=self._traffic,
             host=backend.traffic(),
+            carla_conventions=scenario_runner,
         )
-        header = scenario.header
         self._conditions = Conditions(
             self.world,
             self._state_query,
@@ -111,6 +114,7 @@ class Simulation:
             scenario.storyboard,
             raw=self._conditions,
             start_action=self._dispatcher.start,
+            scenario_runner=scenario_runner,
         )
         self._steps = 0
         self._external_ids: dict[str, int] = {}
@@ -154,6 +158,11 @@ class Simulation:
         if self._backend_config.sumo_config is not None:
             labels.append("SUMO background traffic")
         return tuple(labels)
+
+    @property
+    def environments(self) -> tuple[tuple[float, model.Environment], ...]:
+        """Environments the scenario set (time, environment): recorded, not rendered."""
+        return tuple(self.world.environments)
 
     def off_road(self, state: EntityState) -> bool:
         """Whether an entity is off the drivable road (for the online evaluation)."""
@@ -241,6 +250,12 @@ class Simulation:
             takeover is Takeover.ON_CONTROLLER and has_controller
         ):
             self._switch_driver(ego, True)
+        controller = ego.obj.controller
+        external = isinstance(controller, model.Controller) and (
+            carla.module_of(controller) is carla.Module.EXTERNAL
+        )
+        if external and ego.driver is not None:
+            carla.start_moving(ego.driver)
 
     def _switch_driver(self, actor: Actor, engage: bool) -> None:
         if self._sut.takeover is Takeover.NEVER or actor.name != self.ego:
@@ -262,7 +277,7 @@ class Simulation:
         driver = actor.driver
         if longitudinal is not None:
             longitudinal.step(world, dt)
-        elif driver is not None and self._pilot is not None:
+        elif driver is not None and self._pilot is not None and actor.name == self.ego:
             view = PilotView(
                 snapshot=self._snapshot, ego_id=actor.id, set_speed=driver.set_speed, dt=dt
             )

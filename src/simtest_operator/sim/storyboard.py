@@ -87,6 +87,7 @@ class Node:
         start: model.Trigger | None = None,
         stop: model.Trigger | None = None,
         max_executions: int = 1,
+        level: bool = False,
     ) -> None:
         self.kind = kind
         self.name = name
@@ -95,8 +96,10 @@ class Node:
         self.phase = Phase.STANDBY
         # An empty <StartTrigger/> starts at once, as if it were absent (esmini does the same);
         # an empty stop trigger never fires.
-        self.start = TriggerState(start if start is not None and start.condition_groups else None)
-        self.stop = TriggerState(stop) if stop is not None else None
+        self.start = TriggerState(
+            start if start is not None and start.condition_groups else None, level=level
+        )
+        self.stop = TriggerState(stop, level=level) if stop is not None else None
         self.executions = 0
         self.max_executions = max(1, max_executions)
         self.runs: tuple[ActionRun, ...] = ()
@@ -108,7 +111,7 @@ class Node:
             yield from child.walk()
 
 
-def _build_event(event: model.Event) -> Node:
+def _build_event(event: model.Event, level: bool) -> Node:
     actions = [Node(Kind.ACTION, a.name, a) for a in event.actions]
     return Node(
         Kind.EVENT,
@@ -117,16 +120,17 @@ def _build_event(event: model.Event) -> Node:
         children=actions,
         start=event.start_trigger,
         max_executions=event.maximum_execution_count,
+        level=level,
     )
 
 
-def _build_story(story: model.Story) -> Node:
+def _build_story(story: model.Story, level: bool) -> Node:
     acts = []
     for act in story.acts:
         groups = []
         for group in act.maneuver_groups:
             maneuvers = [
-                Node(Kind.MANEUVER, m.name, m, children=[_build_event(e) for e in m.events])
+                Node(Kind.MANEUVER, m.name, m, children=[_build_event(e, level) for e in m.events])
                 for m in group.maneuvers
             ]
             groups.append(
@@ -146,6 +150,7 @@ def _build_story(story: model.Story) -> Node:
                 children=groups,
                 start=act.start_trigger,
                 stop=act.stop_trigger,
+                level=level,
             )
         )
     return Node(Kind.STORY, story.name, story, children=acts)
@@ -157,6 +162,7 @@ class Storyboard:
     __slots__ = (
         "_by_name",
         "_complete",
+        "_end_with_stories",
         "_fired",
         "_pending",
         "_raw",
@@ -168,13 +174,22 @@ class Storyboard:
     )
 
     def __init__(
-        self, storyboard: model.Storyboard, *, raw: RawCondition, start_action: ActionStarter
+        self,
+        storyboard: model.Storyboard,
+        *,
+        raw: RawCondition,
+        start_action: ActionStarter,
+        scenario_runner: bool = False,
     ) -> None:
         self._raw = raw
         self._start_action = start_action
-        self._stories = tuple(_build_story(story) for story in storyboard.stories)
-        self._stop = TriggerState(storyboard.stop_trigger)
-        self._stop_defined = storyboard.stop_trigger is not None
+        self._stories = tuple(_build_story(story, scenario_runner) for story in storyboard.stories)
+        stop = storyboard.stop_trigger
+        self._stop = TriggerState(stop, level=scenario_runner)
+        # A stop trigger that held only ScenarioRunner criteria is no stop trigger.
+        self._stop_defined = stop is not None and bool(stop.condition_groups or not stop.criteria)
+        # ScenarioRunner ends a scenario when its stories are done or its stop trigger fires.
+        self._end_with_stories = scenario_runner or not self._stop_defined
         self._complete = False
         self._fired: list[tuple[Node, Node, Node, frozenset[str]]] = []
         self._visible: set[tuple[Kind, str, Transition]] = set()
@@ -196,7 +211,8 @@ class Storyboard:
 
     @property
     def complete(self) -> bool:
-        """True once the stop trigger fired (or, without one, every story completed)."""
+        """True once the stop trigger fired (or, without one or under ScenarioRunner's rules,
+        every story completed)."""
         return self._complete
 
     def nodes(self) -> Iterator[Node]:
@@ -350,7 +366,7 @@ class Storyboard:
                     self._settle_act(act)
             if all(act.phase is Phase.COMPLETE for act in story.children):
                 self._end(story)
-        if not self._stop_defined and all(s.phase is Phase.COMPLETE for s in self._stories):
+        if self._end_with_stories and all(s.phase is Phase.COMPLETE for s in self._stories):
             self._complete = True
 
     def _settle_act(self, act: Node) -> None:

@@ -13,6 +13,13 @@ result through
 
 State lives per condition inside a :class:`TriggerState`, one per storyboard element trigger, and
 is reset when the element goes back to standby for another execution.
+
+Files written for CARLA ScenarioRunner (FileHeader description ``CARLA:``) are evaluated as
+ScenarioRunner does (``level=True``): conditions are level-triggered -- the edge is not looked
+at, so a ``rising`` condition already true at its first evaluation fires there -- and a
+condition that was true once stays true until its trigger fires (ScenarioRunner's one-shot
+conditions), so ``SimulationTime == 0 AND TraveledDistance > 1`` in one group fires once the
+entity has moved a metre.
 """
 
 from __future__ import annotations
@@ -33,20 +40,23 @@ _EPSILON = 1e-9
 
 
 class _ConditionState:
-    __slots__ = ("fire_times", "previous")
+    __slots__ = ("fire_times", "latched", "previous")
 
     def __init__(self) -> None:
         self.previous: bool | None = None
+        self.latched: Truth | None = None
         self.fire_times: collections.deque[tuple[float, frozenset[str]]] = collections.deque()
 
 
 class TriggerState:
     """Evaluates one trigger over time, remembering edges and pending delays."""
 
-    __slots__ = ("_states", "_trigger")
+    __slots__ = ("_level", "_states", "_trigger")
 
-    def __init__(self, trigger: model.Trigger | None) -> None:
+    def __init__(self, trigger: model.Trigger | None, *, level: bool = False) -> None:
         self._trigger = trigger
+        self._level = level
+        """ScenarioRunner semantics: edges ignored, conditions latch until the trigger fires."""
         self._states: dict[int, _ConditionState] = {}
 
     @property
@@ -78,14 +88,27 @@ class TriggerState:
             if group_true:
                 fired = True
                 entities |= group_entities
+        if fired and self._level:
+            for state in self._states.values():
+                state.latched = None
         return fired, frozenset(entities)
 
     def _condition(self, now: float, condition: model.Condition, raw: RawCondition) -> Truth:
         state = self._states.get(id(condition))
         if state is None:
             state = self._states[id(condition)] = _ConditionState()
+        truth = self._delayed(now, condition, state, raw)
+        if not self._level:
+            return truth
+        if truth[0]:
+            state.latched = truth
+        return state.latched or truth
+
+    def _delayed(
+        self, now: float, condition: model.Condition, state: _ConditionState, raw: RawCondition
+    ) -> Truth:
         value, who = raw(condition.body)
-        edge = condition.edge
+        edge = model.ConditionEdge.NONE if self._level else condition.edge
         if state.previous is None:
             state.previous = value  # the first evaluation has nothing to compare with
         if edge is model.ConditionEdge.NONE:

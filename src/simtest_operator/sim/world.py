@@ -27,6 +27,7 @@ class World:
         "_states",
         "actors",
         "dt",
+        "environments",
         "ignored",
         "parameters",
         "rng",
@@ -58,6 +59,9 @@ class World:
         self.ignored: list[str] = []
         self.signals: dict[str, str] = {}
         """Traffic signal states by signal name (as TrafficSignalStateActions set them)."""
+        self.environments: list[tuple[float, model.Environment]] = []
+        """Environments set by EnvironmentActions, with the time they were set (not rendered:
+        recorded for the result)."""
         self._states: dict[str, EntityState] = {}
         self.traffic: tuple[EntityState, ...] = ()
         """Vehicles the backend drives (anonymous traffic) as of the last step."""

@@ -18,7 +18,10 @@ from simtest_operator.openscenario.model.common import (
 )
 from simtest_operator.openscenario.model.controls import (
     ActivateControllerAction,
+    AddEntityAction,
     AssignControllerAction,
+    DeleteEntityAction,
+    EnvironmentAction,
     IgnoredAction,
     ModifyValueAction,
     SetValueAction,
@@ -350,11 +353,14 @@ GlobalAction = (
     | ModifyValueAction
     | TrafficSignalStateAction
     | TrafficAction
+    | AddEntityAction
+    | DeleteEntityAction
+    | EnvironmentAction
     | IgnoredAction
     | Unsupported
 )
-"""Global actions; Entity, traffic signal controller, TrafficArea, SetMonitor and UserDefined
-actions are Unsupported."""
+"""Global actions; traffic signal controller, TrafficArea, SetMonitor and UserDefined actions are
+Unsupported."""
 
 AnyAction = PrivateAction | GlobalAction
 

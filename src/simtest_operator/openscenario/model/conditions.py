@@ -344,8 +344,36 @@ class ConditionGroup:
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Criterion:
+    """A CARLA ScenarioRunner test criterion: a condition named ``criteria_<Test>`` in the
+    storyboard's StopTrigger.
+
+    ScenarioRunner reads those as pass/fail tests over the whole run, not as stop conditions
+    (OpenSCENARIO 1.0 has no other place for them); the ParameterCondition inside only carries
+    the test's argument (``parameterRef="distance_success" value="100"``) or nothing
+    (``parameterRef=""``).
+    """
+
+    test: str
+    """The name after ``criteria_``, normalised to ScenarioRunner's spelling when known
+    (``CollisionTest``, ``DrivenDistanceTest``, ...)."""
+    known: bool
+    """False for a name ScenarioRunner's documentation does not list (reported, not judged)."""
+    arguments: tuple[tuple[str, str], ...] = ()
+    """(parameterRef, value) of the inner ParameterCondition when parameterRef is not empty."""
+    line: int | None = None
+
+    def argument(self, name: str) -> str | None:
+        """The value given for argument ``name``, or None."""
+        return next((value for key, value in self.arguments if key == name), None)
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
 class Trigger:
     """True when any of its condition groups is true (OR); empty means never."""
 
     condition_groups: tuple[ConditionGroup, ...]
+    criteria: tuple[Criterion, ...] = ()
+    """Only on the storyboard's StopTrigger: the ``criteria_<Test>`` conditions taken out of its
+    groups (groups left empty by that are dropped)."""
     line: int | None = None

@@ -1,4 +1,5 @@
-"""Controller, parameter/variable, traffic signal and ignored actions of the scenario model.
+"""Controller, parameter/variable, traffic signal, entity, environment and ignored actions of the
+scenario model.
 
 Split from :mod:`.actions` to keep modules small; import them through ``model``.
 """
@@ -10,6 +11,7 @@ import enum
 
 from simtest_operator.openscenario.model.common import Unsupported, ValueScope
 from simtest_operator.openscenario.model.entities import Controller
+from simtest_operator.openscenario.model.positions import Position
 
 
 class ModifyRule(enum.StrEnum):
@@ -86,4 +88,46 @@ class IgnoredAction:
 
     kind: str
     """XML tag, e.g. ``EnvironmentAction`` or ``LightStateAction``."""
+    line: int | None = None
+
+
+# --- entities and environment -----------------------------------------------------------------
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class AddEntityAction:
+    """Put the declared entity ``entity_ref`` into the world at ``position`` (it was absent)."""
+
+    entity_ref: str
+    position: Position
+    line: int | None = None
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class DeleteEntityAction:
+    """Take ``entity_ref`` out of the world: no pose, no conditions, no collisions until added."""
+
+    entity_ref: str
+    line: int | None = None
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Environment:
+    """An environment (time of day, weather, road condition) as written.
+
+    The stand-in renders no weather, so the settings are kept as flat ``Element.attribute`` ->
+    value pairs (``Weather.cloudState``, ``Sun.elevation``, ``Precipitation.intensity``, ...)
+    with parameters resolved: enough to record exactly what the run was asked to show.
+    """
+
+    name: str
+    settings: tuple[tuple[str, str], ...] = ()
+    line: int | None = None
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class EnvironmentAction:
+    """Set the environment (Init or story); recorded, not rendered."""
+
+    environment: Environment
     line: int | None = None

@@ -6,21 +6,35 @@ from simtest_operator.openscenario import reading
 from simtest_operator.openscenario.model import actions as a
 from simtest_operator.openscenario.model import common as m
 from simtest_operator.openscenario.model import controls as ctl
-from simtest_operator.openscenario.readers import controllers, positions, traffic, trajectories
+from simtest_operator.openscenario.readers import (
+    controllers,
+    positions,
+    traffic,
+    trajectories,
+    world_actions,
+)
 from simtest_operator.xmlsafe import Element
 
 _PRIVATE_UNSUPPORTED = {
     "TrailerAction": "trailers are not simulated",
 }
 _GLOBAL_UNSUPPORTED = {
-    "EntityAction": "adding/deleting entities at run time is not supported",
     "SetMonitorAction": "monitors are not supported",
 }
 
 
 def storyboard_action(el: Element, ctx: reading.Context) -> a.Action:
-    """Read a named storyboard ``<Action>``."""
-    chosen = ctx.choice(el)
+    """Read a named storyboard ``<Action>``; one without a child (a placeholder some tools
+    write) does nothing and is reported as a deviation."""
+    chosen = reading.first_child(el)
+    if chosen is None:
+        ctx.deviation(el, "empty-action", "Action without a child read as doing nothing")
+        return a.Action(
+            name=ctx.string(el, "name"),
+            body=ctl.IgnoredAction(kind="Action (empty)", line=el.sourceline),
+            is_private=False,
+            line=el.sourceline,
+        )
     body: a.AnyAction
     if chosen.tag == "PrivateAction":
         body = private(chosen, ctx)
@@ -75,7 +89,9 @@ def global_(el: Element, ctx: reading.Context) -> a.GlobalAction:
     chosen = ctx.choice(el)
     tag = chosen.tag
     if tag == "EnvironmentAction":
-        return _ignored(chosen, ctx)
+        return world_actions.environment_action(chosen, ctx)
+    if tag == "EntityAction":
+        return world_actions.entity_action(chosen, ctx)
     if tag in ("ParameterAction", "VariableAction"):
         scope = m.ValueScope.PARAMETER if tag == "ParameterAction" else m.ValueScope.VARIABLE
         ref = ctx.string(chosen, "parameterRef" if tag == "ParameterAction" else "variableRef")

@@ -34,6 +34,68 @@ def trigger(el: Element | None, ctx: reading.Context) -> c.Trigger | None:
     return c.Trigger(condition_groups=groups, line=el.sourceline)
 
 
+CRITERION_PREFIX = "criteria_"
+KNOWN_CRITERIA = {
+    name.lower(): name
+    for name in (
+        "CollisionTest",
+        "KeepLaneTest",
+        "WrongLaneTest",
+        "OnSidewalkTest",
+        "RunningStopTest",
+        "RunningRedLightTest",
+        "DrivenDistanceTest",
+    )
+}
+"""ScenarioRunner's test criteria by lower-case name (its documentation writes both
+``OnSideWalkTest`` and ``OnSidewalkTest``)."""
+
+
+def stop_trigger(el: Element | None, ctx: reading.Context) -> c.Trigger | None:
+    """Read the storyboard's StopTrigger, taking ScenarioRunner's ``criteria_<Test>`` conditions
+    out as :class:`~.model.conditions.Criterion` (they are tests over the run, not stop
+    conditions; their ParameterConditions name undeclared or empty parameters)."""
+    if el is None:
+        return None
+    groups: list[c.ConditionGroup] = []
+    criteria: list[c.Criterion] = []
+    for group in reading.all_children(el, "ConditionGroup"):
+        kept: list[c.Condition] = []
+        for cond in reading.all_children(group, "Condition"):
+            name = ctx.raw(cond, "name") or ""
+            if name.startswith(CRITERION_PREFIX):
+                criteria.append(_criterion(cond, name[len(CRITERION_PREFIX) :], ctx))
+            else:
+                kept.append(condition(cond, ctx))
+        if kept or not criteria:
+            groups.append(c.ConditionGroup(conditions=tuple(kept), line=group.sourceline))
+    return c.Trigger(condition_groups=tuple(groups), criteria=tuple(criteria), line=el.sourceline)
+
+
+def _criterion(el: Element, test: str, ctx: reading.Context) -> c.Criterion:
+    canonical = KNOWN_CRITERIA.get(test.lower())
+    if canonical is None:
+        ctx.deviation(
+            el,
+            "carla-criterion-unknown",
+            f"ScenarioRunner criterion {test!r} is not one the stand-in knows; it is listed as "
+            "not evaluated",
+        )
+    arguments: list[tuple[str, str]] = []
+    holder = reading.child(el, "ByValueCondition")
+    inner = reading.child(holder, "ParameterCondition") if holder is not None else None
+    if inner is not None:
+        ref = ctx.raw(inner, "parameterRef") or ""
+        if ref:
+            arguments.append((ref, ctx.opt_string(inner, "value") or ""))
+    return c.Criterion(
+        test=canonical or test,
+        known=canonical is not None,
+        arguments=tuple(arguments),
+        line=el.sourceline,
+    )
+
+
 def condition(el: Element, ctx: reading.Context) -> c.Condition:
     """Read one ``<Condition>``."""
     chosen = ctx.choice(el)

@@ -84,7 +84,7 @@ def controller_action(el: Element, ctx: reading.Context) -> a.PrivateAction:
     1.0 requires AssignControllerAction plus OverrideControllerValueAction; 1.1 allows any
     combination of assign/override/activate; 1.2+ exactly one. Assign and activate are merged
     into one AssignControllerAction (activate flags filled from the ActivateControllerAction);
-    an override with any active value is unsupported, an all-inactive one is a no-op.
+    an override with any active value is unsupported, an all-inactive one is a no-op (also alone).
     """
     assign = reading.child(el, "AssignControllerAction")
     activate_el = reading.child(el, "ActivateControllerAction")
@@ -116,7 +116,9 @@ def controller_action(el: Element, ctx: reading.Context) -> a.PrivateAction:
     if switch is not None:
         return switch
     if override is not None:
-        return ctx.unsupported(override, "an inactive controller override alone does nothing")
+        # All values inactive (ScenarioRunner's only supported form): it changes nothing.
+        ctx.ignore("OverrideControllerValueAction")
+        return ctl.IgnoredAction(kind="OverrideControllerValueAction", line=override.sourceline)
     return ctx.unsupported(ctx.choice(el), "unknown controller action")
 
 

@@ -16,7 +16,7 @@ def storyboard(el: Element, ctx: reading.Context) -> s.Storyboard:
     return s.Storyboard(
         init=_init(ctx.require(el, "Init"), ctx),
         stories=tuple(_story(story, ctx) for story in reading.all_children(el, "Story")),
-        stop_trigger=conditions.trigger(reading.child(el, "StopTrigger"), ctx),
+        stop_trigger=conditions.stop_trigger(reading.child(el, "StopTrigger"), ctx),
         line=el.sourceline,
     )
 

@@ -1,0 +1,234 @@
+"""CARLA ScenarioRunner-style scenarios for the tests, written as ScenarioRunner's examples are.
+
+:func:`follow_leading` is a FollowLeadingVehicle-like scenario on ``carla/avenue.xodr``: the hero
+is handed to the system under test (``external_control``), the act starts once the hero has moved
+(a group of ``TraveledDistance > 1`` and ``SimulationTime == 0`` with rising edges), the adversary
+then drives ahead and brakes; the act stops after the hero drove ``act_distance`` metres and the
+storyboard StopTrigger holds only ``criteria_*`` tests. Parts are swappable per test.
+"""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+HERE = Path(__file__).parent / "carla"
+
+ALL_CRITERIA = (
+    "RunningStopTest",
+    "RunningRedLightTest",
+    "WrongLaneTest",
+    "OnSidewalkTest",
+    "KeepLaneTest",
+    "CollisionTest",
+)
+
+
+def criterion(name: str, ref: str = "", value: str = "") -> str:
+    return f"""
+        <Condition name="criteria_{name}" delay="0" conditionEdge="rising">
+          <ByValueCondition>
+            <ParameterCondition parameterRef="{ref}" value="{value}" rule="lessThan"/>
+          </ByValueCondition>
+        </Condition>"""
+
+
+def criteria(*names: str, distance: float | None = 50.0) -> str:
+    body = "".join(criterion(n) for n in names)
+    if distance is not None:
+        body += criterion("DrivenDistanceTest", "distance_success", f"{distance:g}")
+    return body
+
+
+HERO_CONTROL = """
+          <PrivateAction>
+            <ControllerAction>
+              <AssignControllerAction>
+                <Controller name="HeroAgent">
+                  <Properties>
+                    <Property name="module" value="external_control"/>
+                  </Properties>
+                </Controller>
+              </AssignControllerAction>
+              <OverrideControllerValueAction>
+                <Throttle value="0" active="false"/>
+                <Brake value="0" active="false"/>
+                <Clutch value="0" active="false"/>
+                <ParkingBrake value="0" active="false"/>
+                <SteeringWheel value="0" active="false"/>
+                <Gear number="0" active="false"/>
+              </OverrideControllerValueAction>
+            </ControllerAction>
+          </PrivateAction>"""
+
+ENVIRONMENT = """
+        <GlobalAction>
+          <EnvironmentAction>
+            <Environment name="Noon">
+              <TimeOfDay animation="false" dateTime="2020-03-20T12:00:00"/>
+              <Weather cloudState="free">
+                <Sun intensity="0.85" azimuth="0" elevation="1.31"/>
+                <Fog visualRange="100000.0"/>
+                <Precipitation precipitationType="dry" intensity="0.0"/>
+              </Weather>
+              <RoadCondition frictionScaleFactor="1.0"/>
+            </Environment>
+          </EnvironmentAction>
+        </GlobalAction>"""
+
+
+def vehicle(name: str, kind: str) -> str:
+    return f"""
+    <ScenarioObject name="{name}">
+      <Vehicle name="vehicle.lincoln.mkz" vehicleCategory="car">
+        <ParameterDeclarations/>
+        <Performance maxSpeed="69.444" maxAcceleration="200" maxDeceleration="10.0"/>
+        <BoundingBox><Center x="1.5" y="0.0" z="0.9"/><Dimensions width="2.1" length="4.5" height="1.8"/></BoundingBox>
+        <Axles>
+          <FrontAxle maxSteering="0.5" wheelDiameter="0.6" trackWidth="1.8" positionX="3.1" positionZ="0.3"/>
+          <RearAxle maxSteering="0.0" wheelDiameter="0.6" trackWidth="1.8" positionX="0.0" positionZ="0.3"/>
+        </Axles>
+        <Properties><Property name="type" value="{kind}"/></Properties>
+      </Vehicle>
+    </ScenarioObject>"""  # noqa: E501
+
+
+def follow_leading(
+    *,
+    stop: str | None = None,
+    hero_position: str = '<LanePosition roadId="1" laneId="-1" s="20" offset="0"/>',
+    hero_control: str = HERO_CONTROL,
+    init_globals: str = ENVIRONMENT,
+    adversary_init: str | None = None,
+    extra_entities: str = "",
+    extra_events: str = "",
+    act_distance: float = 120.0,
+    brake_after: float = 40.0,
+    description: str = "CARLA:FollowLeadingVehicle",
+    logic_file: str = "avenue.xodr",
+) -> str:
+    stop_groups = stop if stop is not None else criteria(*ALL_CRITERIA)
+    adversary = (
+        adversary_init
+        if adversary_init is not None
+        else """
+        <Private entityRef="adversary">
+          <PrivateAction>
+            <TeleportAction><Position>
+              <RelativeLanePosition entityRef="hero" dLane="0" ds="50" offset="0"/>
+            </Position></TeleportAction>
+          </PrivateAction>
+        </Private>"""
+    )
+    return f"""<?xml version="1.0" encoding="UTF-8"?>
+<OpenSCENARIO>
+  <FileHeader revMajor="1" revMinor="0" date="2020-03-20T12:00:00" description="{description}" author=""/>
+  <ParameterDeclarations>
+    <ParameterDeclaration name="leadingSpeed" parameterType="double" value="6.0"/>
+  </ParameterDeclarations>
+  <CatalogLocations/>
+  <RoadNetwork>
+    <LogicFile filepath="{logic_file}"/>
+    <SceneGraphFile filepath=""/>
+  </RoadNetwork>
+  <Entities>{vehicle("hero", "ego_vehicle")}{vehicle("adversary", "simulation")}{extra_entities}
+  </Entities>
+  <Storyboard>
+    <Init>
+      <Actions>{init_globals}
+        <Private entityRef="hero">
+          <PrivateAction>
+            <TeleportAction><Position>{hero_position}</Position></TeleportAction>
+          </PrivateAction>{hero_control}
+        </Private>{adversary}
+      </Actions>
+    </Init>
+    <Story name="MyStory">
+      <Act name="Behavior">
+        <ManeuverGroup name="ManeuverSequence" maximumExecutionCount="1">
+          <Actors selectTriggeringEntities="false">
+            <EntityRef entityRef="adversary"/>
+          </Actors>
+          <Maneuver name="FollowLeadingVehicleManeuver">
+            <Event name="LeadingVehicleKeepsVelocity" priority="overwrite">
+              <Action name="LeadingVehicleKeepsVelocity">
+                <PrivateAction><LongitudinalAction><SpeedAction>
+                  <SpeedActionDynamics dynamicsShape="step" value="20" dynamicsDimension="distance"/>
+                  <SpeedActionTarget><AbsoluteTargetSpeed value="$leadingSpeed"/></SpeedActionTarget>
+                </SpeedAction></LongitudinalAction></PrivateAction>
+              </Action>
+              <StartTrigger>
+                <ConditionGroup>
+                  <Condition name="Start" delay="0" conditionEdge="rising">
+                    <ByValueCondition>
+                      <SimulationTimeCondition value="0" rule="greaterThan"/>
+                    </ByValueCondition>
+                  </Condition>
+                </ConditionGroup>
+              </StartTrigger>
+            </Event>
+            <Event name="LeadingVehicleBrakes" priority="overwrite">
+              <Action name="LeadingVehicleBrakes">
+                <PrivateAction><LongitudinalAction><SpeedAction>
+                  <SpeedActionDynamics dynamicsShape="linear" value="2" dynamicsDimension="rate"/>
+                  <SpeedActionTarget><AbsoluteTargetSpeed value="0"/></SpeedActionTarget>
+                </SpeedAction></LongitudinalAction></PrivateAction>
+              </Action>
+              <StartTrigger>
+                <ConditionGroup>
+                  <Condition name="AfterKeepsVelocity" delay="0" conditionEdge="rising">
+                    <ByValueCondition>
+                      <StoryboardElementStateCondition storyboardElementType="action" storyboardElementRef="LeadingVehicleKeepsVelocity" state="endTransition"/>
+                    </ByValueCondition>
+                  </Condition>
+                  <Condition name="HeroWentFar" delay="0" conditionEdge="rising">
+                    <ByEntityCondition>
+                      <TriggeringEntities triggeringEntitiesRule="any"><EntityRef entityRef="hero"/></TriggeringEntities>
+                      <EntityCondition><TraveledDistanceCondition value="{brake_after:g}"/></EntityCondition>
+                    </ByEntityCondition>
+                  </Condition>
+                </ConditionGroup>
+              </StartTrigger>
+            </Event>{extra_events}
+          </Maneuver>
+        </ManeuverGroup>
+        <StartTrigger>
+          <ConditionGroup>
+            <Condition name="OverallStartCondition" delay="0" conditionEdge="rising">
+              <ByEntityCondition>
+                <TriggeringEntities triggeringEntitiesRule="any"><EntityRef entityRef="hero"/></TriggeringEntities>
+                <EntityCondition><TraveledDistanceCondition value="1.0"/></EntityCondition>
+              </ByEntityCondition>
+            </Condition>
+            <Condition name="StartTime" delay="0" conditionEdge="rising">
+              <ByValueCondition><SimulationTimeCondition value="0" rule="equalTo"/></ByValueCondition>
+            </Condition>
+          </ConditionGroup>
+        </StartTrigger>
+        <StopTrigger>
+          <ConditionGroup>
+            <Condition name="EndCondition" delay="0" conditionEdge="rising">
+              <ByEntityCondition>
+                <TriggeringEntities triggeringEntitiesRule="any"><EntityRef entityRef="hero"/></TriggeringEntities>
+                <EntityCondition><TraveledDistanceCondition value="{act_distance:g}"/></EntityCondition>
+              </ByEntityCondition>
+            </Condition>
+          </ConditionGroup>
+        </StopTrigger>
+      </Act>
+    </Story>
+    <StopTrigger>
+      <ConditionGroup>{stop_groups}
+      </ConditionGroup>
+    </StopTrigger>
+  </Storyboard>
+</OpenSCENARIO>
+"""  # noqa: E501
+
+
+def write(tmp_path: Path, text: str, name: str = "scenario.xosc") -> Path:
+    """Write ``text`` next to a copy of the test street and return the scenario path."""
+    shutil.copy(HERE / "avenue.xodr", tmp_path / "avenue.xodr")
+    path = tmp_path / name
+    path.write_text(text, encoding="utf-8")
+    return path
