@@ -21,8 +21,9 @@ CACHE_ROOT="${SIMTEST_CACHE_DIR:-${XDG_CACHE_HOME:-$HOME/.cache}/simtest}"
 
 case "$MODE" in
   run) APT_PACKAGES=(git) ;;
+  # protobuf-compiler: protoc for the Go example SUT's OSI bindings (deploy/sut-go/build.sh)
   test) APT_PACKAGES=(git postgresql chromium containerd runc containernetworking-plugins buildah
-        debootstrap iproute2 gcc libc6-dev) ;;
+        debootstrap iproute2 gcc libc6-dev protobuf-compiler) ;;
   *) echo "setup.sh: error: unknown mode '$MODE' (run or test)" >&2; exit 2 ;;
 esac
 
