@@ -1,6 +1,7 @@
 """Benchmark of the SUT interface: the 20-vehicle simulator bench (bench/simulator.py's
 scenario) with the ego driven by the in-process driver model vs by the reference SUT as a
-separate process on loopback (OSI SUT protocol v1, lockstep).
+separate process on loopback (OSI SUT protocol v1, lockstep) vs by the Go example SUT
+(deploy/sut-go, built by its script).
 
 Each run is a fresh process (libsumo is one simulation per process), in ``--repeat`` rounds
 alternating the order of the variants. Per variant: the median run's stepping time, steps per
@@ -17,6 +18,7 @@ from __future__ import annotations
 import argparse
 import importlib.util
 import json
+import os
 import statistics
 import subprocess
 import sys
@@ -30,10 +32,11 @@ from simtest_operator.runner import execution
 from simtest_operator.sim import BackendChoice, SutConfig, Takeover
 from simtest_operator.sim.sut import ExternalSut, Launch
 from simtest_operator.sut.launching import reference_command
-path, nets, variant = Path(sys.argv[1]), Path(sys.argv[2]), sys.argv[3]
+path, nets, variant, go_sut = Path(sys.argv[1]), Path(sys.argv[2]), sys.argv[3], sys.argv[4]
 external = None
-if variant == "external":
-    external = ExternalSut(launch=Launch.LOCAL, command=reference_command(), step_deadline=1.0)
+if variant != "in-process":
+    command = reference_command() if variant == "external" else (go_sut,)
+    external = ExternalSut(launch=Launch.LOCAL, command=command, step_deadline=1.0)
 sut = SutConfig(takeover=Takeover.AFTER_INIT, external=external)
 request = execution.RunRequest(scenario=path, nets_dir=nets, sut=sut, record=False,
                                backend=BackendChoice.SUMO)
@@ -58,9 +61,9 @@ def _scenario_text(vehicles: int, seconds: float) -> str:
     return text
 
 
-def run_child(path: Path, nets: Path, variant: str) -> dict[str, object]:
+def run_child(path: Path, nets: Path, variant: str, go_sut: str) -> dict[str, object]:
     result = subprocess.run(
-        [sys.executable, "-c", _CHILD, str(path), str(nets), variant],
+        [sys.executable, "-c", _CHILD, str(path), str(nets), variant, go_sut],
         check=True,
         capture_output=True,
         text=True,
@@ -79,14 +82,21 @@ def main() -> None:
     scenario = work / "bench.xosc"
     scenario.write_text(_scenario_text(args.vehicles, args.seconds), encoding="utf-8")
     nets = work / "nets"
-    run_child(scenario, nets, "in-process")  # warm the network cache
-    runs: dict[str, list[dict[str, object]]] = {"in-process": [], "external": []}
+    built = subprocess.run(
+        ["bash", str(Path(__file__).resolve().parents[1] / "deploy" / "sut-go" / "build.sh")],
+        check=True,
+        capture_output=True,
+        text=True,
+    )
+    go_sut = built.stdout.strip().splitlines()[-1]
+    run_child(scenario, nets, "in-process", go_sut)  # warm the network cache
+    variants = ["in-process", "external", "external-go"]
+    runs: dict[str, list[dict[str, object]]] = {variant: [] for variant in variants}
     for round_ in range(args.repeat):
-        order = ["in-process", "external"] if round_ % 2 == 0 else ["external", "in-process"]
-        for variant in order:
-            runs[variant].append(run_child(scenario, nets, variant))
+        for variant in variants if round_ % 2 == 0 else variants[::-1]:
+            runs[variant].append(run_child(scenario, nets, variant, go_sut))
     step = 0.05
-    table = {}
+    table: dict[str, object] = {"load_average_1min": round(os.getloadavg()[0], 2)}
     for variant, rows in runs.items():
         stepping = [float(r["wall"]) - float(r["startup"]) for r in rows]  # type: ignore[arg-type]
         median = statistics.median(stepping)
@@ -98,7 +108,7 @@ def main() -> None:
             "steps_per_second": round(simulated / step / median, 1),
             "real_time_factor": round(simulated / median, 1),
         }
-        if variant == "external":
+        if variant != "in-process":
             entry["round_trip_p50_ms"] = round(
                 statistics.median(float(m["sutRoundTripP50Ms"]) for m in metrics), 4
             )
@@ -108,7 +118,7 @@ def main() -> None:
         table[variant] = entry
     print(f"{args.vehicles} vehicles, {args.seconds:g} s simulated, {args.repeat} rounds")
     for variant, entry in table.items():
-        print(variant.ljust(11), json.dumps(entry))
+        print(variant.ljust(17), json.dumps(entry))
     if args.json:
         args.json.write_text(json.dumps(table, indent=2) + "\n", encoding="utf-8")
 
