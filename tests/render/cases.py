@@ -4,6 +4,7 @@ templates, ``default`` and ``ros2``)."""
 from __future__ import annotations
 
 from simtest_operator import render
+from simtest_operator.scenarios import GraphqlSource, Needs, RestSource, SecretRef
 
 OWNER = render.OwnerRef(
     api_version="simtest.dev/v1alpha1",
@@ -86,6 +87,34 @@ CASES = {
             },
             "sut": {"chartValues": {"resources": {"requests": {"cpu": "250m"}}}},
         },
+    ),
+    "scenario-sources": request(
+        isolation="Reuse",
+        scenarios=(
+            render.ScenarioRef(id="a.xosc", source="configmap:suite-a/a.xosc", sha256="01" * 32),
+            render.ScenarioRef(id="b.xosc", source="configmap:suite-b/b.xosc", sha256="02" * 32),
+            render.ScenarioRef(
+                id="c.xosc", source="graphql+https://db.example/graphql#c", sha256="03" * 32
+            ),
+            render.ScenarioRef(
+                id="d.xosc", source="rest+https://db.example/api?suite=x#d", sha256="04" * 32
+            ),
+        ),
+        source_needs=Needs(
+            config_maps=("suite-a", "suite-b"),
+            databases=(
+                GraphqlSource(
+                    endpoint="https://db.example/graphql",
+                    query="query($s: String) { scenarios(suite: $s) { id content } }",
+                    variables={"s": "x"},
+                    secret=SecretRef(name="scenario-db", key="token"),
+                ),
+                RestSource(
+                    url="https://db.example/api?suite=x",
+                    secret=SecretRef(name="scenario-db", key="token"),
+                ),
+            ),
+        ),
     ),
     "ros2-minimal": request(template="ros2"),
     "ros2-overrides": request(

@@ -164,7 +164,10 @@ def _item(row: Any, *, index: int, endpoint: str) -> DatabaseItem:
     if url is not None:
         if not isinstance(url, str):
             raise SourceError(f"{where} ({ident}) has a non-string 'url'")
-        downloading.check_http_url(url)
+        try:
+            downloading.check_http_url(url)
+        except SourceError as exc:
+            raise SourceError(f"{where} ({ident}): {exc}") from exc
         return DatabaseItem(id=str(ident), url=url)
     if not isinstance(content, str):
         raise SourceError(f"{where} ({ident}) has a non-string 'content'")
