@@ -54,6 +54,8 @@ class PodTimeline:
 
     def __init__(self, api: client.ApiClient, namespace: str) -> None:
         self.seen: dict[str, dict[str, float]] = {}
+        self.specs: dict[str, str] = {}
+        """Each pod's run spec (``SIMTEST_RUN_SPEC``): which scenarios it ran."""
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, args=(api, namespace), daemon=True)
 
@@ -77,6 +79,9 @@ class PodTimeline:
             ):
                 now, pod = time.monotonic(), event["object"]
                 marks = self.seen.setdefault(pod.metadata.name, {"created": now})
+                for var in pod.spec.containers[0].env or []:
+                    if var.name == "SIMTEST_RUN_SPEC" and var.value:
+                        self.specs.setdefault(pod.metadata.name, var.value)
                 if pod.spec.node_name:
                     marks.setdefault("scheduled", now)
                 for status in pod.status.container_statuses or []:

@@ -1,7 +1,10 @@
 """Local node agent — development and test infrastructure only, never part of the product.
 
-A kubelet cannot run on our machines (no container runtime, cgroup v1), so real simulator pods
-cannot run on a real node. This agent plays kubelet for one dedicated Node object: it registers
+Simulator pods run on the dev cluster's real node (kubelet + containerd + runc, tests/realnode/);
+this agent remains only as the base of :mod:`tests.e2e.helmfile_job_agent`, because a helmfile
+Job's pod must talk to the API server, and the dev cluster has no service proxy (kube-proxy) that
+would route a pod's in-cluster ``kubernetes`` Service address there. It plays kubelet for one
+dedicated Node object: it registers
 the node (with ``simtest.dev/simulator`` slots), keeps its Lease and Ready condition fresh, and
 runs every pod the scheduler binds to it as a local ``simtest-runner`` *process* with the pod's
 environment — literal values, and ``valueFrom`` references to Secrets and ConfigMaps read from the

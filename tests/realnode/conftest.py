@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -12,6 +12,7 @@ from kubernetes import client
 
 from simtest_operator.devcluster.state import ClusterInfo
 from tests.e2e import support
+from tests.fixtures.forwarding import Forwarder
 
 SCENARIOS = support.REPO / "scenarios"
 SMOKE = SCENARIOS / "smoke-campaign.yaml"
@@ -98,3 +99,27 @@ def real_operator(
         yield process
     finally:
         process.stop()
+
+
+@pytest.fixture
+def pod_host(real_api_client: client.ApiClient, real_cluster: ClusterInfo) -> str:
+    """The address pods reach the host at: the real node's InternalIP (its bridge gateway)."""
+    node = client.CoreV1Api(real_api_client).read_node(real_cluster.real_nodes[0])
+    (address,) = [a.address for a in node.status.addresses if a.type == "InternalIP"]
+    return str(address)
+
+
+@pytest.fixture
+def expose(pod_host: str) -> Iterator[Callable[[int], str]]:
+    """``expose(port)`` -> ``host:port`` where pods reach the loopback server at ``port``."""
+    forwarders: list[Forwarder] = []
+
+    def forward(port: int) -> str:
+        forwarders.append(Forwarder(pod_host, port))
+        return f"{pod_host}:{forwarders[-1].port}"
+
+    try:
+        yield forward
+    finally:
+        for forwarder in forwarders:
+            forwarder.close()

@@ -29,8 +29,8 @@ class OperatorConfig:
     """Downloads, git mirrors and unpacked archives of resolution; ``SIMTEST_OPERATOR_CACHE``."""
     scenario_volume: PvcVolume | None = None
     """PVC holding ``path`` sources, mounted read-only into simulator pods at ``sources_dir``
-    (``SIMTEST_OPERATOR_SCENARIO_CLAIM``); without it pods fetch ``file://`` sources from their
-    node, which only the local node agent supports."""
+    (``SIMTEST_OPERATOR_SCENARIO_CLAIM``); without it a pod cannot read ``file://`` sources
+    (its scenarios end ``Error`` with a hint to set this)."""
     status_interval: float = 1.0
     """Minimum seconds between two campaign status writes that change counters only; phase and
     condition changes are written at once. Fewer writes, same end state."""

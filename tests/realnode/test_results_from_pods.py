@@ -1,9 +1,9 @@
-"""Results and artifacts flow from simulator pods on the real control plane (issue 5).
+"""Results and artifacts flow from simulator pods in real containers on the real node.
 
-Real SUMO smoke scenarios run as ``simtest-runner`` processes of the local node agent (which
-resolves the pod's ``secretKeyRef`` variables from the API server like a kubelet), a throw-away
-PostgreSQL server holds the results database and moto's S3 server the artifacts bucket; the
-operator is the real ``simtest operator`` process.
+Real SUMO smoke scenarios run in the runner image under the kubelet (which resolves the pod's
+``secretKeyRef`` variables and mounts its volumes), a throw-away PostgreSQL server holds the
+results database and moto's S3 server the artifacts bucket — both reached by the pods through the
+node network, as on a cluster; the operator is the real ``simtest operator`` process.
 
 Covers:
 
@@ -13,11 +13,13 @@ Covers:
   final phase and counters, artifact URIs in status are ``s3://`` and name objects that exist
   (the recording is a readable MCAP, ``result.json`` carries the same URIs), and ``simtest
   report`` over that database names every scenario;
+* ``spec.artifacts.pvc``: recordings, logs and result files land on the claim (a hostPath
+  PersistentVolume on the node) below ``<subPath>/<campaign>/``, written by the pod's user;
 * a database that is down (DSN at a closed port): the verdicts are unchanged, each result in
   ScenarioBatch status says ``resultsStored: false`` and the batch has a ``ResultsNotStored``
   Warning event;
-* a DSN Secret that does not exist: the agent reports ``CreateContainerConfigError`` as a kubelet
-  would, and the scenario ends as ``Error`` naming the Secret.
+* a DSN Secret that does not exist: the kubelet reports ``CreateContainerConfigError`` and the
+  scenario ends as ``Error`` naming the Secret.
 """
 
 from __future__ import annotations
@@ -27,17 +29,19 @@ import json
 import subprocess
 import sys
 import time
+import urllib.parse
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import Any, TypeVar
 
 import pytest
+import yaml
 from kubernetes import client
 
 from simtest_operator import recording, results
 from simtest_operator.operator import observed, recording_results
 from tests.e2e import support
-from tests.e2e.local_node_agent import LocalNodeAgent
+from tests.realnode.conftest import smoke_variant
 from tests.results.s3server import BUCKET, CREDENTIALS, S3Server, free_port, s3
 
 __all__ = ["s3"]  # the fixture, used by name
@@ -50,21 +54,14 @@ T = TypeVar("T")
 
 
 @pytest.fixture
-def agent(
-    k8s_api_client: client.ApiClient, k8s_namespace: str, tmp_path: Path
-) -> Iterator[LocalNodeAgent]:
-    node = f"simtest-local-{k8s_namespace}"
-    running = LocalNodeAgent(k8s_api_client, node=node, workdir=tmp_path / "agent", slots=2)
-    running.start()
-    try:
-        yield running
-    finally:
-        running.stop()
+def cluster(real_api_client: client.ApiClient, real_namespace: str) -> support.Cluster:
+    return support.Cluster(real_api_client, real_namespace)
 
 
-def _smoke(operator: support.OperatorProcess) -> None:
-    """The operator serves the repository's scenarios (the smoke files refer to its roads)."""
-    operator.sources = support.REPO / "scenarios"
+def _port(dsn: str) -> int:
+    port = urllib.parse.urlsplit(dsn).port
+    assert port is not None, dsn
+    return port
 
 
 def _secret(cluster: support.Cluster, name: str, data: dict[str, str]) -> None:
@@ -80,38 +77,36 @@ def _secret(cluster: support.Cluster, name: str, data: dict[str, str]) -> None:
 
 
 def _campaign(
+    tmp_path: Path,
     name: str,
-    node: str,
     names: Sequence[str],
     *,
-    database: str,
-    s3: S3Server | None = None,
+    database: str | None,
+    s3: str | None = None,
+    pvc: dict[str, str] | None = None,
 ) -> dict[str, Any]:
-    body = support.campaign(
+    path = smoke_variant(
+        tmp_path,
         name,
-        path="smoke",
-        template="default",
-        execution={
-            "maxParallel": 2,
-            "batchSize": 2,
-            "retries": 0,
-            "timeoutSeconds": 60,
-            "nodeSelector": {"kubernetes.io/hostname": node},
-        },
+        "*.xosc",
+        maxParallel=2,
+        batchSize=2,
+        retries=0,
+        timeoutSeconds=60,
+        resources={"requests": {"cpu": "500m"}},
     )
+    body: dict[str, Any] = yaml.safe_load(path.read_text())
     spec = body["spec"]
     spec["scenarios"]["include"] = list(names)
     spec["evaluation"] = {"criteria": {"minTtc": 1.0}}
-    spec["results"] = {"databaseSecretRef": {"name": database, "key": "dsn"}}
+    if database is not None:
+        spec["results"] = {"databaseSecretRef": {"name": database, "key": "dsn"}}
     if s3 is not None:
         spec["artifacts"] = {
-            "s3": {
-                "endpoint": s3.endpoint,
-                "bucket": BUCKET,
-                "prefix": PREFIX,
-                "secretRef": "artifacts-s3",
-            }
+            "s3": {"endpoint": s3, "bucket": BUCKET, "prefix": PREFIX, "secretRef": "artifacts-s3"}
         }
+    if pvc is not None:
+        spec["artifacts"] = {"pvc": pvc}
     return body
 
 
@@ -138,20 +133,90 @@ def _check_verdicts(found: dict[str, dict[str, Any]], names: Sequence[str]) -> N
     assert all(found[n]["verdict"] == "Passed" for n in names if n != FAILING), found
 
 
+@pytest.fixture
+def artifacts_claim(
+    real_api_client: client.ApiClient, real_namespace: str, tmp_path: Path
+) -> Iterator[tuple[str, Path]]:
+    """A ReadWriteMany claim on a hostPath PersistentVolume: a local-path style volume."""
+    folder = tmp_path / "artifacts-volume"
+    folder.mkdir()
+    folder.chmod(0o1777)  # the pods run as 65532; hostPath volumes get no fsGroup ownership
+    core = client.CoreV1Api(real_api_client)
+    volume = f"artifacts-{real_namespace}"
+    core.create_persistent_volume(
+        body={
+            "metadata": {"name": volume},
+            "spec": {
+                "capacity": {"storage": "1Gi"},
+                "accessModes": ["ReadWriteMany"],
+                "persistentVolumeReclaimPolicy": "Retain",
+                "storageClassName": "",
+                "hostPath": {"path": str(folder), "type": "Directory"},
+                "claimRef": {"namespace": real_namespace, "name": "artifacts"},
+            },
+        }
+    )
+    core.create_namespaced_persistent_volume_claim(
+        real_namespace,
+        body={
+            "metadata": {"name": "artifacts"},
+            "spec": {
+                "accessModes": ["ReadWriteMany"],
+                "storageClassName": "",
+                "volumeName": volume,
+                "resources": {"requests": {"storage": "1Gi"}},
+            },
+        },
+    )
+    try:
+        yield "artifacts", folder
+    finally:
+        core.delete_persistent_volume(volume)
+
+
+def test_artifacts_land_on_a_persistent_volume_claim(
+    real_operator: support.OperatorProcess,
+    cluster: support.Cluster,
+    artifacts_claim: tuple[str, Path],
+    tmp_path: Path,
+) -> None:
+    claim, folder = artifacts_claim
+    names = (FAILING, PASSING[0])
+    cluster.create(
+        _campaign(
+            tmp_path, "onpvc", names, database=None, pvc={"claimName": claim, "subPath": "runs"}
+        )
+    )
+    cluster.wait_complete("onpvc", timeout=600, alive=real_operator.alive)
+    found = cluster.results("onpvc")
+    _check_verdicts(found, names)
+    for scenario_id in names:
+        (result_file,) = (folder / "runs" / "onpvc").glob(f"*/{scenario_id}/result.json")
+        written = json.loads(result_file.read_text())
+        assert written["verdict"] == found[scenario_id]["verdict"]
+        mcap = result_file.parent / "recording.mcap"
+        trajectories = recording.read_trajectories(mcap)
+        assert len(trajectories) >= 2 and all(len(s) > 10 for s in trajectories.values())
+        assert result_file.stat().st_uid == 65532  # written by the pod's user
+        assert set(found[scenario_id]["artifacts"]) >= {"recording", "log", "result"}
+
+
 @pytest.mark.postgres
 @pytest.mark.slow
 @pytest.mark.timeout(900)
 def test_results_and_artifacts_flow_from_the_pods(
-    operator: support.OperatorProcess,
+    real_operator: support.OperatorProcess,
     cluster: support.Cluster,
-    agent: LocalNodeAgent,
     postgres_dsn: str,
     s3: S3Server,
+    expose: Callable[[int], str],
     tmp_path: Path,
 ) -> None:
     names = (FAILING, *PASSING)
-    _smoke(operator)
-    _secret(cluster, "results-db", {"dsn": postgres_dsn})
+    # Pods and the operator reach the database and the bucket through the node network.
+    dsn = postgres_dsn.replace(f"127.0.0.1:{_port(postgres_dsn)}", expose(_port(postgres_dsn)))
+    endpoint = f"http://{expose(s3.port)}"
+    _secret(cluster, "results-db", {"dsn": dsn})
     _secret(
         cluster,
         "artifacts-s3",
@@ -160,18 +225,17 @@ def test_results_and_artifacts_flow_from_the_pods(
             "AWS_SECRET_ACCESS_KEY": CREDENTIALS["secret_access_key"],
         },
     )
-    with support.running(operator):
-        cluster.create(_campaign("results", agent.node, names, database="results-db", s3=s3))
-        status = cluster.wait_complete("results", timeout=600, alive=operator.alive)
-        key = _run_key(cluster, "results")
+    cluster.create(_campaign(tmp_path, "results", names, database="results-db", s3=endpoint))
+    status = cluster.wait_complete("results", timeout=600, alive=real_operator.alive)
+    key = _run_key(cluster, "results")
 
-        def finished() -> results.CampaignRecord | None:
-            with results.open_store(postgres_dsn) as store:
-                record = store.campaign(key)
-            return record if record is not None and record.finished else None
+    def finished() -> results.CampaignRecord | None:
+        with results.open_store(postgres_dsn) as store:
+            record = store.campaign(key)
+        return record if record is not None and record.finished else None
 
-        # The operator's recorder works in the background: wait for the run's end record.
-        run = _wait_for("the finished campaign record", finished, timeout=120)
+    # The operator's recorder works in the background: wait for the run's end record.
+    run = _wait_for("the finished campaign record", finished, timeout=120)
     found = cluster.results("results")
     _check_verdicts(found, names)
     assert all("resultsStored" not in r for r in found.values())
@@ -242,30 +306,29 @@ def test_results_and_artifacts_flow_from_the_pods(
 @pytest.mark.slow
 @pytest.mark.timeout(900)
 def test_a_database_that_is_down_costs_the_rows_not_the_verdicts(
-    operator: support.OperatorProcess,
+    real_operator: support.OperatorProcess,
     cluster: support.Cluster,
-    agent: LocalNodeAgent,
+    pod_host: str,
+    tmp_path: Path,
 ) -> None:
     names = (FAILING, PASSING[0])
-    _smoke(operator)
-    _secret(cluster, "results-db", {"dsn": f"postgresql://simtest@127.0.0.1:{free_port()}/none"})
-    with support.running(operator):
-        cluster.create(_campaign("dbdown", agent.node, names, database="results-db"))
-        status = cluster.wait_complete("dbdown", timeout=600, alive=operator.alive)
-        batches = {b["metadata"]["name"] for b in cluster.items("scenariobatches")}
+    _secret(cluster, "results-db", {"dsn": f"postgresql://simtest@{pod_host}:{free_port()}/none"})
+    cluster.create(_campaign(tmp_path, "dbdown", names, database="results-db"))
+    status = cluster.wait_complete("dbdown", timeout=600, alive=real_operator.alive)
+    batches = {b["metadata"]["name"] for b in cluster.items("scenariobatches")}
 
-        def warnings() -> list[Any] | None:
-            events = cluster.core.list_namespaced_event(cluster.namespace).items
-            found = [
-                e
-                for e in events
-                if e.reason == "ResultsNotStored"
-                and e.type == "Warning"
-                and e.involved_object.kind == "ScenarioBatch"
-            ]
-            return found if len(found) >= len(names) else None
+    def warnings() -> list[Any] | None:
+        events = cluster.core.list_namespaced_event(cluster.namespace).items
+        found = [
+            e
+            for e in events
+            if e.reason == "ResultsNotStored"
+            and e.type == "Warning"
+            and e.involved_object.kind == "ScenarioBatch"
+        ]
+        return found if len(found) >= len(names) else None
 
-        events = _wait_for("ResultsNotStored events", warnings, timeout=60)
+    events = _wait_for("ResultsNotStored events", warnings, timeout=60)
     found = cluster.results("dbdown")
     _check_verdicts(found, names)
     assert status["phase"] == "Failed" and status["failed"] == 1 and status["passed"] == 1
@@ -276,18 +339,15 @@ def test_a_database_that_is_down_costs_the_rows_not_the_verdicts(
 
 
 def test_a_missing_dsn_secret_is_a_container_config_error(
-    operator: support.OperatorProcess,
+    real_operator: support.OperatorProcess,
     cluster: support.Cluster,
-    agent: LocalNodeAgent,
+    tmp_path: Path,
 ) -> None:
-    _smoke(operator)
-    with support.running(operator):
-        cluster.create(_campaign("nosecret", agent.node, [PASSING[0]], database="no-such-secret"))
-        status = cluster.wait_complete("nosecret", timeout=180, alive=operator.alive)
+    cluster.create(_campaign(tmp_path, "nosecret", [PASSING[0]], database="no-such-secret"))
+    status = cluster.wait_complete("nosecret", timeout=180, alive=real_operator.alive)
     found = cluster.results("nosecret")
     result = found[PASSING[0]]
     assert result["verdict"] == "Error"
     assert "CreateContainerConfigError" in result["reason"]
     assert 'secret "no-such-secret" not found' in result["reason"]
     assert status["phase"] == "Error"
-    assert agent.started_pods == []  # the runner never started
