@@ -107,3 +107,4 @@ def test_size_limit_and_escapes_are_invalid(tmp_path: Path) -> None:
     code, output = _invoke(tmp_path, "run", str(escape), "--no-record")
     assert code == 2, output
     assert "reason: road network file '../../../../../../../../etc/passwd' refused" in output
+    assert "hint: --root DIR" in output

@@ -142,6 +142,8 @@ def run(
     outcome = report.outcome
     click.echo(f"verdict: {outcome.verdict}")
     click.echo(f"reason: {outcome.reason}")
+    if "outside the scenario's source root" in outcome.reason:
+        click.echo("hint: --root DIR lets the scenario reference files anywhere inside DIR")
     for deviation in report.deviations:
         click.echo(f"warning: {deviation.describe()}")
     for key, value in sorted(outcome.metrics.items()):
