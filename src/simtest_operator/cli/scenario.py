@@ -64,7 +64,7 @@ _MAX_SIZE = click.option(
     type=click.FloatRange(min=0.001),
     default=MAX_SCENARIO_BYTES / 2**20,
     show_default=True,
-    help="Size limit of scenario and catalog files (parsing takes about 25x in memory).",
+    help="Size limit of scenario and catalog files (loading takes ~20x in memory).",
 )
 
 

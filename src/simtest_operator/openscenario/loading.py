@@ -53,7 +53,7 @@ CARLA_PREFIX = "CARLA:"
 
 MAX_SCENARIO_BYTES = 8 * 1024 * 1024
 """Default size limit of scenario and catalog files: real ones are below 1 MB; 8 MB parse in
-about 200 MB, which fits a simulator pod's memory request beside SUMO (docs/openscenario-support.md
+about 180 MB, which fits a simulator pod's memory request beside SUMO (docs/openscenario-support.md
 has the measurements)."""
 
 
@@ -71,7 +71,7 @@ class LoadOptions:
     """User map libraries (folders of ``<name>.xodr``) searched before the shipped CARLA towns
     for a ``LogicFile`` that names a map."""
     max_bytes: int = MAX_SCENARIO_BYTES
-    """Size limit of the scenario and of each catalog file (parsing takes ~25x in memory)."""
+    """Size limit of the scenario and of each catalog file (loading takes ~20x in memory)."""
 
 
 DEFAULT_OPTIONS = LoadOptions()
