@@ -142,7 +142,11 @@ class Dispatcher:
             return Done()
         if isinstance(body, model.AddEntityAction):
             actor = world.actor(body.entity_ref)
-            actor.speed = 0.0
+            if actor.placed:
+                # Already in the world: the action fails and changes nothing (as in esmini).
+                self._ignore(f"AddEntityAction of {actor.name}, which is already in the world")
+                return Done(actor)
+            # It comes back with the speed it had (esmini keeps a deleted entity's state).
             self.teleport(actor, positions.resolve(world, body.position))
             return Done(actor)
         if isinstance(body, model.DeleteEntityAction):
@@ -164,7 +168,6 @@ class Dispatcher:
         for run in self._active.pop(actor.name, {}).values():
             run.cancel()
         actor.placed = False
-        actor.speed = 0.0
         actor.driver = None
 
     def start_private(self, actor: Actor, body: model.AnyAction) -> Run:

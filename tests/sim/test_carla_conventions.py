@@ -1,0 +1,264 @@
+"""CARLA ScenarioRunner-style scenarios run to a verdict with every criterion's outcome.
+
+The scenarios (``carla_scenarios.follow_leading`` on ``carla/avenue.xodr``, one on the shipped
+Town01) are written as ScenarioRunner's examples are: ``CARLA:`` header, the hero handed to the
+SUT by ``external_control``, an act that starts once the hero moved, ``criteria_*`` tests in the
+storyboard StopTrigger. Covers: the run ends when the stories end and passes with each criterion
+reported; each judged criterion failing on its own (KeepLane, WrongLane, OnSidewalk, Collision,
+DrivenDistance); the external ego must drive for the act to start; esmini's edge rule on the same
+file without ``CARLA:`` never starts the act; AddEntityAction/DeleteEntityAction at run time and
+an entity absent until added; the built-in autopilot for ``carla_autopilot``; the environment in
+the run log and the recording's metadata.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from mcap.reader import make_reader
+
+from simtest_operator import evaluation
+from simtest_operator.runner import execution
+from simtest_operator.sim.session import BackendChoice
+from simtest_operator.sim.sut import SutConfig, Takeover
+from simtest_operator.verdicts import Verdict
+
+from . import carla_scenarios as cs
+
+
+def run(
+    path: Path,
+    *,
+    sut: SutConfig | None = None,
+    time_limit: float = 60.0,
+    out: Path | None = None,
+    overrides: dict[str, str] | None = None,
+) -> execution.RunReport:
+    return execution.run_scenario(
+        execution.RunRequest(
+            scenario=path,
+            nets_dir=path.parent / "nets",
+            sut=sut or SutConfig(),
+            criteria=evaluation.Criteria(time_limit=time_limit),
+            output_dir=out,
+            record=out is not None,
+            backend=BackendChoice.MEMORY,
+            overrides=overrides or {},
+        )
+    )
+
+
+def test_follow_leading_passes_with_each_criterion_reported(tmp_path: Path) -> None:
+    report = run(cs.write(tmp_path, cs.follow_leading()))
+    outcome = report.outcome
+    assert outcome.verdict is Verdict.PASSED, outcome.reason
+    # The StopTrigger held only criteria: the run ended when the story did, long before 60 s.
+    assert report.storyboard_complete and 5.0 < outcome.simulated_seconds < 30.0
+    for name in ("WrongLaneTest", "OnSidewalkTest", "KeepLaneTest", "CollisionTest"):
+        assert f"{name} passed" in outcome.reason
+        assert outcome.metrics[f"criteria.{name}"] == 1.0
+    assert "DrivenDistanceTest passed" in outcome.reason
+    assert outcome.metrics["drivenDistance"] >= 50.0
+    for name in ("RunningStopTest", "RunningRedLightTest"):
+        assert f"{name} not evaluated" in outcome.reason
+        assert f"criteria.{name}" not in outcome.metrics
+    assert report.deviations == ()
+
+
+def test_act_waits_for_the_externally_driven_ego(tmp_path: Path) -> None:
+    path = cs.write(tmp_path, cs.follow_leading())
+    scripted = run(path, sut=SutConfig(takeover=Takeover.NEVER), time_limit=15.0)
+    # Nobody drives the hero: it never moves, the act never starts, the story never ends; the
+    # failed criterion is the news (it outranks the timeout).
+    assert not scripted.storyboard_complete
+    assert scripted.outcome.verdict is Verdict.FAILED
+    assert scripted.outcome.reason.startswith("criteria_DrivenDistanceTest failed: 0.0 m < 50 m")
+    assert max(s[4] for s in scripted.samples["hero"]) == 0.0
+    driven = run(path)
+    assert driven.outcome.verdict is Verdict.PASSED
+    assert max(s[4] for s in driven.samples["hero"]) > 5.0
+
+
+def test_without_the_carla_header_the_rising_start_never_fires(tmp_path: Path) -> None:
+    # SimulationTime == 0 is true at the first evaluation only: esmini's rising edge never fires
+    # there, ScenarioRunner's level-triggered, one-shot condition does and holds until the hero
+    # has moved a metre.
+    text = cs.follow_leading(
+        description="FollowLeadingVehicle", stop=cs.criteria("CollisionTest", distance=None)
+    )
+    plain = run(cs.write(tmp_path, text), time_limit=15.0)
+    assert plain.outcome.verdict is Verdict.TIMEOUT
+    lead_speeds = {s[4] for s in plain.samples["adversary"]}
+    assert lead_speeds == {0.0}
+
+
+@pytest.mark.parametrize(
+    ("hero_position", "failing", "detail"),
+    [
+        (
+            '<LanePosition roadId="1" laneId="-1" s="20" offset="1.4"/>',
+            "KeepLaneTest",
+            "hero crossed from lane -1 into lane -2 of road 1 at t=0.00 s",
+        ),
+        (
+            '<WorldPosition x="20" y="-1.75" z="0" h="0"/>',
+            "WrongLaneTest",
+            "hero against the traffic of lane 1 of road 1",
+        ),
+        (
+            '<LanePosition roadId="1" laneId="-3" s="20" offset="0"/>',
+            "OnSidewalkTest",
+            "hero on a sidewalk of road 1",
+        ),
+    ],
+)
+def test_lane_criteria_fail(tmp_path: Path, hero_position: str, failing: str, detail: str) -> None:
+    # The adversary waits in the outer lane, out of the way.
+    adversary = """
+        <Private entityRef="adversary"><PrivateAction><TeleportAction><Position>
+          <LanePosition roadId="1" laneId="-2" s="200" offset="0"/>
+        </Position></TeleportAction></PrivateAction></Private>"""
+    text = cs.follow_leading(hero_position=hero_position, adversary_init=adversary)
+    outcome = run(cs.write(tmp_path, text)).outcome
+    assert outcome.verdict is Verdict.FAILED
+    assert outcome.reason.startswith(f"criteria_{failing} failed: {detail}")
+    assert outcome.metrics[f"criteria.{failing}"] == 0.0
+    assert outcome.metrics["criteria.CollisionTest"] == 1.0
+
+
+def test_collision_and_driven_distance_fail(tmp_path: Path) -> None:
+    # The adversary stands 50 m ahead; the run lasts until the hero drove 100 m.
+    text = cs.follow_leading(stop=cs.criteria("CollisionTest", distance=5000), brake_after=100)
+    blind = SutConfig(acc=False, aeb=False)
+    path = cs.write(tmp_path, text)
+    outcome = run(path, sut=blind, overrides={"leadingSpeed": "0"}).outcome
+    assert outcome.verdict is Verdict.FAILED
+    assert outcome.reason.startswith("hero collided with adversary")
+    assert "CollisionTest failed (hero collided with adversary at t=" in outcome.reason
+    assert "(+2 more: criteria_CollisionTest, criteria_DrivenDistanceTest)" in outcome.reason
+    assert outcome.metrics["criteria.CollisionTest"] == 0.0
+    assert outcome.metrics["criteria.DrivenDistanceTest"] == 0.0
+
+
+def test_unknown_criterion_is_reported_not_judged(tmp_path: Path) -> None:
+    text = cs.follow_leading(stop=cs.criteria("CollisionTest", "HoverTest"))
+    report = run(cs.write(tmp_path, text))
+    assert report.outcome.verdict is Verdict.PASSED
+    assert "HoverTest not evaluated (unknown criterion)" in report.outcome.reason
+    assert [d.code for d in report.deviations] == ["carla-criterion-unknown"]
+
+
+_LATE = cs.vehicle("late", "simulation")
+_ADD_AND_DELETE = """
+            <Event name="LateArrives" priority="parallel">
+              <Action name="AddLate"><GlobalAction><EntityAction entityRef="late">
+                <AddEntityAction><Position>
+                  <LanePosition roadId="1" laneId="-2" s="150" offset="0"/>
+                </Position></AddEntityAction>
+              </EntityAction></GlobalAction></Action>
+              <StartTrigger><ConditionGroup><Condition name="t2" delay="0" conditionEdge="rising">
+                <ByValueCondition><SimulationTimeCondition value="2" rule="greaterThan"/>
+                </ByValueCondition></Condition></ConditionGroup></StartTrigger>
+            </Event>
+            <Event name="LateLeaves" priority="parallel">
+              <Action name="DeleteLate"><GlobalAction><EntityAction entityRef="late">
+                <DeleteEntityAction/>
+              </EntityAction></GlobalAction></Action>
+              <StartTrigger><ConditionGroup><Condition name="t5" delay="0" conditionEdge="rising">
+                <ByValueCondition><SimulationTimeCondition value="5" rule="greaterThan"/>
+                </ByValueCondition></Condition></ConditionGroup></StartTrigger>
+            </Event>"""
+
+
+def test_entities_added_and_deleted_at_run_time(tmp_path: Path) -> None:
+    text = cs.follow_leading(extra_entities=_LATE, extra_events=_ADD_AND_DELETE)
+    report = run(cs.write(tmp_path, text))
+    assert report.outcome.verdict is Verdict.PASSED, report.outcome.reason
+    times = [sample[0] for sample in report.samples["late"]]
+    # Declared but not placed in Init: absent until added (after t=2), gone after t=5.
+    assert times and all(2.0 < t <= 5.5 for t in times), times
+    assert report.samples["late"][0][1] == pytest.approx(150.0, abs=0.5)
+
+
+def test_entity_added_in_init_and_deleted_in_the_story(tmp_path: Path) -> None:
+    init = (
+        cs.ENVIRONMENT
+        + """
+        <GlobalAction><EntityAction entityRef="late"><AddEntityAction><Position>
+          <LanePosition roadId="1" laneId="-2" s="100" offset="0"/>
+        </Position></AddEntityAction></EntityAction></GlobalAction>"""
+    )
+    deletion = _ADD_AND_DELETE[_ADD_AND_DELETE.index('<Event name="LateLeaves"') :]
+    text = cs.follow_leading(init_globals=init, extra_entities=_LATE, extra_events=deletion)
+    report = run(cs.write(tmp_path, text))
+    times = [sample[0] for sample in report.samples["late"]]
+    assert times[0] == 0.0 and max(times) <= 5.5
+
+
+def test_carla_autopilot_drives_a_non_ego_vehicle(tmp_path: Path) -> None:
+    adversary = """
+        <Private entityRef="adversary">
+          <PrivateAction><TeleportAction><Position>
+            <LanePosition roadId="1" laneId="-2" s="40" offset="0"/>
+          </Position></TeleportAction></PrivateAction>
+          <PrivateAction><ControllerAction><AssignControllerAction>
+            <Controller name="Autopilot"><Properties>
+              <Property name="module" value="carla_autopilot"/>
+            </Properties></Controller>
+          </AssignControllerAction></ControllerAction></PrivateAction>
+        </Private>"""
+    report = run(cs.write(tmp_path, cs.follow_leading(adversary_init=adversary)))
+    # The autopilot brings it from rest to the towns' 30 km/h; the SpeedActions of the story
+    # become its set speed, as they do for the SUT.
+    speeds = [sample[4] for sample in report.samples["adversary"]]
+    assert speeds[0] == 0.0 and max(speeds) > 4.0
+    assert not any("Autopilot" in label for label in report.intended)
+
+
+def test_environment_recorded_in_log_and_recording(tmp_path: Path) -> None:
+    weather = """
+            <Event name="Rain" priority="parallel">
+              <Action name="Rain"><GlobalAction><EnvironmentAction>
+                <Environment name="Rain">
+                  <TimeOfDay animation="false" dateTime="2020-03-20T18:00:00"/>
+                  <Weather cloudState="rainy"><Precipitation precipitationType="rain" intensity="0.9"/>
+                  </Weather><RoadCondition frictionScaleFactor="0.6"/>
+                </Environment>
+              </EnvironmentAction></GlobalAction></Action>
+              <StartTrigger><ConditionGroup><Condition name="t3" delay="0" conditionEdge="rising">
+                <ByValueCondition><SimulationTimeCondition value="3" rule="greaterThan"/>
+                </ByValueCondition></Condition></ConditionGroup></StartTrigger>
+            </Event>"""  # noqa: E501
+    out = tmp_path / "out"
+    report = run(cs.write(tmp_path, cs.follow_leading(extra_events=weather)), out=out)
+    assert report.outcome.verdict is Verdict.PASSED, report.outcome.reason
+    log = (out / "run.log").read_text(encoding="utf-8")
+    assert "environment Noon at t=0 s (recorded, not rendered)" in log
+    assert "environment Rain at t=3.05 s (recorded, not rendered)" in log
+    with (out / "recording.mcap").open("rb") as stream:
+        records = [
+            m.metadata
+            for m in make_reader(stream).iter_metadata()
+            if m.name == "simtest.environment"
+        ]
+    assert [r["name"] for r in records] == ["Noon", "Rain"]
+    assert records[1]["Weather.Precipitation.intensity"] == "0.9"
+    assert records[1]["RoadCondition.frictionScaleFactor"] == "0.6"
+    assert records[0]["Weather.Sun.elevation"] == "1.31"
+
+
+def test_town01_scenario(tmp_path: Path) -> None:
+    text = cs.follow_leading(
+        logic_file="Town01",
+        hero_position='<LanePosition roadId="4" laneId="-1" s="48.58" offset="0"/>',
+        stop=cs.criteria("CollisionTest", "KeepLaneTest", "WrongLaneTest", "OnSidewalkTest"),
+    )
+    path = tmp_path / "town01.xosc"
+    path.write_text(text, encoding="utf-8")
+    report = run(path)
+    outcome = report.outcome
+    assert outcome.verdict is Verdict.PASSED, outcome.reason
+    for name in ("CollisionTest", "KeepLaneTest", "WrongLaneTest", "OnSidewalkTest"):
+        assert outcome.metrics[f"criteria.{name}"] == 1.0
+    assert outcome.metrics["drivenDistance"] >= 50.0
