@@ -21,6 +21,7 @@ from simtest_operator.scenarios import (
     HttpSource,
     PathSource,
     PinnedScenario,
+    RestSource,
     SecretRef,
     StartPolicy,
 )
@@ -41,6 +42,8 @@ def test_selection_and_sources() -> None:
             {"graphql": {"endpoint": "https://h/g", "query": "{s}", "variables": {"c": "x"},
                          "secretRef": {"name": "db", "key": "token"}}},
             {"configMap": {"name": "cm", "keys": ["a.xosc"]}},
+            {"rest": {"url": "https://h/api?x=1", "secretRef": {"name": "db", "key": "t"}}},
+            {"rest": {"url": "http://h/plain"}},
         ],
         "include": ["cut-in/*.xosc"], "exclude": ["**/wip/*"],
         "selector": {"matchTags": ["day"], "matchLabels": {"category": "cut-in"}},
@@ -54,6 +57,8 @@ def test_selection_and_sources() -> None:
         GraphqlSource(endpoint="https://h/g", query="{s}", variables={"c": "x"},
                       secret=SecretRef(name="db", key="token")),
         ConfigMapSource(name="cm", keys=("a.xosc",)),
+        RestSource(url="https://h/api?x=1", secret=SecretRef(name="db", key="t")),
+        RestSource(url="http://h/plain"),
     )  # fmt: skip
     assert (selection.include, selection.exclude) == (("cut-in/*.xosc",), ("**/wip/*",))
     assert selection.selector.tags == ("day",)
