@@ -6,7 +6,8 @@ the bearer token from the secret provider and never in an error; malformed respo
 SourceErrors naming the URL and item; the Locator asks the REST source again for an inline item
 (and says which source is missing); ``needs`` picks the ConfigMaps and databases a set of URIs
 needs; MountedConfigMaps reads a kubelet-style configMap volume (``..data`` symlinks) bounded,
-skipping what is not a key and refusing links out of the folder.
+skipping what is not a key and refusing links out of the folder; a located key has every other
+key of its ConfigMap beside it (a road network stored as a sibling key).
 """
 
 from __future__ import annotations
@@ -211,8 +212,12 @@ def test_mounted_configmaps_read_a_kubelet_volume(tmp_path: Path) -> None:
     resolved = resolve(ConfigMapSource(name="suite"), ctx)
     assert resolved.files == ("a.xosc",)
     assert resolved.uris["a.xosc"] == "configmap:suite/a.xosc"
+    located = Locator(ctx).locate(pin("configmap:suite/a.xosc", "A"))
+    assert (located.parent / "notes.txt").read_text() == "N", "sibling keys (roads) come along"
     located = Locator(ctx).locate(pin("configmap:suite/notes.txt", "N", "notes.txt"))
     assert located.read_text() == "N"
+    with pytest.raises(SourceError, match="ConfigMap 'suite' has no key 'b.xosc' any more"):
+        Locator(ctx).locate(pin("configmap:suite/b.xosc", "B", "b.xosc"))
     with pytest.raises(SourceError, match="ConfigMap 'gone' is not mounted in this pod"):
         reader("gone")
     with pytest.raises(SourceError, match="not a valid object name"):

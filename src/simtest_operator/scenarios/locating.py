@@ -144,14 +144,14 @@ class Locator:
         )
 
     def _configmap_key(self, parsed: uris.ConfigMapUri) -> Path:
+        """The key's file, beside every other key of the ConfigMap: a scenario may name a road
+        network or catalog stored as a sibling key (``LogicFile filepath="road.xodr"``)."""
         if parsed.name not in self._configmaps:
-            resolved = resolving.resolve(ConfigMapSource(name=parsed.name), self.ctx)
+            reader = self.ctx.config_maps
+            keys = tuple(sorted(reader(parsed.name))) if reader is not None else ()
+            resolved = resolving.resolve(ConfigMapSource(name=parsed.name, keys=keys), self.ctx)
             self._configmaps[parsed.name] = resolved.root
         path = self._configmaps[parsed.name] / parsed.key
         if not path.is_file():
-            # The key does not end in .xosc, so the default listing skipped it: read it directly.
-            resolved = resolving.resolve(
-                ConfigMapSource(name=parsed.name, keys=(parsed.key,)), self.ctx
-            )
-            path = resolved.root / parsed.key
+            raise SourceError(f"ConfigMap {parsed.name!r} has no key {parsed.key!r} any more")
         return path
