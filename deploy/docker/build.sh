@@ -2,7 +2,7 @@
 # Build the project's container images with buildah, on bases made here (no registry needed),
 # cached by content.
 #
-#   bash deploy/docker/build.sh                    # all: runner operator helmfile device-plugin pause
+#   bash deploy/docker/build.sh                    # all: runner operator helmfile device-plugin sut-go pause
 #   bash deploy/docker/build.sh runner pause       # a subset (the bases they need come along)
 #   bash deploy/docker/build.sh bases              # only the local bases
 #   bash deploy/docker/build.sh --cache-dir DIR …  # instead of $SIMTEST_CACHE_DIR
@@ -25,7 +25,7 @@
 #   base-uv       localhost/simtest-base/uv:<uv>                /uv from the PyPI wheel (for UV_IMAGE)
 #   base-golang   localhost/simtest-base/golang:<go>-bookworm   + this machine's Go (for GO_IMAGE)
 #   pause         localhost/simtest/pause:<v>                   deploy/docker/pause/pause.c, FROM scratch
-#   runner operator helmfile device-plugin                      deploy/docker/<name>.Dockerfile
+#   runner operator helmfile device-plugin sut-go               deploy/docker/<name>.Dockerfile
 #
 # What buildah 1.28 (Debian bookworm) needs on this machine kind, found by trying:
 #   storage   overlay on the ext4 cache (native overlay diff); vfs would copy every layer in
@@ -77,7 +77,7 @@ STORE="$IMG/storage"
 RUNROOT="/run/simtest-buildah/$(printf '%s' "$STORE" | sha256sum | cut -c1-12)"
 TC="$CACHE_ROOT/toolchain"
 UV_CACHE="$CACHE_ROOT/uv/cache"
-ALL_TARGETS=(runner operator helmfile device-plugin pause)
+ALL_TARGETS=(runner operator helmfile device-plugin sut-go pause)
 ISOLATION="${BUILDAH_ISOLATION:-oci}"
 CA_BUNDLE="${SSL_CERT_FILE:-/etc/ssl/certs/ca-certificates.crt}"
 KEY_LABEL=dev.simtest.build-key

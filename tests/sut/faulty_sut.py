@@ -1,6 +1,6 @@
 """A SUT that misbehaves on purpose, for the fault tests: ``python faulty_sut.py MODE [STEP]``.
 
-Modes: ``crash`` (dies at STEP), ``slow`` (answers STEP after 1 s), ``garbage`` (answers STEP
+Modes: ``kill`` (SIGKILLed at STEP), ``slow`` (answers STEP after 1 s), ``garbage`` (answers STEP
 with a malformed MotionRequest), ``refuse`` (reports an ERROR at STEP), ``exit`` (exits with
 code 3 before listening), ``silent`` (listens but never answers HELLO), ``version`` (speaks
 protocol 2). Until STEP it behaves like the reference SUT.
@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import os
+import signal
 import socket
 import sys
 import time
@@ -40,8 +41,8 @@ def main() -> None:
                     framing.send(conn, Kind.READY, 0, json.dumps(ready).encode())
                 elif frame.kind is Kind.SENSOR_VIEW and session is not None:
                     if frame.sequence == at:
-                        if mode == "crash":
-                            os._exit(9)
+                        if mode == "kill":
+                            os.kill(os.getpid(), signal.SIGKILL)
                         if mode == "slow":
                             time.sleep(1.0)
                         if mode == "garbage":

@@ -9,6 +9,7 @@ wait at once with its exit code and the tail of its stderr.
 from __future__ import annotations
 
 import contextlib
+import functools
 import os
 import socket
 import subprocess
@@ -57,9 +58,14 @@ class _Process:
             self._stderr.close()
             raise SutError(f"cannot start the SUT {command[0]!r}: {exc.strerror or exc}") from exc
 
-    def fate(self) -> str | None:
-        """None while it runs; else how it ended and what it said last."""
-        code = self.process.poll()
+    def fate(self, wait: float = 0.0) -> str | None:
+        """None while it runs (after waiting up to ``wait`` s for it to end: a crashed SUT's
+        socket closes a moment before its exit status is there); else how it ended and what
+        it said last."""
+        try:
+            code = self.process.wait(timeout=wait) if wait > 0 else self.process.poll()
+        except subprocess.TimeoutExpired:
+            code = None
         if code is None:
             return None
         how = f"killed by signal {-code}" if code < 0 else f"exited with code {code}"
@@ -113,7 +119,7 @@ def open_pilot(
             map_reference=map_reference,
         )
         if process is not None:
-            pilot.postmortem = process.fate
+            pilot.postmortem = functools.partial(process.fate, 1.0)
         with pilot:
             pilot.handshake(hello, timeout=external.startup_timeout)
             yield pilot
