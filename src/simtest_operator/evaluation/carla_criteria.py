@@ -11,7 +11,7 @@ ScenarioRunner criterion      Judged here as
 ``KeepLaneTest``              a corner of the ego's box lay in another lane of the ego's road
                               (CARLA: a lane-invasion event)
 ``WrongLaneTest``             the ego moved against the travel direction of the driving lane it
-                              is on (right-hand traffic: lanes with negative ids run along +s)
+                              is on (by the road's rule; RHT: negative lane ids run along +s)
 ``OnSidewalkTest``            the ego's reference point was on a ``sidewalk`` lane
 ``DrivenDistanceTest``        the ego drove at least ``distance_success`` metres by the end
                               (``distance_acceptable``, if given, also passes)
@@ -116,7 +116,7 @@ class ScenarioCriteria:
         self._hint = coord
         if "OnSidewalkTest" in self.names and coord.lane_type == "sidewalk":
             self._fail("OnSidewalkTest", time, f"{ego.name} on a sidewalk of road {coord.road_id}")
-        if "WrongLaneTest" in self.names and _against_traffic(ego, coord):
+        if "WrongLaneTest" in self.names and self._against_traffic(ego, coord):
             self._fail(
                 "WrongLaneTest",
                 time,
@@ -133,17 +133,31 @@ class ScenarioCriteria:
                 )
 
     def _invaded_lane(self, ego: EntityState, coord: RoadCoord) -> int | None:
-        assert self._roads is not None
+        """The other lane of the same road and lane section a box corner lies in (lanes are
+        renumbered across sections, and junction roads overlap: both are not invasions)."""
+        roads = self._roads
+        assert roads is not None
+        section = roads.lane_section_index(coord.road_id, coord.s)
         for x, y in geometry.box_corners(ego):
-            corner = self._roads.to_road(x, y, coord, heading=ego.heading)
+            corner = roads.to_road(x, y, coord, heading=ego.heading)
             if (
                 corner is not None
                 and corner.on_road
                 and corner.road_id == coord.road_id
                 and corner.lane_id != coord.lane_id
+                and roads.lane_section_index(corner.road_id, corner.s) == section
             ):
                 return corner.lane_id
         return None
+
+    def _against_traffic(self, ego: EntityState, coord: RoadCoord) -> bool:
+        assert self._roads is not None
+        if coord.lane_id == 0 or coord.lane_type != "driving" or ego.speed < _MOVING:
+            return False
+        travel = coord.heading_of_road
+        if self._roads.driving_direction(coord.road_id, coord.lane_id) < 0:
+            travel += math.pi
+        return math.cos(ego.heading - travel) < 0.0
 
     def _fail(self, name: str, time: float, detail: str) -> None:
         if name not in self._failures:
@@ -213,10 +227,3 @@ def _number(text: str | None) -> float | None:
     except ValueError:
         return None
     return value if math.isfinite(value) else None
-
-
-def _against_traffic(ego: EntityState, coord: RoadCoord) -> bool:
-    if coord.lane_id == 0 or coord.lane_type != "driving" or ego.speed < _MOVING:
-        return False
-    travel = coord.heading_of_road if coord.lane_id < 0 else coord.heading_of_road + math.pi
-    return math.cos(ego.heading - travel) < 0.0
