@@ -117,8 +117,8 @@ def main() -> None:
             )
         table[variant] = entry
     print(f"{args.vehicles} vehicles, {args.seconds:g} s simulated, {args.repeat} rounds")
-    for variant, entry in table.items():
-        print(variant.ljust(17), json.dumps(entry))
+    for label, figures in table.items():
+        print(label.ljust(17), json.dumps(figures))
     if args.json:
         args.json.write_text(json.dumps(table, indent=2) + "\n", encoding="utf-8")
 

@@ -37,7 +37,7 @@ SIDECAR = {
 def rendered(sut: dict[str, Any], template: str = "default") -> dict[str, Any]:
     wire = environment.SutConfig.model_validate(sut).to_wire()
     library = render.TemplateLibrary(REPO / "helm-templates")
-    return render.render_environment(request(sut=wire, template=template), library).pod
+    return dict(render.render_environment(request(sut=wire, template=template), library).pod)
 
 
 @pytest.mark.parametrize("template", ["default", "ros2"])
