@@ -9,7 +9,8 @@
 # Cached by content: ~/.cache/simtest/sut-go/<key>/simtest-sut-go, <key> = sha256 of the Go
 # sources, go.mod/go.sum, the descriptor set, and the protoc and Go versions; an unchanged
 # build returns at once. Needs go, protoc (Debian protobuf-compiler; deploy/setup.sh test
-# installs it) and the project's Python (for the descriptor set: $PYTHON, default .venv).
+# installs it) and the OSI descriptor set: --descriptor-set FILE, else read from betterosi with
+# the project's Python ($PYTHON, default .venv/bin/python).
 # protoc-gen-go is built from google.golang.org/protobuf at the version go.mod pins.
 set -euo pipefail
 
@@ -52,17 +53,12 @@ if [[ ! -x "$BIN" ]]; then
         || die "cannot build protoc-gen-go $PGG_VERSION"
     mkdir -p "$WORK/src/osi3"
     cp "$HERE"/go.mod "$HERE"/go.sum "$HERE"/*.go "$WORK/src/"
-    # Every OSI file of the set (the SensorView needs most of them), one Go package osi3.
-    mapfile -t FILES < <("$PYTHON" - "$DESCRIPTORS" <<'PY'
-import sys
-from simtest_operator.sut import protowire as pw
-for number, _, value in pw.fields(open(sys.argv[1], "rb").read()):
-    if number == 1:
-        name = pw.message_fields(value)[1][0].decode()
-        if name.startswith("osi_"):
-            print(name)
-PY
-)
+    # Every OSI file of the set (the SensorView needs most of them), one Go package osi3; protoc
+    # lists them itself (the set carries descriptor.proto too).
+    mapfile -t FILES < <(protoc --descriptor_set_in="$DESCRIPTORS" \
+        --decode=google.protobuf.FileDescriptorSet google/protobuf/descriptor.proto <"$DESCRIPTORS" \
+        | sed -n 's/^  name: "\(osi_[a-z_]*\.proto\)"$/\1/p')
+    [[ ${#FILES[@]} -gt 0 ]] || die "no osi_*.proto in the descriptor set $DESCRIPTORS"
     MAPS=()
     for f in "${FILES[@]}"; do MAPS+=("--go_opt=M$f=simtest.dev/sut-go/osi3"); done
     PATH="$WORK/bin:$PATH" protoc --descriptor_set_in="$DESCRIPTORS" \
