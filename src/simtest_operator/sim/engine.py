@@ -291,7 +291,13 @@ class Simulation:
             actor.speed = max(actor.speed + command.acceleration * dt, 0.0)
         if lateral is not None and lateral is not longitudinal:
             lateral.step(world, dt)
-        elif lateral is None and driver is not None and actor.mode is Mode.ROAD and not self._pilot:
+        elif (
+            lateral is None
+            and driver is not None
+            and self._pilot is None
+            and actor.mode is Mode.ROAD
+        ):
+            # lane keeping of the in-process model (an external SUT steers through its order)
             actor.offset = driver.lateral_offset(actor.offset, dt)
         # A trajectory placed the actor for the end of this step (also when it just ended and
         # the actor rejoined its lane): it must not move a second time.
