@@ -41,7 +41,7 @@
   resources: ["events"]
   verbs: ["create"]
 {{- if .Values.rbac.readSecrets }}
-# Bearer tokens of `graphql` scenario sources (secretRef): single named reads only.
+# Bearer tokens of `graphql` and `rest` scenario sources (secretRef): single named reads only.
 - apiGroups: [""]
   resources: ["secrets"]
   verbs: ["get"]
