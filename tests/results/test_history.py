@@ -71,8 +71,10 @@ def test_scenario_history_lists_runs_newest_first(store_target: str) -> None:
 
 def test_classify_rules() -> None:
     def family(seed: str | None, passed: int, failed: int, sut: str = "s 1") -> history.Family:
-        return history.Family(scenario_id="x", sha256="a", sut=sut, simulator="sumo", seed=seed,
-                               runs=passed + failed, passed=passed, failed=failed, recordings=1)  # fmt: skip
+        return history.Family(
+            scenario_id="x", sha256="a", sut=sut, simulator="sumo", seed=seed,
+            runs=passed + failed, passed=passed, failed=failed, recordings=1,
+        )  # fmt: skip
 
     assert history.classify([]) is history.Flakiness.STABLE
     assert history.classify([family("1", 2, 0), family("2", 0, 2)]).value == "seed-sensitive"
