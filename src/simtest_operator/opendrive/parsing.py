@@ -346,13 +346,14 @@ class _Reader:
 
     def _polynomial(self, shape: etree._Element, geometry: models.Geometry) -> models.Geometry:
         """Refuse (param)poly3 coefficients that carry the curve beyond the coordinate limit
-        (or overflow) within the element: each term is bounded at the parameter's end."""
+        (or overflow) within the element: each term and coefficient is bounded."""
         p_end = 1.0 if geometry.normalized else geometry.length
         limit = self._limits.max_coordinate
         param = geometry.kind is models.GeometryKind.PARAM_POLY3
         for axis, coefficients in (("U", geometry.u), ("V", geometry.v)):
             for power, value in enumerate(coefficients):
-                if abs(value) * p_end**power > limit:
+                # Absolute too: a tiny element must not carry huge derivatives (overflow).
+                if max(abs(value), abs(value) * p_end**power) > limit:
                     name = "abcd"[power] + (axis if param else "")
                     raise self._error(
                         shape,

@@ -80,11 +80,12 @@ class _Spiral:
     def __init__(self, geometry: models.Geometry) -> None:
         self._x, self._y, self._heading = geometry.x, geometry.y, geometry.heading
         self._k0 = geometry.curv_start
-        self._c = (
+        rate = (
             (geometry.curv_end - geometry.curv_start) / geometry.length
             if geometry.length > 0
             else 0.0
         )
+        self._c = rate if math.isfinite(rate) else 0.0  # sub-picometre spirals overflow
 
     def at(self, ds: float) -> RefPoint:
         k0, c, h0 = self._k0, self._c, self._heading
@@ -129,6 +130,7 @@ class _ParamPoly3:
         cumulative = np.concatenate(([0.0], np.cumsum(0.5 * (speed[1:] + speed[:-1]) * np.diff(p))))
         total = float(cumulative[-1])
         scale = geometry.length / total if total > 0 else 0.0
+        scale = scale if math.isfinite(scale) else 0.0  # a (sub)normal-tiny total overflows
         self._s = [float(value) * scale for value in cumulative]
         self._p = [float(value) for value in p]
 
@@ -148,8 +150,8 @@ class _ParamPoly3:
         v1 = bv + p * (2 * cv + 3 * dv * p)
         u2 = 2 * cu + 6 * du * p
         v2 = 2 * cv + 6 * dv * p
-        norm = math.hypot(u1, v1)
-        curvature = (u1 * v2 - v1 * u2) / norm**3 if norm > 0 else 0.0
+        cube = math.hypot(u1, v1) ** 3  # may underflow to 0 for a tiny but non-zero speed
+        curvature = (u1 * v2 - v1 * u2) / cube if cube > 0 else 0.0
         return (
             self._x + u * self._cos - v * self._sin,
             self._y + u * self._sin + v * self._cos,

@@ -270,7 +270,10 @@ def evaluate(text: str, lookup: Lookup) -> Value:
     """
     if len(text) > MAX_LENGTH:
         raise ScenarioError(f"expression longer than {MAX_LENGTH} characters")
-    value = _Parser(_tokenize(text), lookup, text).parse()
+    try:
+        value = _Parser(_tokenize(text), lookup, text).parse()
+    except (ArithmeticError, ValueError) as exc:  # e.g. fmod(inf, x), found by fuzzing
+        raise ScenarioError(f"invalid expression {text!r}: {exc}") from exc
     if isinstance(value, float) and not math.isfinite(value):
         raise ScenarioError(f"invalid expression {text!r}: result is not finite")
     return value

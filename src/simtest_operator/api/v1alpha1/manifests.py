@@ -67,7 +67,10 @@ def parse(document: Any, *, source: str = "<manifest>") -> Manifest[Any]:
         problems.append(("kind", f"must be one of {known}, got {kind_name!r}"))
     metadata = document.get("metadata")
     name, namespace, labels = _check_metadata(metadata, kind, problems)
-    unknown = sorted(set(document) - {"apiVersion", "kind", "metadata", "spec", "status"})
+    # str(): YAML keys need not be strings (``? [a]``, an empty key is None) and must not crash.
+    unknown = sorted(
+        str(key) for key in set(document) - {"apiVersion", "kind", "metadata", "spec", "status"}
+    )
     problems.extend((key, "unknown field") for key in unknown)
     spec_doc = document.get("spec")
     if spec_doc is None:
