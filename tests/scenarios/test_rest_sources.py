@@ -216,7 +216,7 @@ def test_mounted_configmaps_read_a_kubelet_volume(tmp_path: Path) -> None:
     assert (located.parent / "notes.txt").read_text() == "N", "sibling keys (roads) come along"
     located = Locator(ctx).locate(pin("configmap:suite/notes.txt", "N", "notes.txt"))
     assert located.read_text() == "N"
-    with pytest.raises(SourceError, match="ConfigMap 'suite' has no key 'b.xosc' any more"):
+    with pytest.raises(SourceError, match=r"ConfigMap 'suite' has no key 'b\.xosc' any more"):
         Locator(ctx).locate(pin("configmap:suite/b.xosc", "B", "b.xosc"))
     with pytest.raises(SourceError, match="ConfigMap 'gone' is not mounted in this pod"):
         reader("gone")
