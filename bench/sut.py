@@ -6,9 +6,9 @@ separate process on loopback (OSI SUT protocol v1, lockstep) vs by the Go exampl
 Each run is a fresh process (libsumo is one simulation per process), in ``--repeat`` rounds
 alternating the order of the variants. Per variant: the median run's stepping time, steps per
 second, real-time factor of the stepping loop; for the external SUT also the round trip per step
-(p50/p99, measured by the simulator from sending the SensorView to receiving the MotionRequest,
-which includes encoding nothing but does include the SUT's own work) and whether the verdicts
-agree. Prints a table and writes JSON::
+(p50/p99, measured by the simulator from
+sending the encoded SensorView to receiving the answer: transfer plus the SUT's own work) and
+whether the verdicts agree. Prints a table and writes JSON::
 
     python bench/sut.py [--vehicles 20] [--seconds 60] [--repeat 3] [--json FILE]
 """

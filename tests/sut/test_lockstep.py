@@ -117,13 +117,13 @@ def test_a_sut_that_never_answers_the_handshake_times_out_at_start_up() -> None:
 
 def test_a_paced_run_records_the_achieved_factor_and_flags_falling_behind() -> None:
     sut = dataclasses.replace(AEB, external=external(reference_command()))
-    kept = run(sut, None, real_time_factor=50.0).outcome.metrics
-    assert kept["realTimeFactorTarget"] == 50.0
+    kept = run(sut, None, real_time_factor=20.0).outcome.metrics
+    assert kept["realTimeFactorTarget"] == 20.0
     assert kept["realTimeBehind"] == 0.0
-    assert kept["loopRealTimeFactor"] == pytest.approx(50.0, rel=0.1)
+    assert 19.0 <= kept["loopRealTimeFactor"] <= 21.0
     slow = dataclasses.replace(
         AEB, external=external((sys.executable, str(FAULTY), "slow", "3"), step_deadline=2.0)
     )
-    behind = run(slow, None, real_time_factor=50.0).outcome.metrics
+    behind = run(slow, None, real_time_factor=20.0).outcome.metrics  # a 1 s stall in 0.41 s
     assert behind["realTimeBehind"] == 1.0
-    assert behind["loopRealTimeFactor"] < 47.5
+    assert behind["loopRealTimeFactor"] < 19.0
