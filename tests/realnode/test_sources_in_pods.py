@@ -40,6 +40,8 @@ from tests.e2e import support
 from tests.realnode.conftest import SCENARIOS, SMOKE
 from tests.realnode.test_real_node import PodWatch
 
+pytestmark = pytest.mark.timeout(600)  # operator start, a real campaign, then `simtest run`
+
 PAIR = ("cut-in_highway_v25_gap30_dv5.xosc", "cut-in_highway_v30_gap8_dv12.xosc")
 """Two smoke scenarios on ``highway_straight``: one the driver model passes, one it fails."""
 ROAD = "highway_straight.xodr"
