@@ -9,6 +9,8 @@ they would not return (the 1e12 spiral took 5e13 quadrature steps per query)."""
 from __future__ import annotations
 
 import dataclasses
+import math
+import re
 import subprocess
 import sys
 import time
@@ -17,7 +19,7 @@ from pathlib import Path
 import pytest
 
 from simtest_operator.errors import ScenarioError
-from simtest_operator.opendrive import RoadNetwork, limits, load, models, parse
+from simtest_operator.opendrive import RoadNetwork, limits, load, models, parse, planview
 from tests.opendrive.conftest import single_road
 
 HOSTILE = Path(__file__).resolve().parent / "hostile"
@@ -154,3 +156,35 @@ def test_large_file_memory_is_bounded() -> None:
     assert roads == 20000
     assert size > 10 * 1024 * 1024
     assert grown < 5 * size, f"parsing {size} bytes grew RSS by {grown} bytes"
+
+
+@pytest.mark.parametrize(
+    ("geometry", "message"),
+    [
+        # Found by fuzzing: a 1e-200 m paramPoly3 with bU=1e200 passed the per-element bound and
+        # overflowed its curvature (OverflowError, a traceback instead of Invalid).
+        ('<paramPoly3 aU="0" bU="1e200" cU="0" dU="0" aV="0" bV="1" cV="0" dV="0" '
+         'pRange="arcLength"/>', "bU 1e+200 moves the curve"),
+    ],
+)  # fmt: skip
+def test_fuzz_findings_are_refused(geometry: str, message: str) -> None:
+    line = f'<geometry s="0" x="0" y="0" hdg="0" length="1e-200">{geometry}</geometry>'
+    with pytest.raises(ScenarioError, match=re.escape(message)):
+        parse(single_road(line, length=1))
+
+
+def test_degenerate_evaluators_stay_finite() -> None:
+    # Found by fuzzing: a paramPoly3 whose speed is tiny but non-zero (norm**3 underflowed to 0,
+    # ZeroDivisionError) and a sub-picometre spiral (its curvature rate overflowed to inf).
+    tiny_speed = models.Geometry(
+        kind=models.GeometryKind.PARAM_POLY3, s=0.0, x=0.0, y=0.0, heading=0.0, length=1.0,
+        u=(0.0, 1e-110, 0.0, 0.0), v=(0.0, 0.0, 1e-110, 0.0),
+    )  # fmt: skip
+    short_spiral = models.Geometry(
+        kind=models.GeometryKind.SPIRAL, s=0.0, x=0.0, y=0.0, heading=0.0, length=1e-320,
+        curv_start=-1000.0, curv_end=1000.0,
+    )  # fmt: skip
+    for geometry in (tiny_speed, short_spiral):
+        line = planview.ReferenceLine((geometry,), geometry.length)
+        for s in (0.0, 0.5 * geometry.length, geometry.length):
+            assert all(math.isfinite(value) for value in line.at(s)), (geometry.kind, s)

@@ -1,0 +1,58 @@
+"""A campaign whose scenarios use hostile road files (issue 12, item 4), run by ``simtest run`` with
+the real simulator engine: each scenario ends ``Invalid`` at once with the element and line, tried
+once. Before, the 1e12 spiral hung the geometry evaluator until the campaign's timeout (a
+``Timeout`` verdict, blaming the system under test) and NaN lengths reached netconvert (``Error``,
+retried, with SUMO's stderr)."""
+
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from simtest_operator.cli.main import cli
+from tests.runner.support import campaign_manifest
+
+ROOT = Path(__file__).resolve().parents[2]
+HOSTILE = ROOT / "tests" / "opendrive" / "hostile"
+SCENARIO = ROOT / "scenarios" / "smoke" / "hard-braking_rural_v15_thw2_d4.xosc"
+ROADS = {
+    "spiral_extreme_curvend": "<spiral>, line 7",
+    "length_nan": "<road>, line 4",
+    "width_negative": "<width>, line 14",
+}
+
+
+@pytest.mark.timeout(180)
+def test_hostile_roads_are_invalid_not_timeout_or_error(tmp_path: Path) -> None:
+    suite = tmp_path / "suite"
+    suite.mkdir()
+    text = SCENARIO.read_text()
+    for name in ROADS:
+        (suite / f"{name}.xodr").write_bytes((HOSTILE / f"{name}.xodr").read_bytes())
+        (suite / f"{name}.xosc").write_text(
+            text.replace("../roads/rural_curved.xodr", f"{name}.xodr")
+        )
+    manifest = tmp_path / "campaign.yaml"
+    manifest.write_text(campaign_manifest(timeout=60, retries=2))
+    started = time.monotonic()
+    result = CliRunner().invoke(
+        cli,
+        ["run", str(manifest), "-o", str(tmp_path / "out"), "-j", "1", "--plain"],
+        env={"SIMTEST_CACHE_DIR": str(tmp_path / "cache")},
+    )
+    assert result.exit_code == 2, result.output
+    assert time.monotonic() - started < 60, "a hostile road must not run into the timeout"
+    assert "retry" not in result.output
+    results = {
+        json.loads(path.read_text())["scenarioId"]: json.loads(path.read_text())
+        for path in (tmp_path / "out" / "scenarios").glob("*/result.json")
+    }
+    assert len(results) == len(ROADS)
+    for name, where in ROADS.items():
+        outcome = results[f"{name}.xosc"]
+        assert outcome["verdict"] == "Invalid", outcome
+        assert where in outcome["reason"] and "\n" not in outcome["reason"], outcome["reason"]
