@@ -26,6 +26,8 @@ MAX_BYTES = limits.DEFAULT.max_bytes
 """Largest accepted .xodr by default (real HD maps reach tens of MB; anything bigger is refused)."""
 
 _T = TypeVar("_T")
+_WIDTH_ROUNDING = -1e-6
+"""Exporters write rounding noise like ``a="-1e-12"``; a truly negative width is refused."""
 
 
 def load(
@@ -409,7 +411,7 @@ class _Reader:
         """Width records: non-negative where they start and bounded over the lane section."""
         children = _children(element, "width")
         for child in children:
-            if self._float(child, "a", 0.0) < 0.0:
+            if self._float(child, "a", 0.0) < _WIDTH_ROUNDING:
                 raise self._error(child, f"lane width a={child.get('a')} is negative")
         return self._records(children, "sOffset", span, self._limits.max_lane_width, "width")
 
