@@ -39,6 +39,7 @@ NOBODYS = frozenset(
 OTHERS = {
     "crds": SUMO | KUBERNETES | {"numpy", "psycopg"},
     "dev-cluster": SUMO | {"kopf", "numpy", "psycopg"},
+    "evidence": SUMO | KUBERNETES | {"numpy", "psycopg"},
     "operator": SUMO | {"numpy", "psycopg"},
     "package": SUMO | KUBERNETES | {"numpy", "psycopg"},
     "render": SUMO | KUBERNETES | {"numpy"},
@@ -46,6 +47,7 @@ OTHERS = {
     "run": SUMO | KUBERNETES | {"numpy"},
     "scenario": KUBERNETES | {"psycopg", "pydantic", "jinja2", "rich"},
     "submit": SUMO | {"kopf", "numpy"},
+    "ui": SUMO | KUBERNETES | {"numpy", "psycopg"},
 }
 """Command -> other commands' dependencies its module must not import."""
 

@@ -37,6 +37,11 @@ COMMANDS = {
         "simtest_operator.cli.devcluster:dev_cluster",
         "A real Kubernetes control plane, fake (kwok) nodes and a real node, as local processes.",
     ),
+    "evidence": Entry(
+        "simtest_operator.cli.evidence:evidence",
+        "Export a campaign run's evidence bundle (verdicts, metrics and content hashes of "
+        "scenario, map, SUT, simulator and recording) and verify one offline.",
+    ),
     "operator": Entry(
         "simtest_operator.cli.operator:operator",
         "Run the simtest operator: TestCampaigns in, simulator pods and verdicts out.",
@@ -65,6 +70,10 @@ COMMANDS = {
     "submit": Entry(
         "simtest_operator.cli.submit:submit",
         "Create the TestCampaign in MANIFEST on the cluster (and wait for its verdict).",
+    ),
+    "ui": Entry(
+        "simtest_operator.cli.ui:ui",
+        "Serve the results UI from a results database (SQLite or PostgreSQL).",
     ),
 }
 """Command name -> its entry."""

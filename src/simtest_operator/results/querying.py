@@ -20,7 +20,7 @@ from typing import Any, Self
 import psycopg
 
 from simtest_operator.errors import ResultsError
-from simtest_operator.results import dsn, migrating, sqlite
+from simtest_operator.results import comparing, dsn, migrating, records, sqlite, sqlrows
 
 Row = tuple[Any, ...]
 MINIMUM_VERSION = 3
@@ -98,6 +98,58 @@ class ReadOnlyDatabase:
             return None
         value = raw if isinstance(raw, datetime.datetime) else datetime.datetime.fromisoformat(raw)
         return value.astimezone(datetime.UTC)
+
+    # Codec (sqlrows): lets the store's row conversion build records from these rows too.
+    def json_out(self, raw: Any) -> Any:
+        return self.json(raw)
+
+    def time_out(self, raw: Any) -> datetime.datetime:
+        value = self.time(raw)
+        if value is None:
+            raise ResultsError(f"results database {self.where}: a required timestamp is NULL")
+        return value
+
+    def json_in(self, value: object) -> object:
+        raise ResultsError("the read-only connection writes nothing")
+
+    def time_in(self, value: datetime.datetime) -> object:
+        raise ResultsError("the read-only connection writes nothing")
+
+    def campaign(self, run_key: str) -> records.CampaignRecord | None:
+        """One campaign run, as the store returns it."""
+        rows = self.query(
+            f"SELECT {sqlrows.CAMPAIGN_COLUMNS} FROM campaigns WHERE run_key = ?", (run_key,)
+        )
+        return sqlrows.campaign(self, rows[0]) if rows else None
+
+    def outcomes(
+        self, run_key: str, *, scenario_id: str | None = None, final_only: bool = True
+    ) -> tuple[records.StoredOutcome, ...]:
+        """A run's stored attempts (of one scenario), converted as the store converts them."""
+        one = scenario_id is not None
+        params: tuple[object, ...] = (run_key, scenario_id) if one else (run_key,)
+        rows = self.query(
+            f"SELECT {sqlrows.OUTCOME_COLUMNS} FROM runs r JOIN scenarios s "
+            "ON s.scenario_id = r.scenario_id AND s.sha256 = r.sha256 "
+            f"WHERE r.run_key = ?{' AND r.scenario_id = ?' if one else ''}",
+            params,
+        )
+        metrics: dict[tuple[str, int], dict[str, float]] = {}
+        for sid, attempt, name, value in self.query(
+            "SELECT scenario_id, attempt, name, value FROM metrics WHERE run_key = ?"
+            f"{' AND scenario_id = ?' if one else ''}",
+            params,
+        ):
+            metrics.setdefault((sid, int(attempt)), {})[name] = (
+                float("nan") if value is None else float(value)
+            )
+        stored = sorted(
+            (sqlrows.outcome(self, row, metrics) for row in rows),
+            key=lambda s: (s.scenario.scenario_id, s.outcome.attempts),
+        )
+        if final_only:
+            return tuple(comparing.final_outcomes(stored).values())
+        return tuple(stored)
 
     def json_text(self, column: str, key: str) -> str:
         """SQL for the text value of ``column``'s top-level ``key`` (a JSON object column)."""

@@ -1,0 +1,53 @@
+"""``simtest ui``: serve the results UI from a results database until interrupted."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from simtest_operator.errors import SimtestError
+
+
+@click.command()
+@click.option("--database", "database", required=True, metavar="DSN|OUTDIR",
+              envvar="SIMTEST_RESULTS_DATABASE",
+              help="PostgreSQL DSN, an output folder or a SQLite file "
+              "(env SIMTEST_RESULTS_DATABASE).")  # fmt: skip
+@click.option("--host", default="127.0.0.1", show_default=True,
+              help="Address to listen on (0.0.0.0 in a pod).")  # fmt: skip
+@click.option("--port", default=8080, show_default=True, type=click.IntRange(0, 65535),
+              help="Port to listen on (0 picks a free one).")  # fmt: skip
+@click.option("--artifacts", type=click.Path(exists=True, file_okay=False, path_type=Path),
+              help="Folder relative artifact paths start from  [default: the output folder "
+              "given as --database, else the current folder]")  # fmt: skip
+def ui(database: str, host: str, port: int, artifacts: Path | None) -> None:
+    """Serve the results UI from a results database (SQLite or PostgreSQL)."""
+    from simtest_operator.results import dsn
+    from simtest_operator.results.querying import ReadOnlyDatabase
+    from simtest_operator.runner.campaigns import read_recording
+    from simtest_operator.ui import server, views
+
+    located = dsn.classify(database)
+    base = artifacts or (located if isinstance(located, Path) and located.is_dir() else None)
+    try:
+        db = ReadOnlyDatabase(database)
+    except SimtestError as exc:
+        click.echo(f"simtest ui: {exc}", err=True)
+        raise SystemExit(2) from None
+    context = views.Context(base_dir=base, read_trajectories=read_recording)
+    try:
+        httpd = server.make(server.App(db, context), host=host, port=port)
+    except OSError as exc:
+        db.close()
+        click.echo(f"simtest ui: cannot listen on {host}:{port}: {exc.strerror}", err=True)
+        raise SystemExit(2) from None
+    bound_port = httpd.server_address[1]
+    click.echo(f"simtest ui: serving {db.where} on http://{host}:{bound_port}/", err=True)
+    try:
+        httpd.serve_forever()
+    except KeyboardInterrupt:
+        pass
+    finally:
+        httpd.server_close()
+        db.close()
