@@ -79,12 +79,12 @@ def test_spiral_evaluation_is_bounded_without_the_parser() -> None:
 
 @pytest.mark.timeout(20)
 def test_wide_road_search_index_is_bounded() -> None:
-    # 400 lanes of 900 m (each within the per-lane limit) made every 2 m segment enter ~1e6 grid
-    # cells; wide segments are now scanned per query instead.
+    # 100 lanes of 900 m (within the per-lane and lane-count limits) made every 2 m segment
+    # enter ~2e7 grid cells; wide segments are now scanned per query instead.
     lane = '<lane id="-{k}" type="driving"><width sOffset="0" a="900"/></lane>'
     lanes = (
         '<laneSection s="0"><center><lane id="0" type="none"/></center><right>'
-        + "".join(lane.format(k=k) for k in range(1, 401))
+        + "".join(lane.format(k=k) for k in range(1, 101))
         + "</right></laneSection>"
     )
     line = '<geometry s="0" x="0" y="0" hdg="0" length="200"><line/></geometry>'
@@ -103,6 +103,19 @@ def test_total_length_limit_names_the_road_that_exceeds_it() -> None:
         parse(data.encode(), bounds=limits.Limits(max_total_length=1000.0))
     assert caught.value.element == "road"
     assert len(parse(data.encode()).roads) == 2
+
+
+def test_road_and_lane_counts_are_bounded() -> None:
+    line = '<geometry s="0" x="0" y="0" hdg="0" length="10"><line/></geometry>'
+    road = single_road(line, length=10).decode()
+    body = road[road.index("<road ") : road.index("</OpenDRIVE>")]
+    data = road.replace("</OpenDRIVE>", body.replace('id="r"', 'id="r2"') + "</OpenDRIVE>")
+    with pytest.raises(ScenarioError, match="more than 1 roads") as caught:
+        parse(data.encode(), bounds=limits.Limits(max_roads=1))
+    assert (caught.value.element, caught.value.line) == ("road", 1)
+    with pytest.raises(ScenarioError, match="2 lanes in <right>, more than 1") as caught:
+        parse(road.encode(), bounds=limits.Limits(max_lanes=1))
+    assert caught.value.element == "right"
 
 
 def test_limits_are_configurable() -> None:

@@ -5,7 +5,8 @@ a spiral's total turn and a road's lateral extent; a file that sets any of them 
 to NaN/inf) would hang or exhaust a simulator instead of being refused. Every limit is one to two
 orders of magnitude above what real maps use (CARLA Town01-10HD and the esmini corpus: roads up to
 3 km, 10.8 km per map, |curvature| <= 1 /m, spirals turning <= 5 rad, lanes up to 50 m wide,
-coordinates within 1.5 km; geo-referenced maps reach UTM northings of ~1e7 m).
+coordinates within 1.5 km, 277 roads, 15 lanes per section; geo-referenced maps reach UTM
+northings of ~1e7 m).
 """
 
 from __future__ import annotations
@@ -33,6 +34,10 @@ class Limits:
     """|curvature| of arcs and spirals, 1/m (a 1 mm radius)."""
     max_spiral_turn: float = 64.0
     """Total heading change of one spiral, radians (about 10 full turns); bounds its quadrature."""
+    max_roads: int = 50_000
+    """Roads per document: each adds at least one search-index segment, whatever its length."""
+    max_lanes: int = 100
+    """Lanes per side of a lane section: lane queries walk them on every simulation step."""
     max_lane_width: float = 1_000.0
     """Width of one lane (or |border|, |laneOffset|) anywhere along its record, metres."""
 

@@ -172,6 +172,10 @@ class _Reader:
                 )
                 name = element.get("name") or ""
             elif kind == "road":
+                if len(roads) >= self._limits.max_roads:
+                    raise self._error(
+                        element, f"more than {self._limits.max_roads} roads (the document limit)"
+                    )
                 road = self.road(element)
                 if road.id in seen:
                     raise self._error(element, f"duplicate road id {road.id!r}")
@@ -375,7 +379,13 @@ class _Reader:
             container = _child(element, side)
             if container is None:
                 return ()
-            result = [self.lane(child, span) for child in _children(container, "lane")]
+            children = _children(container, "lane")
+            if len(children) > self._limits.max_lanes:
+                raise self._error(
+                    container,
+                    f"{len(children)} lanes in <{side}>, more than {self._limits.max_lanes}",
+                )
+            result = [self.lane(child, span) for child in children]
             for lane in result:
                 if lane.id * sign <= 0:
                     raise self._error(container, f"lane id {lane.id} does not belong in <{side}>")
