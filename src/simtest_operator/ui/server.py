@@ -39,6 +39,11 @@ def _when(value: datetime.datetime | None) -> str:
     return f"{value:%Y-%m-%d %H:%M} UTC" if value else "—"
 
 
+def _q(value: object) -> str:
+    """A query-string value: every reserved character escaped (scenario ids hold ``/``)."""
+    return urllib.parse.quote(str(value), safe="")
+
+
 def _metric(value: float) -> str:
     if math.isnan(value):
         return "n/a"
@@ -54,7 +59,7 @@ def environment() -> jinja2.Environment:
         autoescape=True,
         undefined=jinja2.StrictUndefined,
     )
-    env.filters.update(pct=_pct, when=_when, metric=_metric, q=urllib.parse.quote,
+    env.filters.update(pct=_pct, when=_when, metric=_metric, q=_q,
                        local_link=reporting.local_link)  # fmt: skip
     env.globals.update(colours=plots.VERDICT_COLOURS, verdicts=queries.VERDICTS)
     return env
