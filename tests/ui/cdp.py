@@ -114,8 +114,8 @@ class Browser:
         x, y = box[0] + box[2] * at, box[1] + box[3] / 2
         self.evaluate("window.__left = true")
         for kind in ("mousePressed", "mouseReleased"):
-            self.send("Input.dispatchMouseEvent",
-                      {"type": kind, "x": x, "y": y, "button": "left", "clickCount": 1})  # fmt: skip
+            event = {"type": kind, "x": x, "y": y, "button": "left", "clickCount": 1}
+            self.send("Input.dispatchMouseEvent", event)
         if navigates:
             self.wait_for("!window.__left && document.readyState === 'complete'")
 

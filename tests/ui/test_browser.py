@@ -75,8 +75,10 @@ def _has_colour(image: Image.Image, hex_colour: str) -> bool:
     wanted = tuple(int(hex_colour[i : i + 2], 16) for i in (1, 3, 5))
     small = image.resize((image.width // 2, image.height // 2), Image.Resampling.NEAREST)
     colours = small.getcolors(maxcolors=1 << 20) or []
-    return any(all(abs(c - w) <= 3 for c, w in zip(rgb, wanted, strict=True))
-               for _, rgb in colours)  # fmt: skip
+    return any(
+        isinstance(rgb, tuple) and all(abs(c - w) <= 3 for c, w in zip(rgb, wanted, strict=True))
+        for _, rgb in colours
+    )
 
 
 def test_overview_then_history_and_flakiness(

@@ -1,0 +1,169 @@
+"""The results UI's pages and JSON endpoints through WSGI, on SQLite and PostgreSQL.
+
+Covers: every page renders (200) on both databases; the JSON twins carry the figures the pages
+show (run counts, coverage by type/road/tag/requirement, comparison classes, pass rate by SUT
+version, flakiness, one scenario's history, the developer view's replay data read from the real
+recording); bad parameters are 400, unknown runs/scenarios/pages 404, a POST 405 -- each a
+one-line message, never a traceback; the static script and the health probe are served.
+"""
+
+from __future__ import annotations
+
+import html
+import json
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any
+from wsgiref.util import setup_testing_defaults
+
+import pytest
+
+from simtest_operator import results
+from simtest_operator.results.querying import ReadOnlyDatabase
+from simtest_operator.runner.campaigns import read_recording
+from simtest_operator.ui import server, views
+from tests.results.historydata import fill
+from tests.results.sampleoutdir import make_outdir
+from tests.ui.conftest import SAMPLE_RUN
+
+Call = Callable[..., tuple[str, str, bytes]]
+
+
+@pytest.fixture(params=["sqlite", pytest.param("postgres", marks=pytest.mark.postgres)])
+def call(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[Call]:
+    """A WSGI caller over the sample run plus the history, in either database."""
+    dsn = str(request.getfixturevalue("postgres_dsn")) if request.param == "postgres" else None
+    root = make_outdir(tmp_path / "out", database=dsn)
+    target = dsn or str(root)
+    with results.open_store(target) as store:
+        fill(store)
+    with ReadOnlyDatabase(target) as db:
+        app = server.App(db, views.Context(base_dir=root, read_trajectories=read_recording))
+
+        def go(url: str, method: str = "GET") -> tuple[str, str, bytes]:
+            path, _, query = url.partition("?")
+            environ: dict[str, Any] = {"PATH_INFO": path, "QUERY_STRING": query,
+                                       "REQUEST_METHOD": method}  # fmt: skip
+            setup_testing_defaults(environ)
+            seen: dict[str, Any] = {}
+
+            def start_response(status: str, headers: list[tuple[str, str]]) -> None:
+                seen["status"], seen["type"] = status, dict(headers)["Content-Type"]
+
+            body = b"".join(app(environ, start_response))
+            return seen["status"], seen["type"], body
+
+        yield go
+
+
+def _json(call: Call, url: str) -> Any:
+    status, kind, body = call(url)
+    assert (status, kind) == ("200 OK", "application/json"), body[:300]
+    return json.loads(body)
+
+
+PAGES = ["/", "/runs", "/runs?page=1", "/run", f"/run?run={SAMPLE_RUN}", "/coverage",
+         "/coverage?by=requirement", f"/scenario?run={SAMPLE_RUN}&id=cut-in%2Fclose.xosc",
+         "/compare", "/sets", "/sets?axis=simulator&by=tag", "/history", "/history?flaky=1",
+         "/history/scenario?id=seedy.xosc"]  # fmt: skip
+
+
+def test_every_page_renders(call: Call) -> None:
+    for url in PAGES:
+        status, kind, body = call(url)
+        assert (status, kind) == ("200 OK", "text/html; charset=utf-8"), url
+        assert b"Traceback" not in body and b"</html>" in body, url
+
+
+def test_runs_and_coverage(call: Call) -> None:
+    listed = _json(call, "/api/runs")
+    assert listed["total"] == 9 and len(listed["runs"]) == 9
+    sample = next(r for r in listed["runs"] if r["run_key"] == SAMPLE_RUN)
+    assert sample["counts"] == {"Passed": 3, "Failed": 1, "Timeout": 1, "Invalid": 1,
+                                "Skipped": 1}  # fmt: skip
+    assert sample["total"] == 7 and sample["failing"] == 3
+    by_type = {g["label"]: g["counts"] for g in
+               _json(call, f"/api/coverage?run={SAMPLE_RUN}&by=category")["groups"]}  # fmt: skip
+    assert by_type["pedestrian"] == {"Passed": 1, "Timeout": 1}
+    by_tag = {g["label"]: g["total"] for g in
+              _json(call, f"/api/coverage?run={SAMPLE_RUN}&by=tag")["groups"]}  # fmt: skip
+    assert by_tag == {"(none)": 3, "cut-in": 1, "highway": 2, "night": 1, "urban": 2}
+    newest = _json(call, "/api/run")["run"]["run_key"]
+    first = _json(call, "/api/history/scenario?id=steady.xosc")["history"]["entries"][-1]
+    by_req = _json(call, f"/api/coverage?run={first['run_key']}&by=requirement")["groups"]
+    assert {g["label"]: g["counts"] for g in by_req} == {
+        "(none)": {"Passed": 4},
+        "EuroNCAP-CCRs": {"Passed": 1},
+        "UN-R157-5.2.5.2": {"Passed": 1},
+    }
+    assert newest != first["run_key"]
+
+
+def test_comparisons(call: Call) -> None:
+    entries = _json(call, "/api/history/scenario?id=regress.xosc")["history"]["entries"]
+    # Runs 6 (SUT 2.0) against 3 (SUT 1.0): regress.xosc regressed, steady.xosc unchanged.
+    found = _json(call, f"/api/compare?base={entries[2]['run_key']}&other={entries[0]['run_key']}")
+    assert found["counts"]["regressed"] == 1
+    assert [c["id"] for c in found["changes"] if c["change"] == "regressed"] == ["regress.xosc"]
+    default = _json(call, "/api/compare")
+    assert default["other"]["run_key"] != default["base"]["run_key"]
+    sets = _json(call, "/api/sets?axis=sut&by=category")
+    assert sets["columns"] == ["idm-driver 1.0", "idm-driver 1.4.0", "idm-driver 2.0"]
+    cut_in = dict(sets["rows"])["cut-in"]
+    assert cut_in["idm-driver 2.0"]["counts"] == {"Passed": 2, "Failed": 2}
+    assert cut_in["idm-driver 2.0"]["pass_rate"] == 0.5
+
+
+def test_history_and_flakiness(call: Call) -> None:
+    found = {s["scenario_id"]: s for s in _json(call, "/api/history")["summaries"]}
+    assert found["nondet.xosc"]["flakiness"] == "nondeterministic"
+    assert found["follow/stop.xosc"]["flakiness"] == "retried"
+    assert found["regress.xosc"]["pass_rate"] == 0.6
+    only = _json(call, "/api/history?flaky=1")
+    assert only["flaky"] == len(only["summaries"]) == 5
+    one = _json(call, "/api/history/scenario?id=seedy.xosc")
+    assert one["history"]["summary"]["flakiness"] == "seed-sensitive"
+    assert [e["verdict"] for e in one["history"]["entries"]] == ["Failed", "Passed", "Failed",
+                                                                 "Passed"]  # fmt: skip
+
+
+def test_developer_view_data(call: Call) -> None:
+    view = _json(call, f"/api/scenario?run={SAMPLE_RUN}&id=cut-in%2Fclose.xosc")
+    assert view["final"]["outcome"]["reason"] == "collision with 'cutter' at t=7.2 s"
+    entities = {e["name"]: e for e in view["replay"]["entities"]}
+    assert set(entities) == {"ego", "object 1"} and entities["ego"]["ego"]
+    ego = entities["ego"]
+    assert ego["t"][0] == 0.0 and ego["t"][-1] == 10.0 and ego["x"][-1] == 200.0
+    ttc = next(s for s in view["replay"]["timelines"] if s["name"] == "ttc")
+    assert ttc["unit"] == "s" and 2.0 not in ttc["t"], "the infinite sample is left out"
+    retried = _json(call, f"/api/scenario?run={SAMPLE_RUN}&id=follow%2Fstop.xosc")
+    assert [e["outcome"]["verdict"] for e in retried["earlier"]] == ["Error"]
+    assert retried["summary"]["flakiness"] == "retried"
+
+
+@pytest.mark.parametrize(
+    ("url", "status", "message"),
+    [
+        ("/scenario?run=nope&id=x", "404 Not Found", "no campaign run 'nope'"),
+        (f"/api/scenario?run={SAMPLE_RUN}&id=x", "404 Not Found", "scenario 'x' has no result"),
+        ("/api/history/scenario?id=x", "404 Not Found", "scenario 'x' has no runs"),
+        ("/api/coverage?by=colour", "400 Bad Request", "by must be one of category, road"),
+        ("/api/runs?page=two", "400 Bad Request", "parameter 'page' must be a whole number"),
+        ("/api/sets?axis=moon", "400 Bad Request", "axis must be one of sut"),
+        ("/nothing/here", "404 Not Found", "no page /nothing/here"),
+    ],
+)
+def test_bad_requests_are_one_line(call: Call, url: str, status: str, message: str) -> None:
+    got, _, body = call(url)
+    assert got == status
+    text = html.unescape(body.decode())
+    assert message in text and "Traceback" not in text
+
+
+def test_static_probe_and_methods(call: Call) -> None:
+    status, kind, body = call("/static/replay.js")
+    assert status == "200 OK" and kind.startswith("text/javascript") and b"replay" in body
+    assert call("/static/../server.py")[0] == "404 Not Found"
+    assert call("/static/nope.js")[0] == "404 Not Found"
+    assert call("/healthz")[:2] == ("200 OK", "text/plain")
+    assert call("/", method="POST")[0] == "405 Method Not Allowed"
