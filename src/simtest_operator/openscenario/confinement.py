@@ -9,9 +9,11 @@ land inside the scenario's *source root*; road networks may also come from a map
 The source root is the caller's to give (``LoadOptions.source_root``): the folder
 ``simtest scenario check`` was pointed at (or its ``--root``); ``--root`` of
 ``simtest scenario run`` (default: the enclosing git work tree, else the scenario's folder).
-Relative references within a tree (``../catalogs``) keep working. A caller that gives none --
-today the campaign runner, whose fetched sources do not pass their root down yet -- gets the
-enclosing git work tree, or outside any only the system folders (:data:`SYSTEM`) refused.
+A campaign's scenario gets the folder its source was fetched into (a git tree at its commit, an
+unpacked archive, a database's or ConfigMap's files: ``scenarios.uris.source_root``). Relative
+references within a tree (``../catalogs``) keep working. A caller that gives none -- a campaign's
+local ``path`` source, the user's own files -- gets the enclosing git work tree, or outside any
+only the system folders (:data:`SYSTEM`) refused.
 """
 
 from __future__ import annotations
@@ -19,10 +21,9 @@ from __future__ import annotations
 import dataclasses
 from pathlib import Path
 
-SYSTEM = tuple(
-    Path(p) for p in ("/proc", "/sys", "/dev", "/etc", "/boot", "/root", "/run", "/var/run")
-)
-"""Never a scenario's data, whatever the root: kernel interfaces, configuration, secrets."""
+SYSTEM = tuple(Path(p) for p in ("/proc", "/sys", "/dev", "/etc", "/boot", "/run", "/var/run"))
+"""Never a scenario's data, whatever the root: kernel interfaces, configuration, secrets. (Not
+home folders: root's holds the source cache, ``~/.cache/simtest``, when the tools run as root.)"""
 
 
 @dataclasses.dataclass(frozen=True, slots=True)

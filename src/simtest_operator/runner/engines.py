@@ -33,6 +33,6 @@ def execute(task: ScenarioTask) -> ScenarioOutcome:
         output_dir=task.out_dir,
         record=task.record,
         wall_clock_limit=soft_limit(task.timeout_seconds),
-        loading=LoadOptions(maps=task.settings.maps),
+        loading=LoadOptions(source_root=task.source_root, maps=task.settings.maps),
     )
     return execution.run_scenario(request).outcome

@@ -66,6 +66,7 @@ from simtest_operator.scenarios import (
     PinnedScenario,
     SecretProvider,
     SecretRef,
+    uris,
 )
 from simtest_operator.settings import Settings
 from simtest_operator.sim import sumo
@@ -134,7 +135,9 @@ def requests_for(job: Job, scenario: ScenarioRef, path: Path) -> execution.RunRe
         output_dir=job.artifacts / safe_name(scenario.id),
         record=simulator.record,
         wall_clock_limit=max(spec.timeout_seconds * 0.95, spec.timeout_seconds - 2.0),
-        loading=LoadOptions(maps=job.settings.maps),
+        loading=LoadOptions(
+            source_root=uris.source_root(path, scenario.source), maps=job.settings.maps
+        ),
     )
 
 

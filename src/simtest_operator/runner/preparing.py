@@ -18,7 +18,7 @@ from simtest_operator.api import converting, manifestfiles, v1alpha1
 from simtest_operator.errors import ScenarioError
 from simtest_operator.openscenario import headers
 from simtest_operator.runner import executing, outputs, resolving, tasks
-from simtest_operator.scenarios import selecting
+from simtest_operator.scenarios import selecting, uris
 from simtest_operator.scenarios.batching import ExecutionPolicy
 from simtest_operator.scenarios.pinned import FrozenList, PinnedScenario, sha256_hex
 from simtest_operator.scenarios.resolving import FetchContext
@@ -157,6 +157,7 @@ def task_factory(plan: Plan, paths: Mapping[str, Path]) -> executing.TaskFactory
         return tasks.ScenarioTask(
             scenario_id=pinned.id,
             scenario_path=paths[pinned.id],
+            source_root=uris.source_root(paths[pinned.id], pinned.source),
             overrides=dict(pinned.overrides),
             out_dir=plan.output.scenario_dir(pinned.id),
             attempt=attempt,

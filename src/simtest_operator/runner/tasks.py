@@ -34,6 +34,8 @@ class ScenarioTask:
     scenario_id: str
     scenario_path: Path
     """Local file, already located and sha256-verified."""
+    source_root: Path | None = None
+    """Folder the scenario's references must stay in (its fetched source); None: a local file."""
     overrides: Mapping[str, str] = dataclasses.field(default_factory=dict)
     """OpenSCENARIO global parameter values."""
     out_dir: Path

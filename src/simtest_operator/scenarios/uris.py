@@ -157,3 +157,27 @@ def _checked_relative(path: str, uri: str) -> str:
     if pure.is_absolute() or ".." in pure.parts or not path:
         raise SourceError(f"source URI {uri!r} names a path outside its source")
     return pure.as_posix()
+
+
+def source_root(path: Path, uri: str) -> Path | None:
+    """The folder ``uri``'s source was materialised into, given the local ``path`` of the file:
+    a git tree at its commit, an unpacked archive, a database's or ConfigMap's files. What the
+    scenario may reference (roads, catalogs) must stay below it. None for local files
+    (``file://``): their tree is the user's own (the loader then confines them to their git work
+    tree, and refuses system folders in any case)."""
+    parsed = parse(uri)
+    if isinstance(parsed, FileUri):
+        return None
+    if isinstance(parsed, GitUri):
+        member = parsed.path
+    elif isinstance(parsed, HttpUri):
+        member = parsed.member or path.name  # a single file: alone in its download folder
+    elif isinstance(parsed, ConfigMapUri):
+        member = parsed.key
+    else:
+        member = parsed.item  # a database item is stored under its id
+    depth = len(PurePosixPath(member).parts)
+    root = path
+    for _ in range(depth):
+        root = root.parent
+    return root
