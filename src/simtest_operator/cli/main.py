@@ -42,6 +42,14 @@ COMMANDS = {
         "Export a campaign run's evidence bundle (verdicts, metrics and content hashes of "
         "scenario, map, SUT, simulator and recording) and verify one offline.",
     ),
+    "evaluate": Entry(
+        "simtest_operator.cli.evaluate:evaluate",
+        "Re-score recorded runs with another criteria set, from their recordings alone.",
+    ),
+    "compare": Entry(
+        "simtest_operator.cli.compare:compare",
+        "Compare two runs' KPIs per scenario and base scenario; gate CI with --fail-on RULES.",
+    ),
     "operator": Entry(
         "simtest_operator.cli.operator:operator",
         "Run the simtest operator: TestCampaigns in, simulator pods and verdicts out.",

@@ -18,6 +18,7 @@ from typing import Protocol, Self
 
 from simtest_operator.errors import ResultsError
 from simtest_operator.results import comparing, migrating, records, sqlrows
+from simtest_operator.results.evaluationstore import EvaluationQueries
 from simtest_operator.verdicts import ScenarioOutcome
 
 Clock = Callable[[], datetime.datetime]
@@ -47,7 +48,7 @@ def require_aware(value: datetime.datetime, what: str) -> datetime.datetime:
     return value.astimezone(datetime.UTC)
 
 
-class SqlStore(abc.ABC):
+class SqlStore(abc.ABC, EvaluationQueries):
     """Implements :class:`~simtest_operator.results.stores.Store` over :class:`Tx`."""
 
     dialect: migrating.Dialect
@@ -62,7 +63,7 @@ class SqlStore(abc.ABC):
     def _transaction(self, *, write: bool) -> contextlib.AbstractContextManager[Tx]:
         """A transaction that commits on success and rolls back on any exception."""
 
-    def _lock_for_migration(self, tx: Tx) -> None:  # noqa: B027 - optional hook
+    def _lock_for_migration(self, tx: Tx) -> None:
         """Serialise concurrent migrators beyond what the write transaction already does."""
 
     @abc.abstractmethod

@@ -24,6 +24,7 @@ from types import TracebackType
 from typing import Protocol, Self
 
 from simtest_operator.results import comparing, records
+from simtest_operator.results.evaluationstore import EvaluationStore
 from simtest_operator.verdicts import ScenarioOutcome
 
 
@@ -108,7 +109,7 @@ class ResultSource(Protocol):
         ...
 
 
-class Store(ResultSink, ResultSource, Protocol):
+class Store(ResultSink, ResultSource, EvaluationStore, Protocol):
     """A results database: both sides plus closing; usable as a context manager."""
 
     @property

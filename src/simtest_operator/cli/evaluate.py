@@ -1,0 +1,124 @@
+"""``simtest evaluate``: score recorded runs again with another criteria set, without simulating.
+
+Parses options, loads the criteria file and prints what :func:`runner.reevaluation.reevaluate`
+returns. Exit codes follow ``simtest run``: 0 every scenario passed, 1 some did not (a verdict
+on the system under test, or evidence that cannot back a pass), 2 bad input.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import click
+
+from simtest_operator.errors import SimtestError
+
+if TYPE_CHECKING:
+    from simtest_operator.evaluation.reevaluating import CriteriaSet
+    from simtest_operator.results.evaluations import EvaluatedRun
+
+
+def _load_criteria(path: Path | None) -> CriteriaSet:
+    from simtest_operator.evaluation import reevaluating
+
+    if path is None:
+        return reevaluating.DEFAULT_CRITERIA
+    import yaml
+
+    try:
+        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except (OSError, yaml.YAMLError) as exc:
+        raise SimtestError(f"cannot read criteria {path}: {str(exc).splitlines()[0]}") from None
+    if not isinstance(data, dict):
+        raise SimtestError(f"{path}: a criteria set is a mapping (name, baseScenarios, ...)")
+    return reevaluating.load_criteria(data, where=str(path))
+
+
+@click.command()
+@click.argument("source", metavar="OUTDIR|DSN")
+@click.option(
+    "--criteria",
+    "criteria_file",
+    type=click.Path(exists=True, dir_okay=False, path_type=Path),
+    help="Criteria set (YAML/JSON): thresholds per base-scenario type  [default: built-in]",
+)
+@click.option("--run", "run_key", metavar="KEY", help="Run key to evaluate  [default: newest]")
+@click.option(
+    "--artifacts",
+    "artifacts",
+    type=click.Path(exists=True, file_okay=False, path_type=Path),
+    help="Where relative artifact paths start  [default: OUTDIR]",
+)
+@click.option(
+    "--pvc-root",
+    type=click.Path(exists=True, file_okay=False, path_type=Path),
+    help="Local mount of the cluster's artifact volumes (for pvc:// artifacts).",
+)
+@click.option("--quiet", "-q", is_flag=True, help="Only the summary lines.")
+def evaluate(
+    source: str,
+    criteria_file: Path | None,
+    run_key: str | None,
+    artifacts: Path | None,
+    pvc_root: Path | None,
+    quiet: bool,
+) -> None:
+    """Re-score recorded runs with another criteria set, from their recordings alone.
+
+    SOURCE is a run's output folder (its results.sqlite) or a PostgreSQL DSN. Each scenario's
+    recording is decomposed into base scenarios (following, cut-in, crossing, ...) and checked
+    per type; the result is stored as a new evaluation of the same run (the original verdicts
+    stay). Exit code: 0 all passed, 1 some failed or lack complete evidence, 2 bad input.
+    """
+    from simtest_operator.results import dsn, records
+    from simtest_operator.runner import reevaluation
+
+    local = Path(source)
+    is_folder = local.is_dir()
+    try:
+        criteria = _load_criteria(criteria_file)
+        if not is_folder and "://" not in source and "=" not in source and not local.is_file():
+            raise SimtestError(f"{source}: no such output folder, database file or DSN")
+
+        def show(category: str, run: EvaluatedRun) -> None:
+            if not quiet:
+                kinds = ", ".join(
+                    f"{b.kind}{'' if b.verdict.value == 'Passed' else ' FAILED'}"
+                    for b in run.base_scenarios
+                )
+                click.echo(f"{run.verdict.value:<8} {run.scenario_id}  [{kinds}]  {run.reason}")
+
+        summary = reevaluation.reevaluate(
+            reevaluation.EvaluateRequest(
+                target=source,
+                base_dir=artifacts or (local if is_folder else None),
+                criteria=criteria,
+                run_key=records.RunKey(run_key) if run_key else None,
+                pvc_root=pvc_root,
+            ),
+            progress=show,
+        )
+    except SimtestError as exc:
+        click.echo(f"simtest evaluate: {exc}", err=True)
+        raise SystemExit(2) from None
+    counts = ", ".join(f"{n} {v.lower()}" for v, n in sorted(summary.totals.items()))
+    incomplete = sum(1 for r in summary.runs if r.evidence != "complete")
+    bases = sum(len(r.base_scenarios) for r in summary.runs)
+    failed_bases = sum(
+        1 for r in summary.runs for b in r.base_scenarios if b.verdict.value != "Passed"
+    )
+    click.echo(
+        f"evaluation {summary.evaluation_id} of run {summary.run_key} ({dsn.describe(source)}) "
+        f"with criteria {criteria.name!r}: {counts or 'no scenarios'}; "
+        f"{bases} base scenarios, {failed_bases} failed; "
+        f"{incomplete} with incomplete evidence; {summary.wall_seconds:.2f} s"
+    )
+    failing = [r for r in summary.runs if r.verdict.value not in ("Passed", "Skipped")]
+    if failing:
+        first = failing[0]
+        click.echo(
+            f"{len(failing)} of {len(summary.runs)} scenarios not passed "
+            f"(first: {first.scenario_id}: {first.verdict.value}: {first.reason})"
+        )
+        raise SystemExit(1)

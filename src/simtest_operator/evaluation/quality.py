@@ -1,0 +1,184 @@
+"""Evidence quality: is a recording complete and consistent enough to back a verdict?
+
+A run may only be ``Passed`` on evidence that covers it. Three of omega-prime's qualification
+metrics are computed here with its definitions (``temporal_completeness``,
+``duplicate_record_rate``, ``data_format_consistency``; tests/evaluation/test_reeval_quality.py
+checks the numbers against omega-prime's own functions), on numpy instead of polars: importing
+omega-prime costs 4-14 s per process, more than re-simulating the run. omega-prime's
+``record_completeness`` and ``attribute_completeness`` are 100 % by construction for a decoded
+recording (the reader fills every column), so they are not repeated. The rest are the checks
+omega-prime's format needs but does not make (see docs/evaluation.md): frame rate >= 10 Hz, no
+frame gaps, a host vehicle in every frame, a map whose reference matches, constant box size and
+class per object, positions that agree with the recorded velocities, and a recording that
+covers the run's simulated time.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping
+
+import numpy as np
+
+from simtest_operator.evaluation.scenes import ObjectColumns, RecordedColumns, host_id
+
+_RANGES = {
+    "length": (0.0, math.inf, False),
+    "width": (0.0, math.inf, False),
+    "height": (0.0, math.inf, True),
+    "roll": (-math.pi, math.pi, True),
+    "pitch": (-math.pi, math.pi, True),
+    "yaw": (-math.pi, math.pi, True),
+}
+"""omega-prime's value checks (column -> low, high, low inclusive); high always inclusive."""
+_CHECKED_COLUMNS = 20
+"""Columns of omega-prime's ``polars_schema`` that ``data_format_consistency`` counts."""
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class QualityRules:
+    """Thresholds; the defaults are omega-prime's PASS limits and its format's rules."""
+
+    min_rate_hz: float = 10.0
+    timing_tolerance: float = 0.05
+    """omega-prime ``temporal_completeness``: max RMS of relative frame-period deviation."""
+    min_temporal_completeness: float = 100.0
+    max_duplicate_rate: float = 1.0
+    min_format_consistency: float = 95.0
+    coverage_tolerance: float = 0.25
+    """Seconds the recording may end before the run's simulated time (last partial period)."""
+    max_position_error: float = 0.5
+    """Metres a position may differ from the previous one moved by the recorded velocity."""
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Quality:
+    """The metrics and, when the evidence is not sound, why."""
+
+    metrics: Mapping[str, float]
+    issues: tuple[str, ...]
+
+    @property
+    def complete(self) -> bool:
+        return not self.issues
+
+
+def _temporal_completeness(objects: Mapping[int, ObjectColumns], period: float) -> list[float]:
+    """Per track, the RMS of its frame periods' relative deviation from ``period``
+    (omega-prime counts the share of tracks at or under the tolerance)."""
+    tracks = [np.diff(np.sort(np.asarray(o.t))) for o in objects.values() if len(o.t) > 1]
+    if not tracks or period <= 0.0:
+        return []
+    return [float(np.sqrt(np.mean(((d - period) / period) ** 2))) for d in tracks]
+
+
+def _format_consistency(objects: Mapping[int, ObjectColumns]) -> float:
+    total = invalid = 0
+    for o in objects.values():
+        n = len(o.t)
+        total += n * _CHECKED_COLUMNS
+        for name, (low, high, inclusive) in _RANGES.items():
+            values = np.asarray(getattr(o, name), dtype=np.float64)
+            above = values >= low if inclusive else values > low
+            invalid += int(np.count_nonzero(~(above & (values <= high))))
+        types = np.asarray(o.object_type)
+        invalid += int(np.count_nonzero((types < 0) | (types > 4)))
+        invalid += int(np.count_nonzero(np.asarray(o.t) < 0))
+    return 100.0 if total == 0 else 100.0 * (total - invalid) / total
+
+
+def _consistency_issues(objects: Mapping[int, ObjectColumns], max_error: float) -> list[str]:
+    issues = []
+    for object_id, o in sorted(objects.items()):
+        if len(o.t) < 2:
+            continue
+        if np.ptp(np.asarray(o.length)) > 1e-6 or np.ptp(np.asarray(o.width)) > 1e-6:
+            issues.append(f"object {object_id} changes its box size")
+        if len(set(o.object_type)) > 1 or len(set(o.vehicle_type)) > 1:
+            issues.append(f"object {object_id} changes its class")
+        t = np.asarray(o.t)
+        x, y = np.asarray(o.x), np.asarray(o.y)
+        vx, vy = np.asarray(o.vx), np.asarray(o.vy)
+        if not (np.all(np.isfinite(x)) and np.all(np.isfinite(y))):
+            issues.append(f"object {object_id} has non-finite positions")
+            continue
+        dt = np.diff(t)
+        # Trapezoid rule: the recorded velocities must explain the displacement.
+        px = x[:-1] + 0.5 * (vx[:-1] + vx[1:]) * dt
+        py = y[:-1] + 0.5 * (vy[:-1] + vy[1:]) * dt
+        error = np.hypot(px - x[1:], py - y[1:])
+        worst = int(np.argmax(error))
+        if error[worst] > max_error:
+            issues.append(
+                f"object {object_id} jumps {error[worst]:.2f} m against its velocity "
+                f"at t={t[worst + 1]:.2f} s"
+            )
+    return issues
+
+
+def assess(
+    recorded: RecordedColumns, *, simulated_seconds: float, rules: QualityRules | None = None
+) -> Quality:
+    """Quality metrics of one decoded recording and the issues that make it incomplete."""
+    rules = rules or QualityRules()
+    issues: list[str] = []
+    times = np.asarray(recorded.frame_times, dtype=np.float64)
+    metrics: dict[str, float] = {"frames": float(len(times))}
+    if len(times) < 2:
+        return Quality(metrics=metrics, issues=("recording has fewer than two frames",))
+    periods = np.diff(times)
+    period = float(np.median(periods))
+    metrics["rateHz"] = round(1.0 / period, 3) if period > 0 else 0.0
+    if np.any(periods <= 0):
+        issues.append("frame timestamps do not increase")
+    elif metrics["rateHz"] < rules.min_rate_hz - 1e-9:
+        issues.append(f"frame rate {metrics['rateHz']:g} Hz < {rules.min_rate_hz:g} Hz")
+    gaps = np.nonzero(periods > 1.5 * period)[0]
+    metrics["frameGaps"] = float(len(gaps))
+    if len(gaps):
+        issues.append(
+            f"{len(gaps)} frame gap(s), first after t={times[gaps[0]]:.2f} s "
+            f"({periods[gaps[0]]:.2f} s long)"
+        )
+    metrics["recordedSeconds"] = round(float(times[-1] - times[0]), 4)
+    if times[-1] < simulated_seconds - rules.coverage_tolerance:
+        issues.append(
+            f"recording ends at t={times[-1]:.2f} s, the run simulated {simulated_seconds:.2f} s"
+        )
+    host = host_id(recorded)
+    missing_host = sum(1 for h in recorded.host_ids if h is None)
+    if host is None or host not in recorded.objects:
+        issues.append("no host vehicle (ego) in the recording")
+    elif missing_host or len(recorded.objects[host].t) != len(times):
+        issues.append(
+            f"host vehicle {host} is in {len(recorded.objects[host].t)} of {len(times)} frames"
+        )
+    if recorded.map_xml is None:
+        issues.append("no map (ground_truth_map channel) in the recording")
+    elif recorded.map_references and recorded.map_references != {recorded.map_channel_reference}:
+        issues.append(
+            f"map_reference {sorted(recorded.map_references)} does not match the map channel's "
+            f"{recorded.map_channel_reference!r}"
+        )
+    rms = _temporal_completeness(recorded.objects, period)
+    good = sum(1 for value in rms if value <= rules.timing_tolerance) if rms else 0
+    metrics["temporalCompleteness"] = 100.0 * good / len(rms) if rms else 0.0
+    if metrics["temporalCompleteness"] < rules.min_temporal_completeness:
+        issues.append(
+            f"temporal completeness {metrics['temporalCompleteness']:.1f} % "
+            f"< {rules.min_temporal_completeness:g} %"
+        )
+    samples = sum(len(o.t) for o in recorded.objects.values())
+    distinct = sum(len(set(o.t)) for o in recorded.objects.values())
+    metrics["duplicateRecordRate"] = 100.0 * (samples - distinct) / samples if samples else 0.0
+    if metrics["duplicateRecordRate"] > rules.max_duplicate_rate:
+        issues.append(f"duplicate record rate {metrics['duplicateRecordRate']:.1f} %")
+    metrics["dataFormatConsistency"] = _format_consistency(recorded.objects)
+    if metrics["dataFormatConsistency"] < rules.min_format_consistency:
+        issues.append(
+            f"data format consistency {metrics['dataFormatConsistency']:.1f} % "
+            f"< {rules.min_format_consistency:g} %"
+        )
+    issues += _consistency_issues(recorded.objects, rules.max_position_error)
+    return Quality(metrics={k: round(v, 4) for k, v in metrics.items()}, issues=tuple(issues))
