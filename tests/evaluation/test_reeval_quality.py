@@ -1,0 +1,213 @@
+"""Evidence quality and the re-evaluation verdict: the fast reader agrees with the plot reader, the
+quality numbers agree with omega-prime's own qualification metrics, damaged recordings are
+flagged, and a run on incomplete evidence is never ``Passed``."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from simtest_operator.errors import ScenarioError
+from simtest_operator.evaluation import quality, reevaluating
+from simtest_operator.evaluation.basescenarios import Kind
+from simtest_operator.evaluation.scenes import scene_from_columns
+from simtest_operator.recording import read_trajectories
+from simtest_operator.recording.objects import ObjectRecord, RecordedObjects, read_objects
+from simtest_operator.verdicts import Verdict
+from tests.evaluation import recorded_runs
+
+pytestmark = pytest.mark.timeout(300)
+
+
+@pytest.fixture(scope="module")
+def recordings(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
+    folder = tmp_path_factory.mktemp("smoke")
+    manifest = recorded_runs.write_manifest(
+        folder,
+        name="quality",
+        source=recorded_runs.SCENARIOS / "smoke",
+        include=["following_*.xosc", "pedestrian-crossing_*.xosc", "cut-in_highway_v30_*.xosc"],
+    )
+    out = recorded_runs.run_campaign(manifest, folder / "out")
+    return {p.parent.name.split("_")[0]: p for p in (out / "scenarios").glob("*/recording.mcap")}
+
+
+def test_the_fast_reader_agrees_with_the_trajectory_reader(recordings: dict[str, Path]) -> None:
+    for path in recordings.values():
+        decoded = read_objects(path)
+        plotted = read_trajectories(path)
+        assert set(decoded.objects) == set(plotted)
+        for object_id, samples in plotted.items():
+            record = decoded.objects[object_id]
+            assert record.t == [s.t for s in samples]
+            assert record.x == [s.x for s in samples] and record.y == [s.y for s in samples]
+            assert record.yaw == [s.heading for s in samples]
+            speeds = np.hypot(record.vx, record.vy)
+            assert np.allclose(speeds, [s.speed for s in samples])
+        assert decoded.map_xml is not None and decoded.map_xml.startswith("<?xml")
+        assert decoded.map_references == {decoded.map_channel_reference}
+        assert set(decoded.host_ids) == {min(decoded.objects)}
+
+
+def test_a_sound_recording_is_complete_evidence(recordings: dict[str, Path]) -> None:
+    decoded = read_objects(recordings["following"])
+    q = quality.assess(decoded, simulated_seconds=decoded.frame_times[-1])
+    assert q.complete, q.issues
+    assert q.metrics["rateHz"] == 10.0 and q.metrics["temporalCompleteness"] == 100.0
+    assert q.metrics["duplicateRecordRate"] == 0.0
+    assert q.metrics["dataFormatConsistency"] == 100.0
+
+
+def _damaged(decoded: RecordedObjects) -> RecordedObjects:
+    """Object 1 loses frames 30-39, one sample is duplicated, one yaw is out of range."""
+    other = decoded.objects[1]
+    keep = [i for i in range(len(other.t)) if not 30 <= i < 40]
+    columns = {
+        f.name: [getattr(other, f.name)[i] for i in keep]
+        for f in dataclasses.fields(ObjectRecord)
+        if f.name != "object_id"
+    }
+    for name, values in columns.items():
+        values.insert(5, values[5])
+        if name == "yaw":
+            values[50] = 4.0
+    damaged = ObjectRecord(object_id=1, **columns)
+    return dataclasses.replace(decoded, objects={**decoded.objects, 1: damaged})
+
+
+def test_quality_numbers_match_omega_primes_qualification_metrics(
+    recordings: dict[str, Path],
+) -> None:
+    pl = pytest.importorskip("polars")
+    qualification = pytest.importorskip("omega_prime.metrics.qualification")
+    from omega_prime.schemas import polars_schema
+
+    sound = read_objects(recordings["following"])
+    for decoded in (sound, _damaged(sound)):
+        rows = {name: [] for name in polars_schema}
+        for o in decoded.objects.values():
+            n = len(o.t)
+            rows["total_nanos"] += [round(t * 1e9) for t in o.t]
+            rows["idx"] += [o.object_id] * n
+            for name in ("x", "y", "vx", "vy", "ax", "ay", "length", "width", "height",
+                         "roll", "pitch", "yaw"):  # fmt: skip
+                target = {"vx": "vel_x", "vy": "vel_y", "ax": "acc_x", "ay": "acc_y"}.get(
+                    name, name
+                )
+                rows[target] += list(getattr(o, name))
+            for name in ("z", "vel_z", "acc_z"):
+                rows[name] += [0.0] * n
+            rows["type"] += list(o.object_type)
+            rows["role"] += list(o.role)
+            rows["subtype"] += list(o.vehicle_type)
+        frame = pl.DataFrame(rows, schema=polars_schema).lazy()
+        ours = quality.assess(decoded, simulated_seconds=decoded.frame_times[-1])
+
+        def value(metric: object, key: str, frame: object = frame, **kw: object) -> float:
+            _, props = metric(frame, **kw)  # type: ignore[operator]
+            return float(props[key].collect()[key][0])
+
+        assert ours.metrics["temporalCompleteness"] == pytest.approx(
+            value(
+                qualification.temporal_completeness,
+                "temporal_completeness",
+                expected_frequency=ours.metrics["rateHz"],
+            )
+        )
+        assert ours.metrics["duplicateRecordRate"] == pytest.approx(
+            value(qualification.duplicate_record_rate, "duplicate_record_rate"), abs=1e-4
+        )
+        assert ours.metrics["dataFormatConsistency"] == pytest.approx(
+            value(qualification.data_format_consistency, "data_format_consistency"), abs=1e-4
+        )
+
+
+def test_damaged_recordings_are_incomplete_evidence(recordings: dict[str, Path]) -> None:
+    decoded = read_objects(recordings["following"])
+    end = decoded.frame_times[-1]
+    damaged = quality.assess(_damaged(decoded), simulated_seconds=end)
+    text = " | ".join(damaged.issues)
+    assert "temporal completeness 50.0 % < 100 %" in text
+    assert "1 duplicate (object, time) record(s)" in text
+    assert "1 value(s) out of omega-prime's ranges" in text
+    moved = read_objects(recordings["following"])
+    moved.objects[1].x[40] += 3.0
+    jumped = quality.assess(moved, simulated_seconds=end)
+    assert jumped.issues == (
+        f"object 1 jumps 3.00 m against its velocity at t={moved.objects[1].t[40]:.2f} s",
+    )
+    truncated = quality.assess(decoded, simulated_seconds=end + 5.0)
+    assert truncated.issues == (
+        f"recording ends at t={end:.2f} s, the run simulated {end + 5.0:.2f} s",
+    )
+    mapless = quality.assess(dataclasses.replace(decoded, map_xml=None), simulated_seconds=end)
+    assert mapless.issues == ("no map (ground_truth_map channel) in the recording",)
+    times = list(decoded.frame_times)
+    gap = dataclasses.replace(decoded, frame_times=(*times[:20], *times[25:]))
+    assert any("frame gap" in issue for issue in quality.assess(gap, simulated_seconds=end).issues)
+    hostless = dataclasses.replace(decoded, host_ids=(None,) * len(times))
+    assert any("host vehicle" in i for i in quality.assess(hostless, simulated_seconds=end).issues)
+
+
+def test_incomplete_evidence_never_passes_but_a_violation_still_fails(
+    recordings: dict[str, Path],
+) -> None:
+    decoded = read_objects(recordings["following"])
+    scene = scene_from_columns(decoded)
+    end = decoded.frame_times[-1]
+    sound = quality.assess(decoded, simulated_seconds=end)
+    partial = quality.assess(decoded, simulated_seconds=end + 5.0)
+    lenient = reevaluating.DEFAULT_CRITERIA
+    passed = reevaluating.evaluate(scene, sound, lenient, original=Verdict.PASSED)
+    assert passed.verdict is Verdict.PASSED and passed.evidence == "complete"
+    incomplete = reevaluating.evaluate(scene, partial, lenient, original=Verdict.PASSED)
+    assert incomplete.verdict is Verdict.ERROR and incomplete.evidence == "incomplete"
+    assert incomplete.reason.startswith("evidence incomplete: recording ends at")
+    strict = reevaluating.load_criteria(
+        {"name": "strict", "baseScenarios": {"following": {"minTHW": 5.0}}}, where="test"
+    )
+    failed = reevaluating.evaluate(scene, partial, strict, original=Verdict.PASSED)
+    assert failed.verdict is Verdict.FAILED and failed.reason.startswith("following with object")
+    assert "minTHW" in failed.reason and failed.evidence == "incomplete"
+    missing = reevaluating.evaluate(None, None, lenient, original=Verdict.PASSED)
+    assert (missing.verdict, missing.evidence) == (Verdict.ERROR, "missing")
+    invalid = reevaluating.evaluate(None, None, lenient, original=Verdict.INVALID)
+    assert invalid.verdict is Verdict.INVALID
+
+
+def test_base_scenario_checks_use_the_thresholds_of_their_type(
+    recordings: dict[str, Path],
+) -> None:
+    decoded = read_objects(recordings["cut-in"])
+    scene = scene_from_columns(decoded)
+    q = quality.assess(decoded, simulated_seconds=decoded.frame_times[-1])
+    result = reevaluating.evaluate(scene, q, reevaluating.DEFAULT_CRITERIA, original=Verdict.FAILED)
+    cut_in = next(s for s in result.base_scenarios if s.base.kind is Kind.CUT_IN)
+    limits = {c.metric: c.limit for c in cut_in.checks}
+    assert limits == {"minTTC": 1.0, "minTHW": 0.3, "maxDecel": 9.0, "collision": 0.0}
+    assert cut_in.metrics["collision"] == 1.0 and cut_in.verdict is Verdict.FAILED
+    assert result.verdict is Verdict.FAILED
+    assert result.metrics["minDistance"] == 0.0
+    assert math.isfinite(result.metrics["baseScenarios"])
+
+
+def test_a_criteria_file_with_a_wrong_field_names_it() -> None:
+    with pytest.raises(ScenarioError) as raised:
+        reevaluating.load_criteria(
+            {"name": "x", "baseScenarios": {"cut-in": {"minTCC": 1.0}}}, where="crit.yaml"
+        )
+    assert str(raised.value).startswith("crit.yaml: baseScenarios.cut-in.minTCC: ")
+    with pytest.raises(ScenarioError, match=r"baseScenarios\.overtaking"):
+        reevaluating.load_criteria({"name": "x", "baseScenarios": {"overtaking": {}}}, where="f")
+    kept = reevaluating.load_criteria(
+        {"name": "x", "baseScenarios": {"vru": {"PET": 2}}}, where="f"
+    )
+    assert kept.base_scenarios[Kind.VRU].pet == 2.0
+    assert (
+        kept.base_scenarios[Kind.CUT_IN]
+        == reevaluating.DEFAULT_CRITERIA.base_scenarios[Kind.CUT_IN]
+    )
