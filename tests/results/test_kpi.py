@@ -59,8 +59,8 @@ def test_metrics_without_a_direction_and_infinite_pairs_are_handled() -> None:
             groups={"run": {"minTTC": math.inf, "wallSeconds": 1.0}},
         )
     ]
-    other = [kpis.KpiScenario(scenario_id="a", verdict=Verdict.PASSED,
-                              groups={"run": {"minTTC": math.inf, "wallSeconds": 9.0}})]  # fmt: skip
+    groups = {"run": {"minTTC": math.inf, "wallSeconds": 9.0}}
+    other = [kpis.KpiScenario(scenario_id="a", verdict=Verdict.PASSED, groups=groups)]
     comparison = kpis.compare_kpis(base, other, higher_is_better=HIGHER)
     (change,) = comparison.changes
     assert change.metric == "minTTC" and change.worse_by == (0.0,)
