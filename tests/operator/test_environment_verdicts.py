@@ -9,6 +9,7 @@ a pod missing beyond the grace period -> Error; timings; wake-up times.
 
 from __future__ import annotations
 
+import dataclasses
 import datetime
 import json
 from typing import Any
@@ -277,6 +278,40 @@ def test_lost_node_is_an_error_and_forces_the_delete() -> None:
     assert result.results is not None and result.results[0].verdict is Verdict.ERROR
     assert "node n0" in result.reason
     assert result.force_delete
+
+
+def test_a_node_that_stops_reporting_ends_the_run_after_its_grace() -> None:
+    # The kubelet stopped at t=5: nobody will finish or report this pod.
+    silent = {
+        "n0": observed.node_view(
+            {
+                "metadata": {"name": "n0"},
+                "status": {
+                    "conditions": [
+                        {"type": "Ready", "status": "Unknown", "lastTransitionTime": iso(5)}
+                    ],
+                    "allocatable": {"simtest.dev/simulator": "3"},
+                },
+            }
+        )
+    }
+    running = pod(state={"running": {"startedAt": iso(2)}})
+    waiting = assess(env(), running, now=30, nodes=silent)
+    assert waiting.results is None
+    assert waiting.wake_at == at(5 + LIMITS.node_not_ready_grace)
+    ended = assess(env(), running, now=5 + LIMITS.node_not_ready_grace, nodes=silent)
+    assert ended.results is not None and ended.results[0].verdict is Verdict.ERROR
+    assert "node n0 stopped reporting" in ended.reason
+    assert ended.force_delete
+
+
+def test_pods_on_deleted_or_silent_nodes_are_deleted_without_grace() -> None:
+    running = pod(state={"running": {"startedAt": iso(2)}})
+    silent = {"n0": dataclasses.replace(NODES["n0"], ready=False, not_ready_since=at(5))}
+    assert not environments.node_gone(running, NODES)
+    assert environments.node_gone(running, {})
+    assert environments.node_gone(running, silent)
+    assert not environments.node_gone(running, None)  # nodes not watched: nothing known
 
 
 def test_image_errors_end_at_once() -> None:

@@ -23,6 +23,7 @@ from simtest_operator.operator import (
     bodies,
     campaignstatus,
     cancelling,
+    environments,
     environmentstatus,
     helmfileteardown,
     names,
@@ -226,6 +227,7 @@ class _Step:
             + STARTUP_ALLOWANCE_SECONDS,
             backstop_grace=self.config.backstop_grace,
             missing_grace=self.config.missing_pod_grace,
+            node_not_ready_grace=self.config.node_not_ready_grace,
         )
 
     def _assess(self, env: EnvironmentView) -> Assessment:
@@ -257,20 +259,14 @@ class _Step:
             if started and queued and "started" not in (env.status.get("timings") or {}):
                 self.start_latencies.append(max((started - queued).total_seconds(), 0.0))
         pod = self.inputs.pods.get(env.pod or env.name)
-        if env.finished and pod is not None and not pod.deleting:
-            node_lost = (
-                pod.node_name is not None
-                and self.inputs.nodes is not None
-                and pod.node_name not in self.inputs.nodes
-            )
-            self.actions.append(
-                Delete(
-                    kind=Kind.POD,
-                    name=pod.name,
-                    uid=pod.uid,
-                    grace_seconds=0 if node_lost else None,
+        if env.finished and pod is not None:
+            gone = environments.node_gone(pod, self.inputs.nodes)
+            if not pod.deleting or gone:  # a graceful delete on a dead node never completes
+                self.actions.append(
+                    Delete(
+                        kind=Kind.POD, name=pod.name, uid=pod.uid, grace_seconds=0 if gone else None
+                    )
                 )
-            )
 
     def _provision(self, env: EnvironmentView) -> None:
         request = requests.environment_request(

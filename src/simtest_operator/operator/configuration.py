@@ -42,6 +42,9 @@ class OperatorConfig:
     backstop_grace: float = 30.0
     """Seconds past a pod's activeDeadlineSeconds before the operator ends the run as Timeout
     itself (when no kubelet enforces the deadline)."""
+    node_not_ready_grace: float = 60.0
+    """Seconds a simulator pod's node may be NotReady (kubelet stopped, node cut off) before its
+    scenarios end Error and are retried on another node; the pod is force-deleted."""
     keep_finished_environments: bool = False
     """Keep SimEnvironments after their results are folded into the batch (debugging); by
     default they are deleted so live objects stay bounded by the in-flight window."""
@@ -106,6 +109,7 @@ class OperatorConfig:
             ("event_interval", "EVENT_INTERVAL", float),
             ("missing_pod_grace", "MISSING_POD_GRACE", float),
             ("backstop_grace", "BACKSTOP_GRACE", float),
+            ("node_not_ready_grace", "NODE_NOT_READY_GRACE", float),
             ("reuse_queue", "REUSE_QUEUE", int),
             ("max_starts_per_step", "MAX_STARTS_PER_STEP", int),
             ("prefetch_per_node", "PREFETCH", int),

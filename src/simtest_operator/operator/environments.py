@@ -62,6 +62,9 @@ class Limits:
     missing_grace: float = 10.0
     """How long a pod recorded as created may be absent from the cache before it counts as
     deleted (covers watch lag right after a restart)."""
+    node_not_ready_grace: float = 60.0
+    """How long the pod's node may be NotReady (its kubelet stopped reporting) before the run
+    counts as lost: Error, the pod force-deleted, the scenarios retried."""
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
@@ -155,7 +158,7 @@ def assess(
         node=node,
         timings=timings,
         results=None,
-        wake_at=_next_check(pod, timings, limits=limits, queued=queued),
+        wake_at=_next_check(pod, timings, limits=limits, queued=queued, nodes=nodes),
     )
 
 
@@ -200,6 +203,15 @@ def _failure(
     """An ending the pod itself does not report: (verdict, reason, force delete) or None."""
     if pod.node_name and nodes is not None and pod.node_name not in nodes:
         return Verdict.ERROR, f"node {pod.node_name} was lost while the pod ran", True
+    silent = _node_silent_since(pod, nodes)
+    if silent is not None and (now - silent).total_seconds() >= limits.node_not_ready_grace:
+        # Nobody will finish or report this pod: a graceful delete would wait for the kubelet.
+        return (
+            Verdict.ERROR,
+            f"node {pod.node_name} stopped reporting (NotReady since "
+            f"{silent:%H:%M:%S}) while the pod ran",
+            True,
+        )
     if pod.deleting:
         cause = f": {pod.disruption}" if pod.disruption else ""
         return (
@@ -241,9 +253,33 @@ def since_or(value: datetime.datetime | None, default: datetime.datetime) -> dat
     return value if value is not None else default
 
 
-def _next_check(
-    pod: PodView, timings: Timings, *, limits: Limits, queued: datetime.datetime | None
+def _node_silent_since(
+    pod: PodView, nodes: Mapping[str, NodeView] | None
 ) -> datetime.datetime | None:
+    """Since when the pod's node has been NotReady, if it is."""
+    node = nodes.get(pod.node_name) if pod.node_name and nodes is not None else None
+    return node.not_ready_since if node is not None and not node.ready else None
+
+
+def node_gone(pod: PodView, nodes: Mapping[str, NodeView] | None) -> bool:
+    """Whether no kubelet will stop the pod: its node was deleted or is NotReady. Such a pod is
+    deleted without a grace period, or its object would wait for a kubelet that never comes."""
+    if not pod.node_name or nodes is None:
+        return False
+    return pod.node_name not in nodes or _node_silent_since(pod, nodes) is not None
+
+
+def _next_check(
+    pod: PodView,
+    timings: Timings,
+    *,
+    limits: Limits,
+    queued: datetime.datetime | None,
+    nodes: Mapping[str, NodeView] | None = None,
+) -> datetime.datetime | None:
+    silent = _node_silent_since(pod, nodes)
+    if silent is not None:
+        return silent + datetime.timedelta(seconds=limits.node_not_ready_grace)
     if timings.started is None and pod.container.state != "running":
         since = pod.created or queued
         return since + datetime.timedelta(seconds=limits.pending_seconds) if since else None

@@ -201,6 +201,9 @@ class NodeView:
     labels: tuple[tuple[str, str], ...]
     taints: tuple[tuple[str, str, str], ...]
     """(key, value, effect) of each taint."""
+    not_ready_since: datetime.datetime | None = None
+    """When its Ready condition last left True (None while Ready): a kubelet that stopped
+    reporting, whose pods nobody will finish."""
 
 
 def node_view(body: Raw) -> NodeView:
@@ -217,9 +220,13 @@ def node_view(body: Raw) -> NodeView:
         for t in spec.get("taints") or ()
         if isinstance(t, Mapping)
     )
+    is_ready = ready is not None and ready.get("status") == "True"
     return NodeView(
         name=str(meta.get("name", "")),
-        ready=ready is not None and ready.get("status") == "True",
+        ready=is_ready,
+        not_ready_since=None
+        if is_ready or ready is None
+        else timestamp(ready.get("lastTransitionTime")),
         unschedulable=bool(spec.get("unschedulable")),
         slots=slots,
         labels=tuple(sorted((str(k), str(v)) for k, v in (meta.get("labels") or {}).items())),
