@@ -37,8 +37,10 @@ NOBODYS = frozenset(
 """Needed by no command at import: reading recordings, plots, S3 (the runner pod's upload)."""
 
 OTHERS = {
+    "compare": SUMO | KUBERNETES | {"numpy", "psycopg"},
     "crds": SUMO | KUBERNETES | {"numpy", "psycopg"},
     "dev-cluster": SUMO | {"kopf", "numpy", "psycopg"},
+    "evaluate": SUMO | KUBERNETES | {"numpy", "psycopg"},
     "evidence": SUMO | KUBERNETES | {"numpy", "psycopg"},
     "operator": SUMO | {"numpy", "psycopg"},
     "package": SUMO | KUBERNETES | {"numpy", "psycopg"},

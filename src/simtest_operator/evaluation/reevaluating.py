@@ -151,7 +151,8 @@ def load_criteria(data: Mapping[str, Any], *, where: str) -> CriteriaSet:
         return CriteriaSet.model_validate(data)
     except pydantic.ValidationError as exc:
         first = exc.errors()[0]
-        field = ".".join(str(part) for part in first["loc"]) or "(document)"
+        parts = [str(part) for part in first["loc"] if part != "[key]"]
+        field = ".".join(parts) or "(document)"
         raise ScenarioError(f"{where}: {field}: {first['msg']}") from None
 
 
