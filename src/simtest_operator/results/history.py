@@ -191,15 +191,23 @@ def _family(row: Sequence[Any]) -> Family:
 
 def _cells_sql(db: ReadOnlyDatabase, where: str) -> str:
     """One scan for every summary: final attempts counted per family and verdict, with the
-    first and last campaign start and the passes on a later attempt; Python folds the rest."""
-    seed = db.json_text("c.settings", "seed")
+    first and last campaign start and the passes on a later attempt; Python folds the rest.
+
+    Each campaign's family (SUT, simulator, seed) is numbered once in a subquery, so the scan
+    groups by a small integer instead of extracting JSON and comparing text on every run row.
+    """
+    seed = db.json_text("settings", "seed")
+    campaigns = (
+        "SELECT run_key, started_at, sut_name || ' ' || sut_version AS sut, simulator_version "
+        f"AS sim, {seed} AS seed, DENSE_RANK() OVER (ORDER BY sut_name, sut_version, "
+        f"simulator_version, {seed}) AS family FROM campaigns"
+    )
     return (
-        f"SELECT r.scenario_id, r.sha256, c.sut_name || ' ' || c.sut_version, "
-        f"c.simulator_version, {seed}, r.verdict, COUNT(*), MIN(c.started_at), "
-        "MAX(c.started_at), SUM(CASE WHEN r.attempt > 1 THEN 1 ELSE 0 END) "
-        f"FROM runs r JOIN campaigns c ON c.run_key = r.run_key WHERE {FINAL_ATTEMPT}{where} "
-        "GROUP BY r.scenario_id, r.sha256, c.sut_name, c.sut_version, c.simulator_version, "
-        f"{seed}, r.verdict"
+        "SELECT r.scenario_id, r.sha256, MIN(c.sut), MIN(c.sim), MIN(c.seed), r.verdict, "
+        "COUNT(*), MIN(c.started_at), MAX(c.started_at), "
+        "SUM(CASE WHEN r.attempt > 1 THEN 1 ELSE 0 END) "
+        f"FROM runs r JOIN ({campaigns}) c ON c.run_key = r.run_key WHERE {FINAL_ATTEMPT}{where} "
+        "GROUP BY r.scenario_id, r.sha256, c.family, r.verdict"
     )
 
 

@@ -197,12 +197,12 @@ def metadata_sets(
     # Count per (axis value, scenario content, verdict) first -- 100,000 runs fold into a few
     # thousand rows -- and only then join the scenarios and unfold their tags.
     rows = db.query(
-        f"SELECT g.axis, {label}, g.verdict, SUM(g.n) FROM (SELECT {_AXIS_SQL[axis]} AS axis, "
+        f"SELECT g.axis, {label}, g.verdict, SUM(g.n) FROM (SELECT c.axis, "
         "r.scenario_id, r.sha256, r.verdict, COUNT(*) AS n FROM runs r "
-        "JOIN (SELECT run_key, sut_name, sut_version, simulator_version, namespace "
-        "FROM campaigns ORDER BY started_at DESC LIMIT ?) c ON c.run_key = r.run_key "
-        f"WHERE {history.FINAL_ATTEMPT} GROUP BY {_AXIS_SQL[axis]}, r.scenario_id, r.sha256, "
-        "r.verdict) g JOIN scenarios s ON s.scenario_id = g.scenario_id AND s.sha256 = g.sha256"
+        f"JOIN (SELECT run_key, {_AXIS_SQL[axis]} AS axis FROM campaigns c "
+        "ORDER BY started_at DESC LIMIT ?) c ON c.run_key = r.run_key "
+        f"WHERE {history.FINAL_ATTEMPT} GROUP BY c.axis, r.scenario_id, r.sha256, r.verdict) g "
+        "JOIN scenarios s ON s.scenario_id = g.scenario_id AND s.sha256 = g.sha256"
         f"{extra} GROUP BY g.axis, {label}, g.verdict",
         (limit_runs,),
     )
