@@ -43,9 +43,14 @@ class ReadOnlyDatabase:
                     located.conninfo,
                     autocommit=True,
                     connect_timeout=connect_timeout,
-                    # Read-only, and room to aggregate 100,000 runs in memory instead of
-                    # sorting on disk (the default 4 MB spills; measured in bench/ui_queries.py).
-                    options="-c default_transaction_read_only=on -c work_mem=64MB",
+                    # Read-only; room to aggregate 100,000 runs in memory instead of sorting on
+                    # disk (the default 4 MB spills); and a plan per execution: psycopg prepares
+                    # a query run five times, and PostgreSQL's generic plan for it (parameters
+                    # unknown) was 3x slower for the UI's aggregates (bench/ui_queries.py).
+                    options=(
+                        "-c default_transaction_read_only=on -c work_mem=64MB "
+                        "-c plan_cache_mode=force_custom_plan"
+                    ),
                 )
             except psycopg.Error as exc:
                 reason = " ".join(dsn.redact(str(exc), located).split())
