@@ -78,8 +78,19 @@ def scenario_claim(real_api_client: client.ApiClient, real_namespace: str) -> It
 
 
 @pytest.fixture
+def operator_env(request: pytest.FixtureRequest) -> Mapping[str, str]:
+    """Extra ``SIMTEST_OPERATOR_*`` settings; a test sets them with
+    ``@pytest.mark.parametrize("operator_env", [{...}], indirect=True)``."""
+    return dict(getattr(request, "param", {}))
+
+
+@pytest.fixture
 def real_operator(
-    real_cluster: ClusterInfo, real_namespace: str, scenario_claim: str, tmp_path: Path
+    real_cluster: ClusterInfo,
+    real_namespace: str,
+    scenario_claim: str,
+    operator_env: Mapping[str, str],
+    tmp_path: Path,
 ) -> Iterator[support.OperatorProcess]:
     process = support.OperatorProcess(
         kubeconfig=real_cluster.kubeconfig,
@@ -92,6 +103,7 @@ def real_operator(
             # The product's default: a real kubelet enforces activeDeadlineSeconds and needs the
             # pod's termination grace period (10 s) to kill it; the backstop must come later.
             "SIMTEST_OPERATOR_BACKSTOP_GRACE": "30",
+            **operator_env,
         },
     )
     process.start()
