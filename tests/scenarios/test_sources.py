@@ -117,6 +117,26 @@ def test_git_revisions(ctx: FetchContext, repo: Path, revision: str) -> None:
     assert "a v1" in (resolved.root / "a.xosc").read_text()
 
 
+def test_git_over_dumb_http_resolves_a_branch(
+    ctx: FetchContext, repo: Path, server: tuple[str, Routes], tmp_path: Path
+) -> None:
+    # A repository served as plain files (git's "dumb" HTTP) cannot answer a shallow fetch.
+    bare = tmp_path / "suite.git"
+    subprocess.run(["git", "clone", "-q", "--bare", str(repo), str(bare)], check=True)
+    git(bare, "update-server-info")
+    base, routes = server
+    for file in bare.rglob("*"):
+        if file.is_file():
+            routes.get[f"/suite.git/{file.relative_to(bare).as_posix()}"] = (
+                200, file.read_bytes(), {}
+            )  # fmt: skip
+    refs = routes.get["/suite.git/info/refs"]
+    routes.get["/suite.git/info/refs?service=git-upload-pack"] = refs  # not smart: dumb fallback
+    resolved = resolve(GitSource(url=f"{base}/suite.git", revision="main", path="suite"), ctx)
+    assert resolved.info.revision == git(repo, "rev-parse", "main")
+    assert resolved.files == ("a.xosc", "b.xosc")
+
+
 def test_git_unknown_revision_and_folder(ctx: FetchContext, repo: Path) -> None:
     with pytest.raises(SourceError, match="git failed"):
         resolve(GitSource(url=str(repo), revision="no-such-branch"), ctx)

@@ -129,17 +129,26 @@ def _resolve(mirror: Path, url: str, revision: str, *, limits: SourceLimits) -> 
     if _COMMIT.match(revision) and _has_commit(mirror, revision, limits=limits):
         return revision
     fetch = ["-C", str(mirror), "fetch", "--quiet", "--no-tags", "--no-write-fetch-head"]
+    refspec = f"+{revision}:{_PINNED}"
     try:
-        _git([*fetch, "--depth=1", "--", url, f"+{revision}:{_PINNED}"], limits=limits, url=url)
+        _git([*fetch, "--depth=1", "--", url, refspec], limits=limits, url=url)
     except SourceError:
         if not _COMMIT.match(revision):
-            raise
+            # Servers without shallow support (git's "dumb" HTTP: a repository served as plain
+            # files) refuse --depth: fetch the whole history of the ref instead.
+            _git([*fetch, "--", url, refspec], limits=limits, url=url)
+            return _pinned(mirror, url, limits=limits)
         # Some servers refuse fetching a bare commit; fetch every branch and tag instead.
         everything = ["+refs/heads/*:refs/simtest/heads/*", "+refs/tags/*:refs/simtest/tags/*"]
         _git([*fetch, "--", url, *everything], limits=limits, url=url)
         if not _has_commit(mirror, revision, limits=limits):
             raise SourceError(f"{redact(url)}: commit {revision} not found") from None
         return revision
+    return _pinned(mirror, url, limits=limits)
+
+
+def _pinned(mirror: Path, url: str, *, limits: SourceLimits) -> str:
+    """The commit the last fetch pinned."""
     resolved = _git(
         ["-C", str(mirror), "rev-parse", "--verify", f"{_PINNED}^{{commit}}"],
         limits=limits,
