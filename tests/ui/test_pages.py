@@ -19,14 +19,39 @@ from wsgiref.util import setup_testing_defaults
 import pytest
 
 from simtest_operator import results
+from simtest_operator.results import evaluations as ev
 from simtest_operator.results.querying import ReadOnlyDatabase
 from simtest_operator.runner.campaigns import read_recording
 from simtest_operator.ui import server, views
+from simtest_operator.verdicts import Verdict
 from tests.results.historydata import fill
+from tests.results.resultdata import T0
 from tests.results.sampleoutdir import make_outdir
 from tests.ui.conftest import SAMPLE_RUN
 
 Call = Callable[..., tuple[str, str, bytes]]
+
+
+def _evaluate(store: results.Store) -> None:
+    """An evaluation of the sample run (``simtest evaluate`` stores the same) with base scenarios:
+    cut-in/close: following passed, cut-in failed; cut-in/far: following passed."""
+    info = ev.EvaluationInfo(run_key=results.RunKey(SAMPLE_RUN), criteria_name="strict",
+                             criteria={"minTtc": 1.5}, created_at=T0)  # fmt: skip
+    key = store.begin_evaluation(info)
+
+    def base(kind: str, verdict: Verdict, start: float) -> ev.StoredBaseScenario:
+        return ev.StoredBaseScenario(kind=kind, actor=1, start=start, end=start + 5.0,
+                                     verdict=verdict)  # fmt: skip
+
+    for scenario_id, bases in (
+        ("cut-in/close.xosc", (base("following", Verdict.PASSED, 0),
+                               base("cut-in", Verdict.FAILED, 1))),
+        ("cut-in/far.xosc", (base("following", Verdict.PASSED, 0),)),
+    ):  # fmt: skip
+        store.add_evaluated_run(key, ev.EvaluatedRun(
+            scenario_id=scenario_id, attempt=1, verdict=Verdict.PASSED, reason="",
+            evidence="complete", base_scenarios=bases))  # fmt: skip
+    store.finish_evaluation(key, finished_at=T0)
 
 
 @pytest.fixture(params=["sqlite", pytest.param("postgres", marks=pytest.mark.postgres)])
@@ -37,6 +62,7 @@ def call(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[Call]:
     target = dsn or str(root)
     with results.open_store(target) as store:
         fill(store)
+        _evaluate(store)
     with ReadOnlyDatabase(target) as db:
         app = server.App(db, views.Context(base_dir=root, read_trajectories=read_recording))
 
@@ -63,7 +89,8 @@ def _json(call: Call, url: str) -> Any:
 
 
 PAGES = ["/", "/runs", "/runs?page=1", "/run", f"/run?run={SAMPLE_RUN}", "/coverage",
-         "/coverage?by=requirement", f"/scenario?run={SAMPLE_RUN}&id=cut-in%2Fclose.xosc",
+         "/coverage?by=requirement", "/coverage?by=base",
+         f"/scenario?run={SAMPLE_RUN}&id=cut-in%2Fclose.xosc",
          "/compare", "/sets", "/sets?axis=simulator&by=tag", "/history", "/history?flaky=1",
          "/history/scenario?id=seedy.xosc"]  # fmt: skip
 
@@ -97,6 +124,17 @@ def test_runs_and_coverage(call: Call) -> None:
         "UN-R157-5.2.5.2": {"Passed": 1},
     }
     assert newest != first["run_key"]
+
+
+def test_coverage_by_base_scenario(call: Call) -> None:
+    found = _json(call, f"/api/coverage?run={SAMPLE_RUN}&by=base")
+    assert {g["label"]: g["counts"] for g in found["groups"]} == {
+        "cut-in": {"Failed": 1}, "following": {"Passed": 2}}  # fmt: skip
+    assert found["evaluation"] and found["note"] == ""
+    never = _json(call, "/api/coverage?by=base")
+    assert never["groups"] == [] and "no evaluation yet" in never["note"]
+    status, _, body = call(f"/coverage?run={SAMPLE_RUN}&by=base")
+    assert status == "200 OK" and b'data-label="following"' in body
 
 
 def test_comparisons(call: Call) -> None:

@@ -23,7 +23,10 @@ DIMENSIONS = {
     "tag": "Tag",
     "requirement": "Requirement",
 }
-"""Coverage dimensions: query value -> heading."""
+"""Labels of a scenario (file header): query value -> heading."""
+COVERAGE = {**DIMENSIONS, "base": "Base scenario"}
+"""Coverage dimensions: the scenario labels plus the base scenarios of the run's newest
+evaluation (``simtest evaluate``), counted per base-scenario instance."""
 AXES = {"sut": "SUT version", "simulator": "Simulator version", "namespace": "Namespace"}
 """Metadata a comparison of sets groups runs by: query value -> heading."""
 _AXIS_SQL = {
@@ -140,6 +143,28 @@ def _counts(db: ReadOnlyDatabase, keys: Sequence[str]) -> dict[str, dict[str, in
     ):
         found.setdefault(str(key), {})[str(verdict)] = int(count)
     return found
+
+
+def base_scenarios(db: ReadOnlyDatabase, run_key: str) -> tuple[str | None, tuple[Group, ...]]:
+    """(evaluation id, verdict counts per base-scenario kind) of the run's newest evaluation;
+    ``(None, ())`` when the run was never evaluated or the schema predates evaluations."""
+    if int(db.query("SELECT MAX(version) FROM schema_migrations")[0][0] or 0) < 4:
+        return None, ()
+    newest = db.query(
+        "SELECT evaluation_id FROM evaluations WHERE run_key = ? "
+        "ORDER BY created_at DESC, evaluation_id DESC LIMIT 1",
+        (run_key,),
+    )
+    if not newest:
+        return None, ()
+    groups: dict[str, dict[str, int]] = {}
+    for kind, verdict, count in db.query(
+        "SELECT kind, verdict, COUNT(*) FROM base_scenarios WHERE evaluation_id = ? "
+        "GROUP BY kind, verdict",
+        (newest[0][0],),
+    ):
+        groups.setdefault(str(kind), {})[str(verdict)] = int(count)
+    return str(newest[0][0]), tuple(Group(label=k, counts=v) for k, v in sorted(groups.items()))
 
 
 def _label_sql(db: ReadOnlyDatabase, dimension: str) -> tuple[str, str]:

@@ -126,13 +126,21 @@ def coverage(db: ReadOnlyDatabase, params: Mapping[str, str], context: Context) 
     """One run's verdicts by tag, road, scenario type or requirement."""
     row = _run_or_newest(db, params)
     dimension = params.get("by", "category")
-    if dimension not in queries.DIMENSIONS:
-        raise BadRequestError(f"by must be one of {', '.join(queries.DIMENSIONS)}")
-    groups = queries.coverage(db, row.run_key, dimension)
+    if dimension not in queries.COVERAGE:
+        raise BadRequestError(f"by must be one of {', '.join(queries.COVERAGE)}")
+    evaluation, note = None, ""
+    if dimension == "base":
+        evaluation, groups = queries.base_scenarios(db, row.run_key)
+        if evaluation is None:
+            note = "this run has no evaluation yet: `simtest evaluate` decomposes its recordings"
+    else:
+        groups = queries.coverage(db, row.run_key, dimension)
     return {
         "run": row,
         "by": dimension,
-        "dimensions": queries.DIMENSIONS,
+        "dimensions": queries.COVERAGE,
+        "evaluation": evaluation,
+        "note": note,
         "groups": groups,
         "chart": plots.stacked_bars([(g.label, g.counts) for g in groups]),
     }
