@@ -109,22 +109,40 @@ class Path:
         )
 
     def project(self, x: Array, y: Array) -> tuple[Array, Array, Array]:
-        """(arc length, signed lateral offset -- left positive --, tangent angle) per point."""
-        px = x[:, None] - self.start[None, :, 0]
-        py = y[:, None] - self.start[None, :, 1]
-        dx, dy = self.delta[None, :, 0], self.delta[None, :, 1]
+        """(arc length, signed lateral offset -- left positive --, tangent angle) per point.
+
+        The nearest vertex is found for all points at once; the exact projection is then made
+        on its two adjacent segments only (the path's points are close together, so the
+        closest segment touches the closest vertex; the long extensions touch the end points).
+        """
+        vx = np.append(self.start[:, 0], self.start[-1, 0] + self.delta[-1, 0])
+        vy = np.append(self.start[:, 1], self.start[-1, 1] + self.delta[-1, 1])
+        ddx = x[:, None] - vx[None, :]
+        ddy = y[:, None] - vy[None, :]
+        nearest = np.argmin(ddx * ddx + ddy * ddy, axis=1)
+        last = len(self.delta) - 1
+        candidates = np.stack([np.clip(nearest - 1, 0, last), np.clip(nearest, 0, last)], axis=1)
+        sx, sy = self.start[candidates, 0], self.start[candidates, 1]
+        dx, dy = self.delta[candidates, 0], self.delta[candidates, 1]
+        px, py = x[:, None] - sx, y[:, None] - sy
         length2 = np.maximum(dx * dx + dy * dy, 1e-12)
         t = np.clip((px * dx + py * dy) / length2, 0.0, 1.0)
         ex, ey = px - t * dx, py - t * dy
-        best = np.argmin(ex * ex + ey * ey, axis=1)
+        pick = np.argmin(ex * ex + ey * ey, axis=1)
         rows = np.arange(len(x))
-        tb = t[rows, best]
+        best = candidates[rows, pick]
+        tb = t[rows, pick]
         seg_dx, seg_dy = self.delta[best, 0], self.delta[best, 1]
         seg_len = np.hypot(seg_dx, seg_dy)
         s = self.s0[best] + tb * seg_len
-        cross = seg_dx * py[rows, best] - seg_dy * px[rows, best]
+        cross = seg_dx * py[rows, pick] - seg_dy * px[rows, pick]
         lateral = cross / np.maximum(seg_len, 1e-12)
         return s, lateral, np.arctan2(seg_dy, seg_dx)
+
+    def arc_of_vertices(self, x: Array, y: Array) -> Array:
+        """Arc length of the path's own points, in the order given (those it was built from)."""
+        steps = np.hypot(np.diff(x), np.diff(y))
+        return np.concatenate([[self.offset], self.offset + np.cumsum(steps)])
 
 
 def _straight_reach(x: Array, y: Array, limit: float, *, window: float = 30.0) -> float:

@@ -11,20 +11,26 @@ intermediate slices. Unknown fields are skipped, so other OSI writers' files rea
 from __future__ import annotations
 
 import dataclasses
+import re
 import struct
+from collections.abc import Iterator
 from pathlib import Path
+from typing import BinaryIO
 
+import zstandard
+from mcap.data_stream import ReadDataStream
 from mcap.exceptions import McapError
-from mcap.reader import make_reader
+from mcap.reader import McapReader, make_reader
+from mcap.records import Chunk
 
 from simtest_operator.errors import ResultsError
 from simtest_operator.recording.writing import GROUND_TRUTH_TOPIC, MAP_TOPIC
 
 _DOUBLE = struct.Struct("<d").unpack_from
 _FLOAT = struct.Struct("<f").unpack_from
-_VALUES = 18
+_VALUES = 19
 """Per sample: t, x, y, z, roll, pitch, yaw, vx, vy, vz, ax, ay, az, length, width, height,
-OSI type, vehicle classification type (role is kept per object, it never changes legitimately)."""
+OSI type, vehicle classification type and role."""
 
 
 @dataclasses.dataclass(slots=True)
@@ -126,19 +132,32 @@ def _triple(data: bytes, pos: int, end: int, out: list[float], offset: int) -> N
             pos = _skip(data, pos, wire)
 
 
+_BASE_TRIPLE_TAGS = (b"\x0a", b"\x12", b"\x1a", b"\x22", b"\x2a")
+_BASE_LAYOUT = re.compile(
+    b"".join(re.escape(tag + b"\x1b") + b"\x09.{8}\x11.{8}\x19.{8}" for tag in _BASE_TRIPLE_TAGS),
+    re.DOTALL,
+)
+"""BaseMoving as writers emit it: dimension, position, orientation, velocity, acceleration, each
+with its three doubles in field order; matched in C, then unpacked with one struct call."""
+_BASE_SIZE = 5 * 29
+_BASE_DOUBLES = struct.Struct("<" + "2xxdxdxd" * 5).unpack_from
+
 _BASE_OFFSETS = {1: 13, 2: 1, 3: 4, 4: 7, 5: 10}
 """BaseMoving field -> where its three values go (dimension, position, orientation, velocity,
 acceleration)."""
 
 
-def _moving_object(data: bytes, pos: int, end: int, values: list[float]) -> tuple[int, int]:
-    """Decode one MovingObject into ``values`` (t already set); returns (id, role)."""
+def _moving_object(data: bytes, pos: int, end: int, values: list[float]) -> int:
+    """Decode one MovingObject into ``values`` (t already set); returns its id (-1: none)."""
     object_id = -1
-    role = -1
+    values[18] = -1
     while pos < end:
         tag = data[pos]
         if tag < 0x80:
             pos += 1
+        elif data[pos + 1] < 0x80:
+            tag = (tag & 0x7F) | (data[pos + 1] << 7)
+            pos += 2
         else:
             tag, pos = _varint(data, pos)
         field, wire = tag >> 3, tag & 7
@@ -147,6 +166,9 @@ def _moving_object(data: bytes, pos: int, end: int, values: list[float]) -> tupl
                 object_type = data[pos]
                 if object_type < 0x80:
                     pos += 1
+                elif data[pos + 1] < 0x80:
+                    object_type = (object_type & 0x7F) | (data[pos + 1] << 7)
+                    pos += 2
                 else:
                     object_type, pos = _varint(data, pos)
                 values[16] = object_type
@@ -156,6 +178,9 @@ def _moving_object(data: bytes, pos: int, end: int, values: list[float]) -> tupl
         size = data[pos]
         if size < 0x80:
             pos += 1
+        elif data[pos + 1] < 0x80:
+            size = (size & 0x7F) | (data[pos + 1] << 7)
+            pos += 2
         else:
             size, pos = _varint(data, pos)
         stop = pos + size
@@ -165,22 +190,37 @@ def _moving_object(data: bytes, pos: int, end: int, values: list[float]) -> tupl
                 itag = data[inner]
                 if itag < 0x80:
                     inner += 1
+                elif data[inner + 1] < 0x80:
+                    itag = (itag & 0x7F) | (data[inner + 1] << 7)
+                    inner += 2
                 else:
                     itag, inner = _varint(data, inner)
                 if itag == 8:
                     object_id = data[inner]
                     if object_id < 0x80:
                         inner += 1
+                    elif data[inner + 1] < 0x80:
+                        object_id = (object_id & 0x7F) | (data[inner + 1] << 7)
+                        inner += 2
                     else:
                         object_id, inner = _varint(data, inner)
                 else:
                     inner = _skip(data, inner, itag & 7)
         elif field == 2:
+            if size == _BASE_SIZE and _BASE_LAYOUT.match(data, pos, stop):
+                unpacked = _BASE_DOUBLES(data, pos)
+                values[13:16] = unpacked[0:3]
+                values[1:13] = unpacked[3:15]
+                pos = stop
+                continue
             inner = pos
             while inner < stop:
                 itag = data[inner]
                 if itag < 0x80:
                     inner += 1
+                elif data[inner + 1] < 0x80:
+                    itag = (itag & 0x7F) | (data[inner + 1] << 7)
+                    inner += 2
                 else:
                     itag, inner = _varint(data, inner)
                 ifield, iwire = itag >> 3, itag & 7
@@ -188,6 +228,9 @@ def _moving_object(data: bytes, pos: int, end: int, values: list[float]) -> tupl
                     isize = data[inner]
                     if isize < 0x80:
                         inner += 1
+                    elif data[inner + 1] < 0x80:
+                        isize = (isize & 0x7F) | (data[inner + 1] << 7)
+                        inner += 2
                     else:
                         isize, inner = _varint(data, inner)
                     offset = _BASE_OFFSETS.get(ifield)
@@ -203,12 +246,18 @@ def _moving_object(data: bytes, pos: int, end: int, values: list[float]) -> tupl
                 itag = data[inner]
                 if itag < 0x80:
                     inner += 1
+                elif data[inner + 1] < 0x80:
+                    itag = (itag & 0x7F) | (data[inner + 1] << 7)
+                    inner += 2
                 else:
                     itag, inner = _varint(data, inner)
                 if itag == 8:
                     vehicle_type = data[inner]
                     if vehicle_type < 0x80:
                         inner += 1
+                    elif data[inner + 1] < 0x80:
+                        vehicle_type = (vehicle_type & 0x7F) | (data[inner + 1] << 7)
+                        inner += 2
                     else:
                         vehicle_type, inner = _varint(data, inner)
                     values[17] = vehicle_type
@@ -216,18 +265,22 @@ def _moving_object(data: bytes, pos: int, end: int, values: list[float]) -> tupl
                     role = data[inner]
                     if role < 0x80:
                         inner += 1
+                    elif data[inner + 1] < 0x80:
+                        role = (role & 0x7F) | (data[inner + 1] << 7)
+                        inner += 2
                     else:
                         role, inner = _varint(data, inner)
+                    values[18] = role
                 else:
                     inner = _skip(data, inner, itag & 7)
         pos = stop
-    return object_id, role
+    return object_id
 
 
 def _ground_truth(
-    data: bytes, fallback_t: float, objects: dict[int, ObjectRecord], refs: set[str]
+    data: bytes, fallback_t: float, rows: dict[int, list[list[float]]], refs: set[str]
 ) -> tuple[float, int | None]:
-    """Decode one GroundTruth, appending its objects; returns (time, host id)."""
+    """Decode one GroundTruth, appending one row per object; returns (time, host id)."""
     t = fallback_t
     host: int | None = None
     spans: list[tuple[int, int]] = []
@@ -236,6 +289,9 @@ def _ground_truth(
         tag = data[pos]
         if tag < 0x80:
             pos += 1
+        elif data[pos + 1] < 0x80:
+            tag = (tag & 0x7F) | (data[pos + 1] << 7)
+            pos += 2
         else:
             tag, pos = _varint(data, pos)
         field, wire = tag >> 3, tag & 7
@@ -245,6 +301,9 @@ def _ground_truth(
         size = data[pos]
         if size < 0x80:
             pos += 1
+        elif data[pos + 1] < 0x80:
+            size = (size & 0x7F) | (data[pos + 1] << 7)
+            pos += 2
         else:
             size, pos = _varint(data, pos)
         stop = pos + size
@@ -257,18 +316,27 @@ def _ground_truth(
                 itag = data[inner]
                 if itag < 0x80:
                     inner += 1
+                elif data[inner + 1] < 0x80:
+                    itag = (itag & 0x7F) | (data[inner + 1] << 7)
+                    inner += 2
                 else:
                     itag, inner = _varint(data, inner)
                 if itag == 8:
                     seconds = data[inner]
                     if seconds < 0x80:
                         inner += 1
+                    elif data[inner + 1] < 0x80:
+                        seconds = (seconds & 0x7F) | (data[inner + 1] << 7)
+                        inner += 2
                     else:
                         seconds, inner = _varint(data, inner)
                 elif itag == 16:
                     nanos = data[inner]
                     if nanos < 0x80:
                         inner += 1
+                    elif data[inner + 1] < 0x80:
+                        nanos = (nanos & 0x7F) | (data[inner + 1] << 7)
+                        inner += 2
                     else:
                         nanos, inner = _varint(data, inner)
                 else:
@@ -280,12 +348,18 @@ def _ground_truth(
                 itag = data[inner]
                 if itag < 0x80:
                     inner += 1
+                elif data[inner + 1] < 0x80:
+                    itag = (itag & 0x7F) | (data[inner + 1] << 7)
+                    inner += 2
                 else:
                     itag, inner = _varint(data, inner)
                 if itag == 8:
                     host = data[inner]
                     if host < 0x80:
                         inner += 1
+                    elif data[inner + 1] < 0x80:
+                        host = (host & 0x7F) | (data[inner + 1] << 7)
+                        inner += 2
                     else:
                         host, inner = _varint(data, inner)
                 else:
@@ -297,28 +371,9 @@ def _ground_truth(
         values = [0.0] * _VALUES
         values[0] = t
         values[17] = -1
-        object_id, role = _moving_object(data, start, stop, values)
-        if object_id < 0:
-            continue
-        record = objects.get(object_id)
-        if record is None:
-            record = objects[object_id] = ObjectRecord(object_id=object_id)
-        record.t.append(t)
-        record.x.append(values[1])
-        record.y.append(values[2])
-        record.roll.append(values[4])
-        record.pitch.append(values[5])
-        record.yaw.append(values[6])
-        record.vx.append(values[7])
-        record.vy.append(values[8])
-        record.ax.append(values[10])
-        record.ay.append(values[11])
-        record.length.append(values[13])
-        record.width.append(values[14])
-        record.height.append(values[15])
-        record.object_type.append(int(values[16]))
-        record.vehicle_type.append(int(values[17]))
-        record.role.append(role)
+        object_id = _moving_object(data, start, stop, values)
+        if object_id >= 0:
+            rows.setdefault(object_id, []).append(values)
     return t, host
 
 
@@ -341,32 +396,100 @@ def _map_message(data: bytes) -> tuple[str | None, str | None]:
     return reference, xml
 
 
+_RECORD_HEAD = struct.Struct("<BQ").unpack_from
+_MESSAGE_HEAD = struct.Struct("<H4xQ").unpack_from
+_OPCODE_MESSAGE = 0x05
+_MESSAGE_HEADER = 22
+"""channel id (2), sequence (4), log time (8), publish time (8)."""
+
+
+def _chunk_messages(
+    reader: McapReader, stream: BinaryIO, topics: set[str]
+) -> Iterator[tuple[str, int, bytes]] | None:
+    """(topic, log time, payload) of every message on ``topics``, chunk by chunk in file order.
+
+    The mcap package parses chunk records one small read at a time, which costs as much as
+    decoding the messages; a chunk is one decompressed buffer, so its records are walked here
+    with two struct reads each. ``None`` when the file has no chunk index or another
+    compression than zstd or none: then the caller uses the mcap reader.
+    """
+    summary = reader.get_summary()
+    if summary is None or not summary.chunk_indexes:
+        return None
+    if any(index.compression not in ("zstd", "") for index in summary.chunk_indexes):
+        return None
+    wanted = {cid: ch.topic for cid, ch in summary.channels.items() if ch.topic in topics}
+
+    def walk() -> Iterator[tuple[str, int, bytes]]:
+        for index in sorted(summary.chunk_indexes, key=lambda i: i.chunk_start_offset):
+            if not wanted.keys() & index.message_index_offsets.keys():
+                continue
+            stream.seek(index.chunk_start_offset + 1 + 8)
+            chunk = Chunk.read(ReadDataStream(stream))
+            data = (
+                zstandard.decompress(chunk.data, chunk.uncompressed_size)
+                if chunk.compression == "zstd"
+                else bytes(chunk.data)
+            )
+            pos, end = 0, len(data)
+            while pos < end:
+                opcode, length = _RECORD_HEAD(data, pos)
+                body = pos + 9
+                if opcode == _OPCODE_MESSAGE:
+                    channel, log_time = _MESSAGE_HEAD(data, body)
+                    topic = wanted.get(channel)
+                    if topic is not None:
+                        yield topic, log_time, data[body + _MESSAGE_HEADER : body + length]
+                pos = body + length
+
+    return walk()
+
+
+def _columns(object_id: int, rows: list[list[float]]) -> ObjectRecord:
+    c = list(zip(*rows, strict=True))
+    return ObjectRecord(
+        object_id=object_id, t=list(c[0]), x=list(c[1]), y=list(c[2]), roll=list(c[4]),
+        pitch=list(c[5]), yaw=list(c[6]), vx=list(c[7]), vy=list(c[8]), ax=list(c[10]),
+        ay=list(c[11]), length=list(c[13]), width=list(c[14]), height=list(c[15]),
+        object_type=[int(v) for v in c[16]], vehicle_type=[int(v) for v in c[17]],
+        role=[int(v) for v in c[18]],
+    )  # fmt: skip
+
+
 def read_objects(path: Path, *, with_map: bool = True) -> RecordedObjects:
     """Every frame and object of an omega-prime recording (both map topic spellings)."""
-    objects: dict[int, ObjectRecord] = {}
+    rows: dict[int, list[list[float]]] = {}
     refs: set[str] = set()
     times: list[float] = []
     hosts: list[int | None] = []
     map_ref = map_xml = None
     map_topics = {MAP_TOPIC, "/" + MAP_TOPIC}
+    topics = {GROUND_TRUTH_TOPIC, *map_topics} if with_map else {GROUND_TRUTH_TOPIC}
     try:
         with path.open("rb") as stream:
             reader = make_reader(stream)
             metadata = {record.name: dict(record.metadata) for record in reader.iter_metadata()}
-            topics = [GROUND_TRUTH_TOPIC, *map_topics] if with_map else [GROUND_TRUTH_TOPIC]
-            for _, channel, message in reader.iter_messages(topics=topics, log_time_order=False):
-                if channel.topic in map_topics:
-                    map_ref, map_xml = _map_message(message.data)
+            messages = _chunk_messages(reader, stream, topics)
+            if messages is None:
+                messages = (
+                    (channel.topic, message.log_time, message.data)
+                    for _, channel, message in reader.iter_messages(
+                        topics=sorted(topics), log_time_order=False
+                    )
+                )
+            for topic, log_time, data in messages:
+                if topic in map_topics:
+                    map_ref, map_xml = _map_message(data)
                     continue
-                t, host = _ground_truth(message.data, message.log_time * 1e-9, objects, refs)
+                t, host = _ground_truth(data, log_time * 1e-9, rows, refs)
                 times.append(t)
                 hosts.append(host)
-    except (OSError, McapError, ValueError, IndexError, struct.error) as exc:
+    except (OSError, McapError, ValueError, IndexError, struct.error, zstandard.ZstdError) as exc:
         raise ResultsError(f"cannot read recording {path}: {exc}") from exc
     return RecordedObjects(
         frame_times=tuple(times),
         host_ids=tuple(hosts),
-        objects=objects,
+        objects={object_id: _columns(object_id, r) for object_id, r in rows.items()},
         map_references=frozenset(refs),
         map_xml=map_xml,
         map_channel_reference=map_ref,
