@@ -109,6 +109,7 @@ def test_runs_and_coverage(call: Call) -> None:
     assert sample["counts"] == {"Passed": 3, "Failed": 1, "Timeout": 1, "Invalid": 1,
                                 "Skipped": 1}  # fmt: skip
     assert sample["total"] == 7 and sample["failing"] == 3
+    assert sample["pass_rate"] == 0.5, "3 passed of the 6 that ran (one Skipped)"
     by_type = {g["label"]: g["counts"] for g in
                _json(call, f"/api/coverage?run={SAMPLE_RUN}&by=category")["groups"]}  # fmt: skip
     assert by_type["pedestrian"] == {"Passed": 1, "Timeout": 1}

@@ -60,6 +60,12 @@ class RunRow:
         """Scenarios whose verdict counts against the run."""
         return self.total - self.counts.get("Passed", 0) - self.counts.get("Skipped", 0)
 
+    @property
+    def pass_rate(self) -> float:
+        """Passed over scenarios that ran (not Skipped); 0 when none did."""
+        ran = self.total - self.counts.get("Skipped", 0)
+        return self.counts.get("Passed", 0) / ran if ran else 0.0
+
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
 class Group:
