@@ -84,3 +84,18 @@ def test_classify_rules() -> None:
     assert history.classify([family("1", 2, 0, "s 1"), family("1", 0, 2, "s 2")]).value == "stable"
     assert history.classify([family("1", 3, 0)], retried_passes=1).value == "retried"
     assert history.Flakiness.NONDETERMINISTIC.flaky and not history.Flakiness.STABLE.flaky
+
+
+def test_cluster_campaigns_record_their_seed() -> None:
+    """Flakiness needs the seed: the operator's campaign record carries it with the settings."""
+    from simtest_operator.operator import observed, recording_results
+
+    view = observed.campaign_view({
+        "apiVersion": "simtest.dev/v1alpha1", "kind": "TestCampaign",
+        "metadata": {"name": "nightly", "namespace": "team-a", "uid": "0b1c"},
+        "spec": {"scenarios": {"sources": [{"path": "scenarios"}]},
+                 "environment": {"sut": {"name": "idm-driver", "version": "2.0.0"},
+                                 "simulator": {"seed": 7}}},
+    })  # fmt: skip
+    info = recording_results.campaign_info(view, now=started(1))
+    assert info.settings["seed"] == 7

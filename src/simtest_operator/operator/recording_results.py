@@ -72,7 +72,7 @@ def campaign_info(campaign: CampaignView, *, now: datetime.datetime) -> results.
         sut_name=environment.sut.name,
         sut_version=environment.sut.version,
         simulator_version=environment.simulator.image,
-        settings=spec.execution.to_wire(),
+        settings={**spec.execution.to_wire(), "seed": environment.simulator.seed},
     )
 
 
