@@ -4,8 +4,8 @@ Covers: exit 1 with the failing cut-in named, the evaluation stored as a new eva
 same run with base scenarios while the original verdicts stay; a lenient criteria set gives exit
 0; a run whose recording ends before its simulated time has incomplete evidence and cannot pass;
 a missing recording is missing evidence; recordings fetched from S3 (moto's server) by their
-``s3://`` artifact URIs; bad criteria files and sources are exit 2 with one line naming the
-problem.
+``s3://`` artifact URIs; runs in PostgreSQL evaluated in place; bad criteria files and sources
+are exit 2 with one line naming the problem.
 """
 
 from __future__ import annotations
@@ -144,6 +144,23 @@ def test_recordings_are_fetched_from_s3(run_copy: Path, s3: S3Server) -> None:
         (evaluation,) = store.evaluations(record.run_key)
         recordings = {r.recording for r in store.evaluated_runs(evaluation.evaluation_id)}
     assert all(uri.startswith(f"s3://{BUCKET}/nightly/") for uri in recordings)
+
+
+@pytest.mark.postgres
+def test_runs_in_postgresql_are_evaluated_in_place(postgres_dsn: str, tmp_path: Path) -> None:
+    manifest = recorded_runs.write_manifest(
+        tmp_path, name="shared", source=recorded_runs.SCENARIOS / "smoke", include=["*.xosc"]
+    )
+    out = recorded_runs.run_campaign(manifest, tmp_path / "out", "--db", postgres_dsn)
+    assert not (out / "results.sqlite").exists()
+    code, output = evaluate(postgres_dsn, "--artifacts", str(out), "-q")
+    assert code == 1, output
+    assert "1 failed, 5 passed" in output and "0 with incomplete evidence" in output
+    with results.open_store(postgres_dsn) as store:
+        (record,) = store.campaigns()
+        (evaluation,) = store.evaluations(record.run_key)
+        runs = store.evaluated_runs(evaluation.evaluation_id)
+    assert len(runs) == 6 and sum(len(r.base_scenarios) for r in runs) >= 6
 
 
 @pytest.mark.parametrize(

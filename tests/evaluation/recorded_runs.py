@@ -57,9 +57,10 @@ spec:
     return manifest
 
 
-def run_campaign(manifest: Path, out: Path) -> Path:
+def run_campaign(manifest: Path, out: Path, *extra: str) -> Path:
     """Run the campaign with one worker; any verdict is fine, a crash is not."""
-    result = CliRunner().invoke(cli, ["run", str(manifest), "-o", str(out), "-j", "1", "--plain"])
+    args = ["run", str(manifest), "-o", str(out), "-j", "1", "--plain", *extra]
+    result = CliRunner().invoke(cli, args)
     assert result.exit_code in (0, 1), result.output
     return out
 

@@ -6,10 +6,44 @@ Public API: :class:`Criteria` (defaults plus per-scenario overrides), :class:`On
 (evaluator plus :class:`RunFacts` -> :class:`Judgement`).
 """
 
-from simtest_operator.evaluation.carla_criteria import Outcome, ScenarioCriteria, Status
-from simtest_operator.evaluation.criteria import DEFAULT_TIME_LIMIT, Criteria
-from simtest_operator.evaluation.judging import Judgement, RunFacts, judge
-from simtest_operator.evaluation.online import Collision, OffRoadCheck, OnlineEvaluator, Violation
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from simtest_operator.evaluation.carla_criteria import Outcome, ScenarioCriteria, Status
+    from simtest_operator.evaluation.criteria import DEFAULT_TIME_LIMIT, Criteria
+    from simtest_operator.evaluation.judging import Judgement, RunFacts, judge
+    from simtest_operator.evaluation.online import (
+        Collision,
+        OffRoadCheck,
+        OnlineEvaluator,
+        Violation,
+    )
+
+# Loaded on first use: the offline modules (``simtest evaluate``) need none of these, and
+# carla_criteria pulls in the OpenSCENARIO reader (about 150 ms at start-up).
+_MODULES = {
+    "Outcome": "carla_criteria",
+    "ScenarioCriteria": "carla_criteria",
+    "Status": "carla_criteria",
+    "DEFAULT_TIME_LIMIT": "criteria",
+    "Criteria": "criteria",
+    "Judgement": "judging",
+    "RunFacts": "judging",
+    "judge": "judging",
+    "Collision": "online",
+    "OffRoadCheck": "online",
+    "OnlineEvaluator": "online",
+    "Violation": "online",
+}
+
+
+def __getattr__(name: str) -> Any:
+    module = _MODULES.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    return getattr(importlib.import_module(f"{__name__}.{module}"), name)
+
 
 __all__ = [
     "DEFAULT_TIME_LIMIT",

@@ -25,7 +25,7 @@ import numpy as np
 import numpy.typing as npt
 
 from simtest_operator.evaluation import geometry2d
-from simtest_operator.evaluation.scenes import ActorKind, Array, Scene, Track
+from simtest_operator.evaluation.scenes import ActorKind, Array, Scene, Track, median
 
 Mask = npt.NDArray[np.bool_]
 
@@ -215,8 +215,22 @@ def relate(
         adjacent=adjacent,
         unknown=unknown,
         distance=distance,
-        conflict=_conflict(ego, other, params.conflict_horizon),
+        conflict=_conflict(ego, other, params.conflict_horizon)
+        if _may_cross(other, heading, present, params)
+        else None,
     )
+
+
+def _may_cross(other: Track, heading: Array, present: Mask, params: Parameters) -> bool:
+    """Whether a conflict could make a crossing or VRU base scenario: a pedestrian or cyclist,
+    or an object that is at some point not heading along the ego path (or off its trusted
+    part). Objects that only ever drive along the path (leads, cut-ins) need no search."""
+    if other.kind.vulnerable:
+        return True
+    known = heading[present]
+    with np.errstate(invalid="ignore"):
+        along = np.abs(known) < params.crossing_angle
+    return bool(len(known) == 0 or not np.all(along) or np.isnan(known).any())
 
 
 def _window(t: Array, centre: float, params: Parameters) -> tuple[int, int]:
@@ -230,7 +244,7 @@ def _lane_events(rel: Relation, t: Array, params: Parameters) -> list[BaseScenar
     events: list[BaseScenario] = []
     actor = rel.track.object_id
     inside = rel.in_lane_alongside
-    lookback = max(1, round(params.lane_change_lookback / max(np.median(np.diff(t)), 1e-3)))
+    lookback = max(1, round(params.lane_change_lookback / max(median(np.diff(t)), 1e-3)))
     for first, last in _runs(inside):
         if first > 0 and rel.adjacent[max(0, first - lookback) : first].any():
             before = rel.lateral[max(0, first - lookback) : first]
@@ -326,7 +340,7 @@ def _lead_segments(
 ) -> list[BaseScenario]:
     """Following and approaching, per nearest lead; short flickers join their neighbours."""
     events: list[BaseScenario] = []
-    period = max(float(np.median(np.diff(t))), 1e-3) if len(t) > 1 else 0.1
+    period = max(median(np.diff(t)), 1e-3) if len(t) > 1 else 0.1
     for actor in sorted(set(lead_actor.tolist()) - {-1}):
         for first, last in _runs(lead_actor == actor):
             with np.errstate(invalid="ignore"):
@@ -386,7 +400,7 @@ def decompose(scene: Scene, params: Parameters | None = None) -> Decomposition:
             events.append(conflict)
             busy[conflict.first : conflict.last + 1] = True
     events += _lead_segments(t, lead_actor, lead_closing, params)
-    period = float(np.median(np.diff(t))) if n > 1 else 0.1
+    period = median(np.diff(t)) if n > 1 else 0.1
     for a, b in _runs((lead_actor == -1) & ~busy):
         if t[b] - t[a] + period >= params.min_free_driving:
             events.append(

@@ -21,7 +21,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from simtest_operator.evaluation.scenes import ObjectColumns, RecordedColumns, host_id
+from simtest_operator.evaluation.scenes import ObjectColumns, RecordedColumns, host_id, median
 
 _RANGES = {
     "length": (0.0, math.inf, False),
@@ -128,7 +128,7 @@ def assess(
     if len(times) < 2:
         return Quality(metrics=metrics, issues=("recording has fewer than two frames",))
     periods = np.diff(times)
-    period = float(np.median(periods))
+    period = median(periods)
     metrics["rateHz"] = round(1.0 / period, 3) if period > 0 else 0.0
     if np.any(periods <= 0):
         issues.append("frame timestamps do not increase")
