@@ -165,3 +165,46 @@ def test_library_recordings_decompose_into_their_templates_base_scenarios(
             assert 0.0 <= b.start <= b.end <= s.ego.t[-1] + 1e-9
             assert s.ego.t[b.first] == b.start and s.ego.t[b.last] == b.end
         assert all(math.isfinite(b.start) for b in bases)
+
+
+def test_pet_is_omega_primes_timegap(library_run: Path) -> None:
+    """Crossing and VRU PET equals omega-prime's min timegap (|t_obj - t_ego| of overlapping
+    box polygons); omega-prime looks only 2 s either way, so beyond that it reports none."""
+    import warnings
+
+    omega_prime = pytest.importorskip("omega_prime")
+    from omega_prime.metrics import MetricManager
+    from omega_prime.metrics.analysis import distance_traveled, timegaps_and_min_timegaps, vel
+
+    from simtest_operator.evaluation import quality, reevaluating
+    from simtest_operator.verdicts import Verdict
+
+    recordings = sorted((library_run / "scenarios").glob("*/recording.mcap"))
+    checked = 0
+    for path in recordings:
+        if not path.parent.name.startswith(("ltap", "pedestrian-crossing")):
+            continue
+        decoded = read_objects(path)
+        result = reevaluating.evaluate(
+            scene_from_columns(decoded),
+            quality.assess(decoded, simulated_seconds=0.0),
+            reevaluating.DEFAULT_CRITERIA,
+            original=Verdict.PASSED,
+        )
+        (ours,) = [s.metrics["PET"] for s in result.base_scenarios if "PET" in s.metrics]
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            recording = omega_prime.Recording.from_file(
+                str(path), validate=False, parse_map=False, apply_proj=False
+            )
+            manager = MetricManager(metrics=[vel, distance_traveled, timegaps_and_min_timegaps])
+            _, properties = manager.compute(recording, ego_id=0)
+        rows = properties["min_timegaps"]
+        rows = rows.collect() if hasattr(rows, "collect") else rows
+        theirs = [abs(row["min_timegap"]) for row in rows.to_dicts()]
+        if theirs:
+            assert ours == pytest.approx(min(theirs), abs=1e-6), path.parent.name
+        else:
+            assert ours > 2.0, path.parent.name
+        checked += 1
+    assert checked == 6

@@ -40,7 +40,7 @@ def _point_segment_distances(points: Array, boxes: Array) -> Array:
     return distances
 
 
-def _overlap(first: Array, second: Array) -> npt.NDArray[np.bool_]:
+def overlaps(first: Array, second: Array) -> npt.NDArray[np.bool_]:
     """Separating-axis test per row: True where the two boxes intersect."""
     separated = np.zeros(len(first), dtype=bool)
     for box in (first, second):
@@ -58,7 +58,7 @@ def box_distance(first: Array, second: Array) -> Array:
     distance = np.minimum(
         _point_segment_distances(first, second), _point_segment_distances(second, first)
     )
-    distance[_overlap(first, second)] = 0.0
+    distance[overlaps(first, second)] = 0.0
     return distance
 
 

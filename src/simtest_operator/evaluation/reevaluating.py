@@ -230,9 +230,10 @@ def _score(
     distances = [_min(r.distance[window]) for r in relations]
     metrics["minDistance"] = min(distances, default=math.inf)
     metrics["maxDecel"] = max(0.0, float(np.max(-ego.longitudinal_acceleration[window])))
-    if base.kind in (Kind.CROSSING, Kind.VRU) and relations and relations[0].conflict:
-        i, j = relations[0].conflict
-        metrics["PET"] = abs(float(ego.t[i] - relations[0].track.t[j]))
+    conflict = relations[0].conflict if relations else None
+    if base.kind in (Kind.CROSSING, Kind.VRU) and conflict is not None:
+        other_t = relations[0].track.t[conflict.other_frame]
+        metrics["PET"] = abs(float(ego.t[conflict.ego_frame] - other_t))
     metrics["collision"] = 1.0 if metrics["minDistance"] <= 0.0 else 0.0
     checks = [
         Check(
