@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -15,6 +16,7 @@ from simtest_operator.errors import ScenarioError
 from simtest_operator.evaluation import quality, reevaluating
 from simtest_operator.evaluation.basescenarios import Kind
 from simtest_operator.evaluation.scenes import scene_from_columns
+from simtest_operator.recording import objects as objects_module
 from simtest_operator.recording import read_trajectories
 from simtest_operator.recording.objects import ObjectRecord, RecordedObjects, read_objects
 from simtest_operator.verdicts import Verdict
@@ -51,6 +53,18 @@ def test_the_fast_reader_agrees_with_the_trajectory_reader(recordings: dict[str,
         assert decoded.map_xml is not None and decoded.map_xml.startswith("<?xml")
         assert decoded.map_references == {decoded.map_channel_reference}
         assert set(decoded.host_ids) == {min(decoded.objects)}
+
+
+def test_the_layout_fast_path_decodes_like_the_general_decoder(
+    recordings: dict[str, Path], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    fast = {name: read_objects(path) for name, path in recordings.items()}
+    monkeypatch.setattr(objects_module, "_OBJECT_LAYOUT", re.compile(b"(?!)"))
+    monkeypatch.setattr(objects_module, "_BASE_LAYOUT", re.compile(b"(?!)"))
+    for name, path in recordings.items():
+        general = read_objects(path)
+        assert general.objects == fast[name].objects
+        assert general.frame_times == fast[name].frame_times
 
 
 def test_a_sound_recording_is_complete_evidence(recordings: dict[str, Path]) -> None:

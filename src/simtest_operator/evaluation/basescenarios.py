@@ -64,6 +64,8 @@ class Parameters:
     """Seconds within which two paths' occupation must overlap to count as a conflict."""
     before: float = 2.0
     after: float = 3.0
+    exact_distance: float = 30.0
+    """Metres (bounding-circle gap) below which box distances are computed exactly."""
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
@@ -198,13 +200,19 @@ def relate(
         heading[known] = rel[kept]
         along = other.speed[samples] * np.cos(rel)
         closing[known] = (ego.speed[frames] - along)[kept]
-        ego_box = geometry2d.corners(
-            ego.x[frames], ego.y[frames], ego.yaw[frames], ego.length, ego.width
-        )
+        # Exact box distances where they can matter; far apart, the centre distance minus both
+        # half diagonals (a lower bound, at most ~3 m short for cars) is enough.
+        reach = (math.hypot(ego.length, ego.width) + math.hypot(other.length, other.width)) / 2
+        bound = np.hypot(ego.x[frames] - other.x[samples], ego.y[frames] - other.y[samples])
+        bound -= reach
+        near = bound < params.exact_distance
+        distance[frames] = bound
+        fn, sn = frames[near], samples[near]
+        ego_box = geometry2d.corners(ego.x[fn], ego.y[fn], ego.yaw[fn], ego.length, ego.width)
         other_box = geometry2d.corners(
-            other.x[samples], other.y[samples], other.yaw[samples], other.length, other.width
+            other.x[sn], other.y[sn], other.yaw[sn], other.length, other.width
         )
-        distance[frames] = geometry2d.box_distance(ego_box, other_box)
+        distance[fn] = geometry2d.box_distance(ego_box, other_box)
     with np.errstate(invalid="ignore"):
         same_direction = np.abs(heading) < params.same_direction
         half = params.lane_width / 2.0

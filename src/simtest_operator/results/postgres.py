@@ -12,10 +12,10 @@ from __future__ import annotations
 import contextlib
 import datetime
 from collections.abc import Iterable, Iterator, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import psycopg
-import psycopg.types.json
+if TYPE_CHECKING:
+    import psycopg
 
 from simtest_operator.errors import ResultsError
 from simtest_operator.results import dsn, migrating, sqlrows, sqlstore
@@ -27,8 +27,15 @@ MIGRATION_LOCK = 0x73696D7465737400
 class _PostgresCodec:
     """JSONB through psycopg's adapter; TIMESTAMPTZ as aware datetimes."""
 
+    def __init__(self) -> None:
+        # psycopg is imported when a PostgreSQL store is opened, not with the results package
+        # (70 ms that every SQLite user, e.g. simtest evaluate on an output folder, would pay).
+        from psycopg.types.json import Jsonb
+
+        self._jsonb = Jsonb
+
     def json_in(self, value: object) -> object:
-        return psycopg.types.json.Jsonb(value)
+        return self._jsonb(value)
 
     def json_out(self, raw: Any) -> Any:
         return raw
@@ -82,6 +89,9 @@ class PostgresStore(sqlstore.SqlStore):
             raise ResultsError(f"not a PostgreSQL DSN: {located}")
         self._dsn = located
         self.where = located.where
+        import psycopg
+
+        self._error: type[Exception] = psycopg.Error
         try:
             self._connection: psycopg.Connection[Any] = psycopg.connect(
                 located.conninfo, autocommit=True, connect_timeout=connect_timeout
@@ -106,7 +116,7 @@ class PostgresStore(sqlstore.SqlStore):
                 if not write:
                     self._connection.execute("SET TRANSACTION READ ONLY")
                 yield _PostgresTx(self._connection)
-        except psycopg.Error as exc:
+        except self._error as exc:
             reason = " ".join(dsn.redact(str(exc), self._dsn).split())
             raise ResultsError(f"results database {self.where}: {reason}") from exc
 
