@@ -3,17 +3,20 @@ recorded for real and evaluated, compared by metric values per base scenario.
 
 Covers: the shorter headway shows up as minTHW on approaching worse, with distributions; a
 ``--fail-on`` rule over that change exits 1, a looser one exits 0; ``--original`` compares the
-runs' own metrics; the JSON output; bad rules and sources are exit 2 with one line.
+runs' own metrics; the JSON output; two evaluations of one run (default vs a strict criteria set)
+differ in verdicts but not in metric values; bad rules and sources are exit 2 with one line.
 """
 
 from __future__ import annotations
 
 import json
+import shutil
 from pathlib import Path
 
 import pytest
 from click.testing import CliRunner
 
+from simtest_operator import results
 from simtest_operator.cli.main import cli
 from tests.evaluation import recorded_runs
 
@@ -119,3 +122,24 @@ def test_bad_input_is_exit_2_with_one_line(
 def test_an_unknown_source_is_exit_2(tmp_path: Path) -> None:
     code, output = compare(str(tmp_path / "a"), str(tmp_path / "b"))
     assert code == 2 and "no such output folder, database file or DSN" in output
+
+
+def test_two_evaluations_of_one_run_differ_in_verdicts_not_values(
+    versions: tuple[Path, Path], tmp_path: Path
+) -> None:
+    base = Path(shutil.copytree(versions[0], tmp_path / "base"))
+    strict = tmp_path / "strict.yaml"
+    strict.write_text("name: strict\nbaseScenarios:\n  following: {minTHW: 5}\n", "utf-8")
+    result = CliRunner().invoke(cli, ["evaluate", str(base), "--criteria", str(strict), "-q"])
+    assert result.exit_code == 1, result.output
+    with results.open_store(base) as store:
+        (run,) = store.campaigns()
+        evaluations = store.evaluations(run.run_key)
+    by_name = {e.info.criteria_name: e.evaluation_id for e in evaluations}
+    code, output = compare(
+        str(base), "--base-evaluation", by_name["default"], "--evaluation", by_name["strict"],
+        "--fail-on", "verdict:regressed>0,minTHW@following:worsened>0",
+    )  # fmt: skip
+    assert code == 1, output
+    assert "rule minTHW@following:worsened>0: ok (0;" in output
+    assert "rule verdict:regressed>0: VIOLATED" in output
