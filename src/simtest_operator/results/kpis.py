@@ -222,7 +222,7 @@ def parse_rules(text: str) -> tuple[Rule, ...]:
         match = _RULE.match(part.replace(" ", ""))
         if match is None:
             raise ResultsError(
-                f"bad --fail-on rule {part!r}: expected METRIC[.STAT][@GROUP]:worse|worsened"
+                f"bad --fail-on rule {part!r}: expected METRIC[.STAT][@GROUP]:worse|worsened "
                 "OP NUMBER or verdict[@GROUP]:regressed|fixed|failing OP NUMBER"
             )
         subject, measure = match["subject"], match["measure"]
