@@ -113,7 +113,7 @@ def test_a_recording_shorter_than_its_run_cannot_pass(run_copy: Path) -> None:
     assert (
         merge.reason.startswith("evidence missing: artifact ") and "does not exist" in merge.reason
     )
-    assert "2 with incomplete evidence" in output
+    assert "2 without complete evidence" in output
 
 
 def test_recordings_are_fetched_from_s3(run_copy: Path, s3: S3Server) -> None:
@@ -138,7 +138,7 @@ def test_recordings_are_fetched_from_s3(run_copy: Path, s3: S3Server) -> None:
     }
     code, output = evaluate(str(run_copy), "-q", env=env)
     assert code == 1, output
-    assert "1 failed, 5 passed" in output and "0 with incomplete evidence" in output
+    assert "1 failed, 5 passed" in output and "0 without complete evidence" in output
     with results.open_store(run_copy) as store:
         (record,) = store.campaigns()
         (evaluation,) = store.evaluations(record.run_key)
@@ -155,7 +155,7 @@ def test_runs_in_postgresql_are_evaluated_in_place(postgres_dsn: str, tmp_path: 
     assert not (out / "results.sqlite").exists()
     code, output = evaluate(postgres_dsn, "--artifacts", str(out), "-q")
     assert code == 1, output
-    assert "1 failed, 5 passed" in output and "0 with incomplete evidence" in output
+    assert "1 failed, 5 passed" in output and "0 without complete evidence" in output
     with results.open_store(postgres_dsn) as store:
         (record,) = store.campaigns()
         (evaluation,) = store.evaluations(record.run_key)

@@ -3,6 +3,7 @@ generated library whose base scenarios are known by construction of each templat
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from pathlib import Path
 
@@ -112,6 +113,18 @@ def test_a_pedestrian_crossing_is_a_vru_interaction_not_a_crossing() -> None:
 def test_oncoming_traffic_in_its_own_lane_is_no_interaction() -> None:
     oncoming = track(2, 600.0 - 25.0 * T, np.full_like(T, 3.5))
     assert list(kinds(scene(oncoming))) == [Kind.FREE_DRIVING]
+
+
+def test_a_single_frame_has_no_base_scenarios() -> None:
+    first = slice(0, 1)
+    one = Track(
+        object_id=0, kind=ActorKind.VEHICLE, length=4.5, width=1.8, t=T[first],
+        x=T[first], y=T[first], yaw=T[first], vx=T[first], vy=T[first], ax=T[first],
+        ay=T[first],
+    )  # fmt: skip
+    other = dataclasses.replace(one, object_id=1, x=one.x + 20.0)
+    decomposition = decompose(Scene(ego=one, others=(other,), frame_times=T[first]))
+    assert decomposition.base_scenarios == ()
 
 
 # --- the generated library, known by construction --------------------------------------------

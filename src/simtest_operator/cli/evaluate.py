@@ -112,7 +112,7 @@ def evaluate(
         f"evaluation {summary.evaluation_id} of run {summary.run_key} ({dsn.describe(source)}) "
         f"with criteria {criteria.name!r}: {counts or 'no scenarios'}; "
         f"{bases} base scenarios, {failed_bases} failed; "
-        f"{incomplete} with incomplete evidence; {summary.wall_seconds:.2f} s"
+        f"{incomplete} without complete evidence; {summary.wall_seconds:.2f} s"
     )
     failing = [r for r in summary.runs if r.verdict.value not in ("Passed", "Skipped")]
     if failing:

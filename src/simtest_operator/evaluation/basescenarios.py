@@ -404,6 +404,12 @@ def decompose(scene: Scene, params: Parameters | None = None) -> Decomposition:
     ego = scene.ego
     t = ego.t
     n = len(t)
+    if n < 2:  # nothing happens in one frame (and the quality check says so)
+        empty = np.full(n, np.nan)
+        return Decomposition(
+            scene=scene, relations=(), lead_gap=empty, lead_closing=empty.copy(),
+            lead_actor=np.full(n, -1, dtype=np.int64), base_scenarios=(),
+        )  # fmt: skip
     path = geometry2d.Path.of(ego.x, ego.y, ego.yaw)
     ego_s = path.arc_of_vertices(ego.x, ego.y)
     relations = tuple(relate(scene, other, path, ego_s, params) for other in scene.others)

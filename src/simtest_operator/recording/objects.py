@@ -510,7 +510,8 @@ def read_objects(path: Path, *, with_map: bool = True) -> RecordedObjects:
                 times.append(t)
                 hosts.append(host)
     except (OSError, McapError, ValueError, IndexError, struct.error, zstandard.ZstdError) as exc:
-        raise ResultsError(f"cannot read recording {path}: {exc}") from exc
+        detail = str(exc) or f"{type(exc).__name__} (truncated or damaged file)"
+        raise ResultsError(f"cannot read recording {path}: {detail}") from exc
     return RecordedObjects(
         frame_times=tuple(times),
         host_ids=tuple(hosts),
