@@ -47,7 +47,9 @@ class Fetcher:
         path = Path(uri)
         if not path.is_absolute():
             if self._base is None:
-                raise ResultsError(f"relative artifact path {uri} needs the run's output folder")
+                raise ResultsError(
+                    f"relative artifact path {uri} needs the run's output folder (--artifacts)"
+                )
             path = self._base / path
         return self._existing(path)
 
