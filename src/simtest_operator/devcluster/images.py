@@ -20,6 +20,8 @@ BUILD_SCRIPT = Path("deploy/docker/build.sh")
 INDEX = "images.json"
 RUNNER_IMAGE = "ghcr.io/simtest-dev/simtest-runner:0.1.0"
 DEVICE_PLUGIN_IMAGE = "ghcr.io/simtest-dev/simtest-device-plugin:0.1.0"
+SUT_GO_IMAGE = "ghcr.io/simtest-dev/simtest-sut-go:0.1.0"
+"""The example system under test in Go (``deploy/sut-go``), run as a sidecar."""
 SANDBOX_PREFIX = "localhost/simtest/pause:"
 """Name prefix of the pod-sandbox image the build script makes (a static ``pause``)."""
 
