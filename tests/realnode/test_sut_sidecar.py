@@ -1,0 +1,124 @@
+"""An external system under test as a sidecar in real pods: the Go SUT image beside the simulator.
+
+Covers: a campaign whose ``spec.environment.sut.external.image`` is the Go SUT
+(``deploy/sut-go``, OSI protobuf over the SUT protocol) runs on the real node — each simulator pod
+starts the SUT as a native sidecar (init container ``sut``, ``restartPolicy: Always``, TCP startup
+probe) before the simulator, and the verdicts equal the built-in model's local ones (the cut-in at
+8 m fails); the SUT killed mid-run (SIGKILL from the node) makes that run ``Error`` naming the SUT
+— whose fault it was — and the retry passes.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import time
+from pathlib import Path
+from typing import Any
+
+import pytest
+import yaml
+from kubernetes import client
+
+from simtest_operator.devcluster import images
+from simtest_operator.devcluster.state import ClusterInfo
+from tests.e2e import support
+
+EXAMPLE = support.REPO / "scenarios" / "external-sut-go-campaign.yaml"
+CUT_INS = {
+    "cut-in_highway_v25_gap30_dv5.xosc": "Passed",
+    "cut-in_highway_v30_gap8_dv12.xosc": "Failed",
+}
+
+
+def _campaign(tmp_path: Path, name: str, include: list[str], **simulator: Any) -> dict[str, Any]:
+    body: dict[str, Any] = yaml.safe_load(EXAMPLE.read_text())
+    body["metadata"]["name"] = name
+    spec = body["spec"]
+    spec["scenarios"]["include"] = include
+    spec["environment"]["simulator"].update(simulator)
+    spec["execution"]["resources"] = {"requests": {"cpu": "500m"}}
+    assert spec["environment"]["sut"]["external"]["image"] == images.SUT_GO_IMAGE
+    return body
+
+
+def _sut_pids() -> list[int]:
+    found = []
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                if b"simtest-sut-go" in (entry / "cmdline").read_bytes():
+                    found.append(int(entry.name))
+            except OSError:
+                continue
+    return found
+
+
+def test_the_go_sut_as_a_sidecar_gives_the_local_verdicts(
+    real_cluster: ClusterInfo,
+    real_api_client: client.ApiClient,
+    real_namespace: str,
+    real_operator: support.OperatorProcess,
+    tmp_path: Path,
+) -> None:
+    cluster = support.Cluster(real_api_client, real_namespace)
+    cluster.create(_campaign(tmp_path, "sut-go", sorted(CUT_INS)))
+    seen: dict[str, Any] = {}
+    deadline = time.monotonic() + 300
+    while not seen:
+        assert time.monotonic() < deadline, "no simulator pod appeared"
+        for pod in cluster.pods():
+            seen[pod.metadata.name] = pod.spec
+        time.sleep(0.2)
+    cluster.wait_complete("sut-go", timeout=300, alive=real_operator.alive)
+    results = cluster.results("sut-go")
+    assert {k: v["verdict"] for k, v in results.items()} == CUT_INS, results
+    assert all(r["attempts"] == 1 for r in results.values()), results
+    (spec,) = list(seen.values())[:1]
+    (sidecar,) = spec.init_containers
+    assert (sidecar.name, sidecar.image, sidecar.restart_policy) == (
+        "sut",
+        images.SUT_GO_IMAGE,
+        "Always",
+    )
+    assert sidecar.startup_probe is not None and sidecar.startup_probe.tcp_socket is not None
+
+
+@pytest.mark.parametrize(
+    "operator_env", [{"SIMTEST_OPERATOR_KEEP_ENVIRONMENTS": "true"}], indirect=True
+)
+def test_a_sut_killed_mid_run_is_error_naming_the_sut_then_retried(
+    real_cluster: ClusterInfo,
+    real_api_client: client.ApiClient,
+    real_namespace: str,
+    real_operator: support.OperatorProcess,
+    tmp_path: Path,
+) -> None:
+    body = _campaign(
+        tmp_path, "sut-killed", ["cut-in_highway_v25_gap30_dv5.xosc"], realTimeFactor=1.0
+    )
+    cluster = support.Cluster(real_api_client, real_namespace)
+    cluster.create(body)
+    deadline = time.monotonic() + 180
+    while not (pids := _sut_pids()):
+        assert time.monotonic() < deadline, "the SUT never started"
+        time.sleep(0.2)
+    time.sleep(3.0)  # the simulator is past its handshake and stepping in real time
+    for pid in pids:
+        os.kill(pid, signal.SIGKILL)
+    # The first attempt's SimEnvironment keeps its verdict (environments kept for the test).
+    first: dict[str, Any] = {}
+    deadline = time.monotonic() + 120
+    while not first:
+        assert time.monotonic() < deadline, "the killed attempt never ended"
+        for env in cluster.items("simenvironments"):
+            for result in (env.get("status") or {}).get("results") or []:
+                if result.get("attempts") == 1:
+                    first = result
+        time.sleep(0.1)
+    assert first["verdict"] == "Error", first
+    assert "SUT" in first["reason"], first
+    cluster.wait_complete("sut-killed", timeout=300, alive=real_operator.alive)
+    (result,) = cluster.results("sut-killed").values()
+    assert result["verdict"] == "Passed", result
+    assert result["attempts"] == 2, result
