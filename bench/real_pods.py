@@ -91,8 +91,8 @@ class PodTimeline:
                         marks.setdefault("terminated", now)
 
 
-def scenario_claim(core: client.CoreV1Api, namespace: str) -> None:
-    """The repository's scenarios as a read-only PVC (a hostPath volume bound to it)."""
+def scenario_claim(core: client.CoreV1Api, namespace: str, root: Path = SCENARIOS) -> None:
+    """``root`` (the repository's scenarios) as a read-only PVC (a hostPath volume bound to it)."""
     core.create_persistent_volume(
         {
             "metadata": {"name": f"scenarios-{namespace}"},
@@ -100,7 +100,7 @@ def scenario_claim(core: client.CoreV1Api, namespace: str) -> None:
                 "capacity": {"storage": "1Gi"},
                 "accessModes": ["ReadOnlyMany"],
                 "storageClassName": "",
-                "hostPath": {"path": str(SCENARIOS), "type": "Directory"},
+                "hostPath": {"path": str(root), "type": "Directory"},
                 "claimRef": {"namespace": namespace, "name": "scenarios"},
             },
         }
