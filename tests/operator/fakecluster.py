@@ -18,7 +18,7 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
-from simtest_operator.operator import campaigns, observed, scenariolists
+from simtest_operator.operator import observed, planning, scenariolists
 from simtest_operator.operator.actions import (
     Create,
     Delete,
@@ -151,11 +151,11 @@ class FakeCluster:
 
     # --- planning ----------------------------------------------------------------------------
 
-    def inputs(self, name: str = "camp") -> campaigns.Inputs:
+    def inputs(self, name: str = "camp") -> planning.Inputs:
         campaign = self.get(Kind.CAMPAIGN, name)
         assert campaign is not None
         cm = self.get(Kind.CONFIG_MAP, f"{name}-scenarios")
-        return campaigns.Inputs(
+        return planning.Inputs(
             campaign=observed.campaign_view(campaign),
             stored=scenariolists.read(cm) if cm else None,
             batches=[observed.batch_view(b) for b in self.of(Kind.BATCH)],
@@ -172,7 +172,7 @@ class FakeCluster:
         )
 
     def plan(self, name: str = "camp") -> Plan:
-        return campaigns.plan(
+        return planning.plan(
             self.inputs(name),
             config=self.config,
             render=lambda request: render_environment(request, self.library),

@@ -17,8 +17,8 @@ import json
 import pytest
 
 from simtest_operator.errors import SourceError
-from simtest_operator.operator import campaigns, client, conditions, names, observed, scenariolists
-from simtest_operator.operator.actions import Emit, Kind, PatchStatus
+from simtest_operator.operator import client, conditions, names, observed, planning, scenariolists
+from simtest_operator.operator.actions import Emit, Kind, PatchStatus, Plan
 from simtest_operator.operator.caching import ALL_NODES, Cache
 from simtest_operator.operator.configuration import OperatorConfig
 from simtest_operator.operator.expectations import Expectation, Expectations, Want
@@ -168,10 +168,10 @@ def test_api_errors_are_mapped(status: int, reason: str, expected: type[Exceptio
     assert type(error) is expected and error.status == status
 
 
-def _halted(body: dict[str, object], **inputs: object) -> campaigns.Plan:
+def _halted(body: dict[str, object], **inputs: object) -> Plan:
     view = observed.campaign_view(body)
-    return campaigns.plan(
-        campaigns.Inputs(campaign=view, now=T0, **inputs),  # type: ignore[arg-type]
+    return planning.plan(
+        planning.Inputs(campaign=view, now=T0, **inputs),  # type: ignore[arg-type]
         config=OperatorConfig(templates_dir=REPO / "helm-templates"),
         render=lambda request: pytest.fail("nothing may render"),  # type: ignore[arg-type,return-value]
     )

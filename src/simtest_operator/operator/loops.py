@@ -22,7 +22,7 @@ import time
 from collections.abc import Callable
 
 from simtest_operator.errors import ClusterError, ScenarioError, SimtestError
-from simtest_operator.operator import campaigns, recording_results, resolving
+from simtest_operator.operator import planning, recording_results, resolving
 from simtest_operator.operator.actions import Plan
 from simtest_operator.operator.applying import Applier
 from simtest_operator.operator.caching import Cache, CampaignKey
@@ -132,8 +132,8 @@ class CampaignLoop:
         if self.stored is None and campaign.spec is not None:
             await self._resolve(campaign)
             now = shared.clock()
-        planning = time.perf_counter()  # reading the cache and planning: no API calls
-        inputs = campaigns.Inputs(
+        planning_started = time.perf_counter()  # reading the cache and planning: no API calls
+        inputs = planning.Inputs(
             campaign=campaign,
             stored=self.stored,
             resolution_error=self.resolution_error,
@@ -145,8 +145,8 @@ class CampaignLoop:
             last_status_write=self.last_status_write,
             jobs=cache.jobs_of(self.key),
         )
-        plan = campaigns.plan(inputs, config=shared.config, render=shared.render)
-        shared.metrics.plan.observe(time.perf_counter() - planning)
+        plan = planning.plan(inputs, config=shared.config, render=shared.render)
+        shared.metrics.plan.observe(time.perf_counter() - planning_started)
         applied = await self.applier.apply(plan, now=now)
         self.expectations.expect(applied.expectations, now=now)
         if applied.campaign_written:
@@ -181,8 +181,8 @@ class CampaignLoop:
         if self.stored is not None:
             return
         # Say "Resolving" first: resolution may take a while (git clone, downloads).
-        resolving_plan = campaigns.plan(
-            campaigns.Inputs(campaign=campaign, stored=None, now=self.shared.clock()),
+        resolving_plan = planning.plan(
+            planning.Inputs(campaign=campaign, stored=None, now=self.shared.clock()),
             config=self.shared.config,
             render=self.shared.render,
         )

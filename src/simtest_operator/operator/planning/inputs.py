@@ -1,0 +1,102 @@
+"""What a planning step reads: the watched views as given, and the frozen step built from them.
+
+:class:`Inputs` is what the campaign loop hands over. :class:`Step` narrows it to one resolved
+campaign (its spec, frozen list, layout, children) plus the configuration, once, so every phase
+reads the same facts and none can change what a later one sees.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import datetime
+from collections.abc import Callable, Mapping, Sequence
+
+from simtest_operator.api.v1alpha1 import TestCampaignSpec
+from simtest_operator.operator import recording_results
+from simtest_operator.operator.batches import Layout
+from simtest_operator.operator.configuration import OperatorConfig
+from simtest_operator.operator.jobviews import JobView
+from simtest_operator.operator.observed import (
+    BatchView,
+    CampaignView,
+    EnvironmentView,
+    NodeView,
+    PodView,
+)
+from simtest_operator.operator.scenariolists import StoredList
+from simtest_operator.render import EnvironmentRequest, RenderedEnvironment
+from simtest_operator.scenarios.pinned import PinnedScenario
+
+Renderer = Callable[[EnvironmentRequest], RenderedEnvironment]
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Inputs:
+    """Everything one step looks at."""
+
+    campaign: CampaignView
+    stored: StoredList | None
+    """The frozen list (None until resolution has written it)."""
+    resolution_error: str | None = None
+    batches: Sequence[BatchView] = ()
+    envs: Sequence[EnvironmentView] = ()
+    pods: Mapping[str, PodView] = dataclasses.field(default_factory=dict)
+    nodes: Mapping[str, NodeView] | None = None
+    """None when the operator cannot see nodes (then maxParallel defaults to batchSize)."""
+    now: datetime.datetime
+    last_status_write: datetime.datetime | None = None
+    jobs: Mapping[str, JobView] = dataclasses.field(default_factory=dict)
+    """helmfile Jobs by name (``provisioner: Helmfile``)."""
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Step:
+    """One step of a resolved campaign with a valid spec: what every phase reads."""
+
+    inputs: Inputs
+    spec: TestCampaignSpec
+    config: OperatorConfig
+    render: Renderer
+    frozen: tuple[PinnedScenario, ...]
+    """The frozen list's scenarios, in order."""
+    layout: Layout
+    batches: Mapping[int, BatchView]
+    """This campaign's batches by index."""
+    envs: Sequence[EnvironmentView]
+    """This campaign's environments."""
+    run_key: str
+    """The results run key pods record under; empty without a results database."""
+
+    @property
+    def campaign(self) -> CampaignView:
+        """The campaign being planned."""
+        return self.inputs.campaign
+
+    @property
+    def now(self) -> datetime.datetime:
+        """The step's clock reading."""
+        return self.inputs.now
+
+
+def step(
+    inputs: Inputs,
+    stored: StoredList,
+    spec: TestCampaignSpec,
+    *,
+    config: OperatorConfig,
+    render: Renderer,
+) -> Step:
+    """The step of a campaign whose spec is valid and whose list is frozen."""
+    campaign = inputs.campaign
+    frozen = stored.frozen.scenarios
+    return Step(
+        inputs=inputs,
+        spec=spec,
+        config=config,
+        render=render,
+        frozen=frozen,
+        layout=Layout(ids=tuple(s.id for s in frozen), batch_size=stored.batch_size),
+        batches={b.index: b for b in inputs.batches if b.campaign == campaign.name},
+        envs=tuple(e for e in inputs.envs if e.campaign == campaign.name),
+        run_key=recording_results.run_key(campaign) if spec.results.database_secret_ref else "",
+    )

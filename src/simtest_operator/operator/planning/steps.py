@@ -1,0 +1,92 @@
+"""One planning step: the order of its phases.
+
+A step acts on observed state only. Results become durable in this order, each step after the
+previous one is visible: pod terminated -> SimEnvironment status records the verdicts -> pod
+deleted and the verdicts folded into the ScenarioBatch status -> SimEnvironment deleted. A crash
+between any two steps leaves enough behind for the next operator to continue from.
+"""
+
+from __future__ import annotations
+
+from simtest_operator.operator import campaignstatus, cancelling, statuses
+from simtest_operator.operator.actions import Observation, Plan
+from simtest_operator.operator.batches import State
+from simtest_operator.operator.configuration import OperatorConfig
+from simtest_operator.operator.planning import (
+    assessing,
+    cleaning,
+    folding,
+    inputs,
+    starting,
+    tending,
+)
+from simtest_operator.operator.planning.outcomes import Outcome
+
+
+def plan(given: inputs.Inputs, *, config: OperatorConfig, render: inputs.Renderer) -> Plan:
+    """One reconcile step."""
+    campaign = given.campaign
+    if campaign.deleting:
+        return Plan(finished=True)
+    if campaign.spec is None:
+        return _halt(given, "Error", "InvalidSpec", campaign.spec_error or "invalid spec")
+    if given.stored is None:
+        if given.resolution_error is not None:
+            return _halt(given, "Error", "ResolutionFailed", given.resolution_error)
+        return _halt(given, "Resolving", "Resolving", "resolving scenario sources", final=False)
+    step = inputs.step(given, given.stored, campaign.spec, config=config, render=render)
+    return _run(step)
+
+
+def _halt(
+    given: inputs.Inputs, phase: str, reason: str, message: str, *, final: bool = True
+) -> Plan:
+    actions = campaignstatus.halted(
+        given.campaign, phase, reason, message, final=final, now=given.now
+    )
+    return Plan(actions=actions, finished=final)
+
+
+def _run(step: inputs.Step) -> Plan:
+    spec, campaign = step.spec, step.campaign
+    cancellation = cancelling.decide(spec, campaign.status, now=step.now)
+    judged = assessing.assessments(step, cancellation)
+    states = assessing.states(step, judged, cancellation)
+    outcome = tending.tend(step, judged) + cleaning.teardowns(step) + folding.fold(step, states)
+    folded = {s.id for s in states if s.state is State.FOLDED}
+    outcome += cleaning.removals(step, judged, folded)
+    complete = all(s.state.settled for s in states)
+    in_flight = assessing.in_flight(step, judged)
+    window = starting.window(step)
+    if not complete and not campaign.deleting and cancellation is None:
+        outcome += starting.start(step, states, in_flight=in_flight, window=window)
+        limit = cancelling.deadline(spec, campaign.status)
+        if limit is not None:
+            outcome += Outcome(wakes=(limit,))
+    counts = statuses.counters(states)
+    update = campaignstatus.progressed(
+        campaign,
+        spec,
+        counts,
+        batches=len(step.batches),
+        complete=complete,
+        cancellation=cancellation,
+        now=step.now,
+        last_write=step.inputs.last_status_write,
+        status_interval=step.config.status_interval,
+    )
+    outcome += Outcome(
+        actions=update.actions, wakes=(update.due,) if update.due is not None else ()
+    )
+    return Plan(
+        actions=outcome.actions,
+        wake_at=min(outcome.wakes) if outcome.wakes else None,
+        observation=Observation(
+            in_flight=in_flight,
+            queued=counts["queued"],
+            window=window,
+            start_latencies=outcome.start_latencies,
+            overheads=outcome.overheads,
+        ),
+        finished=complete and not step.envs,
+    )
