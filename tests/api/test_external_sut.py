@@ -12,7 +12,7 @@ from pydantic import ValidationError
 
 from simtest_operator.api import converting
 from simtest_operator.api.v1alpha1 import environment, kinds
-from simtest_operator.sim.sut import Launch
+from simtest_operator.drivermodel import Launch
 
 CRD = Path(__file__).resolve().parents[2] / "crds" / "simtest.dev_testcampaigns.yaml"
 

@@ -14,7 +14,7 @@ import pytest
 from simtest_operator import render
 from simtest_operator.api import converting
 from simtest_operator.api.v1alpha1 import environment
-from simtest_operator.sim.sut import Launch
+from simtest_operator.drivermodel import Launch
 from tests.render.cases import request
 
 REPO = Path(__file__).resolve().parents[2]

@@ -19,9 +19,9 @@ import pytest
 from mcap.reader import make_reader
 
 from simtest_operator import evaluation
+from simtest_operator.drivermodel import SutConfig, Takeover
 from simtest_operator.runner import execution
 from simtest_operator.sim.session import BackendChoice
-from simtest_operator.sim.sut import SutConfig, Takeover
 from simtest_operator.verdicts import Verdict
 
 from . import carla_scenarios as cs

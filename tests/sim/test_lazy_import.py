@@ -1,8 +1,9 @@
 """Importing the operator (and with it the API layer's SUT conversion) does not load SUMO.
 
-Covers: ``simtest_operator.sim`` resolves its public names lazily, so a process that needs only
-the driver-model values (the operator, ``simtest submit``) never imports libsumo or sumolib; the
-names still resolve; an unknown name is an AttributeError.
+Covers: the driver-model values live in ``simtest_operator.drivermodel``, below ``sim``, so a
+process that needs only them (the operator, ``simtest submit``) never imports the simulator,
+libsumo or sumolib; ``simtest_operator.sim`` still exports its public names (the driver-model
+types among them); an unknown name is an AttributeError.
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ import sys
 import pytest
 
 import simtest_operator.sim as sim
+from simtest_operator import drivermodel
 
 
 def test_operator_process_does_not_import_sumo() -> None:
@@ -31,7 +33,7 @@ def test_operator_process_does_not_import_sumo() -> None:
 
 
 def test_public_names_resolve() -> None:
-    assert sim.SutConfig.__name__ == "SutConfig"
+    assert sim.SutConfig is drivermodel.SutConfig
     assert callable(sim.open_simulation)
 
 

@@ -9,9 +9,9 @@ from pathlib import Path
 
 import pytest
 
+from simtest_operator.drivermodel import DriverModel, Leader
 from simtest_operator.runner import execution
 from simtest_operator.sim import BackendChoice, SutConfig, Takeover
-from simtest_operator.sim.sut import DriverModel, Leader
 from simtest_operator.verdicts import Verdict
 
 DATA = Path(__file__).parent / "data"

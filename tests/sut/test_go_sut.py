@@ -12,9 +12,9 @@ from pathlib import Path
 
 import pytest
 
+from simtest_operator.drivermodel import ExternalSut, Launch
 from simtest_operator.runner import execution
 from simtest_operator.sim import BackendChoice, SutConfig
-from simtest_operator.sim.sut import ExternalSut, Launch
 from simtest_operator.verdicts import Verdict
 
 REPO = Path(__file__).resolve().parents[2]

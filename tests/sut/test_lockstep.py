@@ -14,10 +14,10 @@ from pathlib import Path
 import pytest
 from mcap.reader import make_reader
 
+from simtest_operator.drivermodel import ExternalSut, Launch
 from simtest_operator.runner import execution
 from simtest_operator.settings import SimulationSettings
 from simtest_operator.sim import BackendChoice, SutConfig
-from simtest_operator.sim.sut import ExternalSut, Launch
 from simtest_operator.sut.launching import reference_command
 from simtest_operator.verdicts import Verdict
 

@@ -9,11 +9,11 @@ from __future__ import annotations
 
 from simtest_operator.api import v1alpha1
 from simtest_operator.api.v1alpha1 import environment, evaluation, sources
+from simtest_operator.drivermodel import ExternalSut, Launch, SutConfig, Takeover
 from simtest_operator.evaluation import DEFAULT_TIME_LIMIT, Criteria
 from simtest_operator.scenarios import batching, globbing, specs
 from simtest_operator.scenarios.pinned import PinnedScenario
 from simtest_operator.settings import SimulationSettings
-from simtest_operator.sim.sut import ExternalSut, Launch, SutConfig, Takeover
 
 
 def selection(spec: sources.ScenarioSelection) -> specs.Selection:

@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from simtest_operator.api import converting, manifestfiles, v1alpha1
+from simtest_operator.drivermodel import SutConfig
 from simtest_operator.errors import ScenarioError
 from simtest_operator.openscenario import headers
 from simtest_operator.runner import executing, outputs, resolving, tasks
@@ -24,7 +25,6 @@ from simtest_operator.scenarios.pinned import FrozenList, PinnedScenario, sha256
 from simtest_operator.scenarios.resolving import FetchContext
 from simtest_operator.scenarios.specs import DatabaseSource, GraphqlSource, RestSource
 from simtest_operator.settings import Settings
-from simtest_operator.sim.sut import SutConfig
 from simtest_operator.verdicts import ScenarioOutcome, Verdict
 
 if TYPE_CHECKING:

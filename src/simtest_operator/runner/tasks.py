@@ -12,9 +12,9 @@ import dataclasses
 from collections.abc import Callable, Mapping
 from pathlib import Path
 
+from simtest_operator.drivermodel import SutConfig
 from simtest_operator.evaluation import Criteria
 from simtest_operator.settings import Settings
-from simtest_operator.sim.sut import SutConfig
 from simtest_operator.verdicts import ScenarioOutcome
 
 RECORDING = "recording.mcap"

@@ -13,8 +13,8 @@ import enum
 import math
 import operator
 
+from simtest_operator.drivermodel import DriverModel
 from simtest_operator.openscenario import model
-from simtest_operator.sim.sut import DriverModel
 from simtest_operator.snapshots import BoundingBox, EntityKind, EntityState, fast_entity_state
 
 

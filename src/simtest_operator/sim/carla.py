@@ -19,9 +19,9 @@ from __future__ import annotations
 
 import enum
 
+from simtest_operator.drivermodel import DriverModel, SutConfig
 from simtest_operator.openscenario import model
 from simtest_operator.sim.actors import Actor
-from simtest_operator.sim.sut import DriverModel, SutConfig
 
 CRUISE_SPEED = 30.0 / 3.6
 """m/s: the urban speed limit of the CARLA towns, which their autopilot and agents drive at."""

@@ -16,6 +16,7 @@ completions propagate through the storyboard, the backend is synchronised, and a
 
 from __future__ import annotations
 
+from simtest_operator.drivermodel import DriverModel, SutConfig, Takeover
 from simtest_operator.errors import ScenarioError
 from simtest_operator.opendrive import RoadNetwork
 from simtest_operator.openscenario import model
@@ -26,7 +27,7 @@ from simtest_operator.sim.backends import ActorSpec, Backend, BackendConfig
 from simtest_operator.sim.conditions import Conditions
 from simtest_operator.sim.dispatch import Dispatcher
 from simtest_operator.sim.storyboard import Storyboard
-from simtest_operator.sim.sut import DriverModel, Pilot, PilotView, SutConfig, Takeover
+from simtest_operator.sim.sut import Pilot, PilotView
 from simtest_operator.sim.traffic import Traffic
 from simtest_operator.sim.trajectories import PathRun
 from simtest_operator.sim.world import World

@@ -11,8 +11,8 @@ from __future__ import annotations
 import math
 
 from simtest_operator import geometry
+from simtest_operator.drivermodel import Leader
 from simtest_operator.sim.actors import Actor, Mode
-from simtest_operator.sim.sut import Leader
 from simtest_operator.sim.world import World
 from simtest_operator.snapshots import EntityState
 

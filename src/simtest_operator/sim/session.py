@@ -16,6 +16,7 @@ import enum
 from collections.abc import Mapping
 from pathlib import Path
 
+from simtest_operator.drivermodel import SutConfig
 from simtest_operator.opendrive import RoadNetwork
 from simtest_operator.openscenario import LoadOptions, load_scenario, model
 from simtest_operator.settings import SimulationSettings
@@ -24,7 +25,6 @@ from simtest_operator.sim.backends import Backend, BackendConfig
 from simtest_operator.sim.engine import Simulation
 from simtest_operator.sim.memory import MemoryBackend
 from simtest_operator.sim.sumo import SumoBackend
-from simtest_operator.sim.sut import SutConfig
 
 
 class BackendChoice(enum.StrEnum):

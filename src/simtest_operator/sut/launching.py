@@ -18,7 +18,7 @@ import tempfile
 from collections.abc import Iterator, Mapping
 from typing import IO, Any
 
-from simtest_operator.sim.sut import ExternalSut, Launch
+from simtest_operator.drivermodel import ExternalSut, Launch
 from simtest_operator.sut import client
 from simtest_operator.sut.errors import SutError
 

@@ -8,8 +8,8 @@ ego's straight corridor within the sensor range (the in-process model also follo
 curvature through the simulator's lane coordinates, which the SensorView does not carry).
 Laterally it holds the lane (the simulator's vehicle model follows the lane; no steering).
 
-Configuration arrives in HELLO: ``driverModel`` holds :class:`~simtest_operator.sim.sut.SutConfig`
-fields (snake_case) and overrides the defaults.
+Configuration arrives in HELLO: ``driverModel`` holds
+:class:`~simtest_operator.drivermodel.SutConfig` fields (snake_case) and overrides the defaults.
 """
 
 from __future__ import annotations
@@ -26,8 +26,8 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from simtest_operator import geometry
+from simtest_operator.drivermodel import DriverModel, Leader, SutConfig
 from simtest_operator.recording import osiwire
-from simtest_operator.sim.sut import DriverModel, Leader, SutConfig
 from simtest_operator.snapshots import BoundingBox, EntityKind, EntityState
 from simtest_operator.sut import framing
 from simtest_operator.sut import protowire as pw

@@ -10,7 +10,7 @@ import statistics
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from simtest_operator.sim.sut import SutConfig
+from simtest_operator.drivermodel import SutConfig
 from simtest_operator.sut.client import Identity
 from simtest_operator.sut.messages import OSI_VERSION
 

@@ -1,0 +1,188 @@
+"""The ego driver model: its configuration and its longitudinal and lateral decisions.
+
+Longitudinal control is the Intelligent Driver Model (Treiber et al. 2000) when adaptive cruise
+control is on (follow the vehicle ahead with a time gap) and plain cruise control when it is off;
+automatic emergency braking (AEB) overrides both when the in-path time to collision drops below
+its threshold. Laterally the model keeps the lane centre (or, with lane keeping off, holds its
+heading). Two configurations therefore produce different behaviour on the same scenario, which is
+the point of testing a SUT.
+
+:class:`SutConfig` mirrors the campaign's ``spec.environment.sut.driverModel`` (``api`` converts
+into it), plus how and when the ego is handed to the model (:class:`Takeover`) and where an
+external SUT comes from (:class:`ExternalSut`). The values sit below ``api``, ``sim`` and ``sut``
+and import nothing, so the operator and the reference SUT use them without loading the simulator.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import enum
+import math
+from collections.abc import Mapping
+
+
+class Takeover(enum.StrEnum):
+    """When the driver model takes the ego over from the storyboard."""
+
+    ON_CONTROLLER = "onController"
+    """When an ActivateControllerAction activates the ego's controller, or from the start when the
+    ego has an ObjectController (OpenSCENARIO semantics; scripted otherwise)."""
+    AFTER_INIT = "afterInit"
+    """Right after the Init actions: the storyboard only sets the ego's start state and speed."""
+    NEVER = "never"
+    """The ego stays scripted (reproduces the reference player; SUT settings have no effect)."""
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class SutConfig:
+    """Parameters of the ego driver model (defaults equal the api's defaults)."""
+
+    name: str = "idm-driver"
+    version: str = "0.0.0"
+    ego: str | None = None
+    """Entity that is the ego; None picks ``Ego``/``ego``/``hero``, else the first vehicle."""
+    takeover: Takeover = Takeover.ON_CONTROLLER
+    desired_speed: float | None = None
+    """Cruise speed (m/s); None keeps the speed the scenario gives the ego."""
+    time_headway: float = 1.5
+    """IDM T / ACC time gap (s)."""
+    min_gap: float = 2.0
+    """IDM s0 (m)."""
+    max_acceleration: float = 2.0
+    """IDM a (m/s^2)."""
+    comfortable_deceleration: float = 3.0
+    """IDM b (m/s^2)."""
+    max_deceleration: float = 8.0
+    """Physical braking limit of the controller (m/s^2)."""
+    acc: bool = True
+    """Follow the vehicle ahead (IDM); off: constant-speed cruise, blind to traffic."""
+    lane_keeping: bool = True
+    """Steer back to the lane centre; off: hold the heading."""
+    aeb: bool = True
+    """Automatic emergency braking."""
+    aeb_ttc_threshold: float = 1.5
+    """In-path TTC (s) below which AEB brakes."""
+    aeb_deceleration: float = 8.0
+    """AEB braking (m/s^2)."""
+    sensor_range: float = 200.0
+    """How far ahead (m) the model sees other road users."""
+    external: ExternalSut | None = None
+    """Where an external SUT runs; None drives the ego with the in-process model above."""
+
+
+class Launch(enum.StrEnum):
+    """How the runner reaches an external SUT."""
+
+    LOCAL = "local"
+    """Start ``command`` as a local process for every run and connect to it."""
+    SIDECAR = "sidecar"
+    """A container next to the simulator (``SIMTEST_SUT_ENDPOINT`` in the pod says where);
+    outside a pod the runner starts ``command`` locally instead."""
+    ENDPOINT = "endpoint"
+    """Connect to ``endpoint``; nothing is started."""
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class ExternalSut:
+    """An external system under test reached through the OSI SUT protocol."""
+
+    launch: Launch
+    command: tuple[str, ...] = ()
+    """Process to start (local) or the sidecar's command; gets ``SIMTEST_SUT_PORT``."""
+    endpoint: str | None = None
+    """``host:port`` to connect to."""
+    port: int = 7460
+    """Port a sidecar listens on."""
+    image: str | None = None
+    """Sidecar image (identity for the results)."""
+    env: Mapping[str, str] = dataclasses.field(default_factory=dict)
+    step_deadline: float = 0.1
+    """Seconds the SUT may take to answer one step before the run ends Error."""
+    startup_timeout: float = 60.0
+    """Seconds the SUT may take to accept the connection and answer the handshake."""
+    perception_range: float | None = None
+    """Radius (m) around the ego beyond which other objects are left out of the SensorView."""
+    config: Mapping[str, str] = dataclasses.field(default_factory=dict)
+    """Free-form configuration sent to the SUT in the handshake."""
+
+
+IDM_DELTA = 4.0
+"""IDM acceleration exponent (the usual value)."""
+
+LANE_KEEPING_TIME = 1.0
+"""Time constant (s) with which lane keeping removes a lateral offset."""
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Leader:
+    """The nearest road user ahead in the ego's path, as the ego perceives it."""
+
+    gap: float
+    """Free-space distance (m) bumper to bumper."""
+    speed: float
+    """Its speed along the ego's heading (m/s)."""
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Command:
+    """What the driver model wants this step."""
+
+    acceleration: float
+    aeb_active: bool
+
+
+class DriverModel:
+    """Longitudinal decision of the SUT for one ego, with AEB latch state."""
+
+    __slots__ = ("_aeb_latched", "config", "set_speed")
+
+    def __init__(self, config: SutConfig, *, set_speed: float) -> None:
+        self.config = config
+        self.set_speed = config.desired_speed if config.desired_speed is not None else set_speed
+        """Current cruise target; scenario SpeedActions on the ego change it (driver request)."""
+        self._aeb_latched = False
+
+    def command(self, *, speed: float, leader: Leader | None) -> Command:
+        """Acceleration for this step given the ego speed and the perceived leader."""
+        cfg = self.config
+        desired = max(self.set_speed, 0.1)
+        free = cfg.max_acceleration * (1.0 - (max(speed, 0.0) / desired) ** IDM_DELTA)
+        acceleration = free
+        if leader is not None and cfg.acc:
+            closing = speed - leader.speed
+            wanted = cfg.min_gap + max(
+                0.0,
+                speed * cfg.time_headway
+                + speed
+                * closing
+                / (2.0 * math.sqrt(cfg.max_acceleration * cfg.comfortable_deceleration)),
+            )
+            acceleration = cfg.max_acceleration * (
+                1.0
+                - (max(speed, 0.0) / desired) ** IDM_DELTA
+                - (wanted / max(leader.gap, 0.1)) ** 2
+            )
+        acceleration = max(acceleration, -cfg.max_deceleration)
+        aeb = self._aeb(speed=speed, leader=leader)
+        if aeb:
+            acceleration = min(acceleration, -cfg.aeb_deceleration)
+        return Command(acceleration=acceleration, aeb_active=aeb)
+
+    def _aeb(self, *, speed: float, leader: Leader | None) -> bool:
+        cfg = self.config
+        if not cfg.aeb or speed <= 0.0:
+            self._aeb_latched = False
+            return False
+        closing = speed - leader.speed if leader is not None else 0.0
+        ttc = leader.gap / closing if leader is not None and closing > 0.0 else math.inf
+        if ttc < cfg.aeb_ttc_threshold:
+            self._aeb_latched = True
+        elif self._aeb_latched and (leader is None or closing <= 0.0):
+            self._aeb_latched = False
+        return self._aeb_latched
+
+    def lateral_offset(self, offset: float, dt: float) -> float:
+        """Lane-keeping update of the offset from the lane centre (m)."""
+        if not self.config.lane_keeping:
+            return offset
+        return offset * math.exp(-dt / LANE_KEEPING_TIME)
