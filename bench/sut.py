@@ -30,7 +30,7 @@ import json, sys, time
 from pathlib import Path
 from simtest_operator.runner import execution
 from simtest_operator.sim import BackendChoice, SutConfig, Takeover
-from simtest_operator.sim.sut import ExternalSut, Launch
+from simtest_operator.drivermodel import ExternalSut, Launch
 from simtest_operator.sut.launching import reference_command
 path, nets, variant, go_sut = Path(sys.argv[1]), Path(sys.argv[2]), sys.argv[3], sys.argv[4]
 external = None
