@@ -104,7 +104,7 @@ _CHILD = r"""
 import json, sys, time
 t0 = time.perf_counter()
 from pathlib import Path
-from simtest_operator.runner import execution
+from simtest_operator.runner import scenario_execution
 from simtest_operator.sim import BackendChoice, SutConfig, Takeover
 from simtest_operator.sim import session
 t_import = time.perf_counter() - t0
@@ -130,14 +130,14 @@ if variant == "sumo+record":
         spent["seconds"] += time.perf_counter() - begun
         spent["frames"] = self.frames
     writing.Recorder.write, writing.Recorder.close = timed_write, timed_close
-request = execution.RunRequest(
+request = scenario_execution.RunRequest(
     scenario=path, nets_dir=nets, sut=SutConfig(takeover=Takeover.NEVER),
     output_dir=Path(out) if variant == "sumo+record" else None,
     record=variant == "sumo+record",
     backend=BackendChoice.MEMORY if variant == "memory" else BackendChoice.SUMO,
 )
 t1 = time.perf_counter()
-report = execution.run_scenario(request)
+report = scenario_execution.run_scenario(request)
 wall = time.perf_counter() - t1
 o = report.outcome
 print(json.dumps({"variant": variant, "verdict": o.verdict.value, "reason": o.reason,

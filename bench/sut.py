@@ -28,7 +28,7 @@ from pathlib import Path
 _CHILD = r"""
 import json, sys, time
 from pathlib import Path
-from simtest_operator.runner import execution
+from simtest_operator.runner import scenario_execution
 from simtest_operator.sim import BackendChoice, SutConfig, Takeover
 from simtest_operator.drivermodel import ExternalSut, Launch
 from simtest_operator.sut.launching import reference_command
@@ -38,10 +38,10 @@ if variant != "in-process":
     command = reference_command() if variant == "external" else (go_sut,)
     external = ExternalSut(launch=Launch.LOCAL, command=command, step_deadline=1.0)
 sut = SutConfig(takeover=Takeover.AFTER_INIT, external=external)
-request = execution.RunRequest(scenario=path, nets_dir=nets, sut=sut, record=False,
+request = scenario_execution.RunRequest(scenario=path, nets_dir=nets, sut=sut, record=False,
                                backend=BackendChoice.SUMO)
 t1 = time.perf_counter()
-report = execution.run_scenario(request)
+report = scenario_execution.run_scenario(request)
 wall = time.perf_counter() - t1
 o = report.outcome
 print(json.dumps({"variant": variant, "verdict": o.verdict.value, "reason": o.reason,

@@ -37,13 +37,13 @@ NEVER_BEFORE_FIRST_STEP = frozenset(
 
 _PROBE = """
 import json, sys
-from simtest_operator.runner import execution
+from simtest_operator.runner import scenario_execution
 
 def _at_first_step(*args, **kwargs):
     sys.stderr.write("first-step " + json.dumps(sorted(sys.modules)) + "\\n")
     return plain(*args, **kwargs)
 
-plain, execution._loop = execution._loop, _at_first_step
+plain, scenario_execution._loop = scenario_execution._loop, _at_first_step
 try:
     {body}
 except SystemExit:
@@ -120,11 +120,11 @@ _WARM_POD = """
 import json, os, sys
 from pathlib import Path
 from simtest_operator.render import RunSpec
-from simtest_operator.runner import entrypoint, execution
+from simtest_operator.runner import entrypoint, scenario_execution
 from simtest_operator.settings import Settings
 from simtest_operator.sim import sumo
 
-plain = execution.run_scenario
+plain = scenario_execution.run_scenario
 
 def traced(request):
     report = plain(request)
@@ -137,7 +137,7 @@ def started(request):
     warm = "libsumo.libsumo" in sys.modules  # before this scenario touched the simulator
     return traced(request)
 
-execution.run_scenario = started
+scenario_execution.run_scenario = started
 spec = RunSpec.loads(sys.argv[1])
 job = entrypoint.Job(spec=spec, artifacts=Path(spec.artifacts_dir),
                      settings=Settings.from_env({"SIMTEST_CACHE_DIR": sys.argv[2]}))

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from simtest_operator.runner.execution import RunRequest, run_scenario
+from simtest_operator.runner.scenario_execution import RunRequest, run_scenario
 from simtest_operator.sim import SutConfig
 from simtest_operator.verdicts import Verdict
 from tests.library.conftest import LIBRARY_ROOT

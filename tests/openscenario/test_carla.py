@@ -19,7 +19,7 @@ import pytest
 from simtest_operator import maps
 from simtest_operator.errors import ScenarioError
 from simtest_operator.openscenario import LoadOptions, StrictDeviationError, load_scenario, model
-from simtest_operator.runner import execution
+from simtest_operator.runner import scenario_execution
 from simtest_operator.settings import Settings
 from simtest_operator.sim import BackendChoice
 from tests.openscenario.conftest import ScenarioWriter
@@ -76,8 +76,8 @@ def test_carla_frame_is_negated_into_opendrive() -> None:
 
 def test_engine_places_carla_entities_on_their_lanes(tmp_path: Path) -> None:
     settings = Settings.from_env({"SIMTEST_CACHE_DIR": str(tmp_path)})
-    report = execution.run_scenario(
-        execution.RunRequest(
+    report = scenario_execution.run_scenario(
+        scenario_execution.RunRequest(
             scenario=TOWN01_FILE,
             nets_dir=settings.cache.nets,
             backend=BackendChoice.MEMORY,

@@ -1,6 +1,6 @@
 """Helpers for the simulator-pod tests: a run spec over fake scenario files and a fake engine.
 
-The fake engine (:func:`fake_run_one`) stands in for ``execution.run_scenario`` inside
+The fake engine (:func:`fake_run_one`) stands in for ``scenario_execution.run_scenario`` inside
 ``entrypoint.run_job``: it writes the same three files a real run leaves (recording, log, result
 file) and returns a verdict chosen by the scenario's ``simtest:fake`` header property, so the
 delivery path sees exactly what a pod produces without starting SUMO.
@@ -12,7 +12,7 @@ import json
 from pathlib import Path
 
 from simtest_operator.render import RunSpec, ScenarioRef
-from simtest_operator.runner import entrypoint, execution
+from simtest_operator.runner import entrypoint, scenario_execution
 from simtest_operator.scenarios import sha256_hex
 from simtest_operator.settings import Settings
 from simtest_operator.verdicts import ScenarioOutcome, Verdict
@@ -61,7 +61,7 @@ def job(
     return entrypoint.Job(spec=spec, artifacts=root, settings=settings)
 
 
-def fake_run_one(request: execution.RunRequest) -> ScenarioOutcome:
+def fake_run_one(request: scenario_execution.RunRequest) -> ScenarioOutcome:
     """Write recording, log and result file like a real run; the verdict from the file header."""
     assert request.output_dir is not None
     out = request.output_dir

@@ -20,7 +20,7 @@ import pytest
 from simtest_operator import results
 from simtest_operator.api.v1alpha1 import ManifestError
 from simtest_operator.errors import ScenarioError
-from simtest_operator.runner import campaigns, executing, fakes
+from simtest_operator.runner import campaigns, fakes, preparing, scheduling
 from simtest_operator.settings import Settings
 from simtest_operator.verdicts import Verdict
 from tests.runner.support import write_campaign
@@ -33,8 +33,8 @@ BEHAVIOURS = {"a": "pass", "b": "fail", "cut-in/c": "sleep:0.2", "cut-in/d": "er
 
 def request(
     tmp_path: Path, manifest: Path | None, out: str = "out", **kw: object
-) -> campaigns.LocalRunRequest:
-    return campaigns.LocalRunRequest(
+) -> preparing.LocalRunRequest:
+    return preparing.LocalRunRequest(
         manifest=manifest, output=tmp_path / out,
         settings=Settings.from_env({"HOME": str(tmp_path / "home")}), execute=fakes.execute,
         parallel=2, **kw,  # type: ignore[arg-type]
@@ -81,7 +81,7 @@ def test_interrupt_then_resume(tmp_path: Path) -> None:
     stop = threading.Event()
 
     def stop_after_two(event: campaigns.Event) -> None:
-        if isinstance(event, executing.Finished) and event.outcome.verdict is Verdict.PASSED:
+        if isinstance(event, scheduling.Finished) and event.outcome.verdict is Verdict.PASSED:
             stop_after_two.done += 1  # type: ignore[attr-defined]
             if stop_after_two.done >= 2:  # type: ignore[attr-defined]
                 stop.set()

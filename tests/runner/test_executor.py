@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 
 from simtest_operator.errors import SimulationError
-from simtest_operator.runner import executing, fakes
+from simtest_operator.runner import fakes, scheduling
 from simtest_operator.runner.tasks import ScenarioTask
 from simtest_operator.scenarios import ExecutionPolicy, PinnedScenario, StartPolicy, batching
 from simtest_operator.settings import Settings
@@ -27,7 +27,7 @@ from tests.runner.support import alive, write_scenarios
 pytestmark = pytest.mark.timeout(60)
 
 
-def factory(tmp_path: Path, pins: list[PinnedScenario]) -> executing.TaskFactory:
+def factory(tmp_path: Path, pins: list[PinnedScenario]) -> scheduling.TaskFactory:
     paths = {p.id: Path(p.source.removeprefix("file://")) for p in pins}
     settings = Settings.from_env({"HOME": str(tmp_path)})
 
@@ -47,11 +47,11 @@ def run(
     parallel: int = 2,
     policy: ExecutionPolicy | None = None,
     stop: threading.Event | None = None,
-) -> tuple[executing.ExecutionResult, list[executing.Event]]:
+) -> tuple[scheduling.ExecutionResult, list[scheduling.Event]]:
     pins = write_scenarios(tmp_path / "scenarios", behaviours)
     policy = policy or ExecutionPolicy(batch_size=10, timeout_seconds=20, retries=2)
-    events: list[executing.Event] = []
-    executor = executing.Executor(
+    events: list[scheduling.Event] = []
+    executor = scheduling.Executor(
         fakes.execute, policy=policy, parallel=parallel, make_task=factory(tmp_path, pins),
         on_event=events.append, stop=stop,
     )  # fmt: skip
@@ -59,7 +59,7 @@ def run(
     return result, events
 
 
-def verdicts(result: executing.ExecutionResult) -> dict[str, Verdict]:
+def verdicts(result: scheduling.ExecutionResult) -> dict[str, Verdict]:
     return {f.outcome.scenario_id.removesuffix(".xosc"): f.outcome.verdict for f in result.finished}
 
 
@@ -72,7 +72,7 @@ def test_verdicts_attempts_logs_and_worker_reuse(tmp_path: Path) -> None:
                                 "i": Verdict.INVALID}  # fmt: skip
     assert not result.interrupted and result.unfinished == ()
     assert result.workers_started == 2, "two workers served six scenarios"
-    pids = {e.pid for e in events if isinstance(e, executing.Started)}
+    pids = {e.pid for e in events if isinstance(e, scheduling.Started)}
     assert len(pids) == 2
     invalid = next(f for f in result.finished if f.outcome.verdict is Verdict.INVALID)
     assert "unsupported element <FakeAction>" in invalid.outcome.reason
@@ -91,7 +91,7 @@ def test_timeout_really_kills_the_process_group(tmp_path: Path) -> None:
     assert "no result within 1.5 s" in timeout.reason and timeout.attempts == 1, "not retried"
     assert 1.4 <= timeout.wall_seconds < 5
     assert elapsed < 15
-    worker_pid = next(e.pid for e in events if isinstance(e, executing.Started)
+    worker_pid = next(e.pid for e in events if isinstance(e, scheduling.Started)
                       and e.scenario_id == "hang.xosc")  # fmt: skip
     child_pid = int((tmp_path / "out/hang.xosc/child.pid").read_text())
     deadline = time.monotonic() + 5
@@ -112,7 +112,7 @@ def test_crash_is_error_and_retries_only_error(tmp_path: Path) -> None:
     assert (outcomes["flaky"].verdict, outcomes["flaky"].attempts) == (Verdict.PASSED, 3)
     assert (outcomes["broken"].verdict, outcomes["broken"].attempts) == (Verdict.ERROR, 3)
     assert (outcomes["fail"].verdict, outcomes["fail"].attempts) == (Verdict.FAILED, 1)
-    retried = [e.outcome.scenario_id for e in events if isinstance(e, executing.Retrying)]
+    retried = [e.outcome.scenario_id for e in events if isinstance(e, scheduling.Retrying)]
     assert sorted(retried) == sorted(["crash.xosc"] * 2 + ["flaky.xosc"] * 2 + ["broken.xosc"] * 2)
     assert outcomes["ok"].verdict is Verdict.PASSED
     log = (tmp_path / "out/flaky.xosc/log.txt").read_text()
@@ -126,10 +126,10 @@ def test_barrier_policy_never_overlaps_batches(tmp_path: Path) -> None:
     assert all(v is Verdict.PASSED for v in verdicts(result).values())
     open_batches: dict[int, int] = {}
     for event in events:
-        if isinstance(event, executing.Started):
+        if isinstance(event, scheduling.Started):
             assert all(n == 0 for b, n in open_batches.items() if b != event.batch), event
             open_batches[event.batch] = open_batches.get(event.batch, 0) + 1
-        elif isinstance(event, executing.Finished):
+        elif isinstance(event, scheduling.Finished):
             open_batches[event.batch] -= 1
 
 
@@ -152,7 +152,7 @@ def test_stop_event_kills_and_returns_unfinished(tmp_path: Path) -> None:
     assert result.interrupted
     assert verdicts(result) == {"a": Verdict.PASSED}
     assert sorted(p.id for _, p in result.unfinished) == ["b.xosc", "c.xosc", "d.xosc", "e.xosc"]
-    pins_started = [e.pid for e in events if isinstance(e, executing.Started)]
+    pins_started = [e.pid for e in events if isinstance(e, scheduling.Started)]
     time.sleep(0.2)
     assert not any(alive(pid) for pid in pins_started), "no worker outlives the run"
 
@@ -161,7 +161,7 @@ def test_workers_that_cannot_start_abort_the_run(tmp_path: Path) -> None:
     from tests.runner import broken_engine
 
     pins = write_scenarios(tmp_path / "scenarios", {"a": "pass"})
-    executor = executing.Executor(
+    executor = scheduling.Executor(
         broken_engine.execute, policy=ExecutionPolicy(), parallel=1,
         make_task=factory(tmp_path, pins),
     )  # fmt: skip

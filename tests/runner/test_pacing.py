@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from simtest_operator.runner import execution
+from simtest_operator.runner import scenario_execution
 from simtest_operator.settings import SimulationSettings
 
 SCENARIO = (
@@ -23,9 +23,9 @@ SCENARIO = (
 
 @pytest.mark.slow
 def test_real_time_factor_paces_the_run(tmp_path: Path) -> None:
-    def run(factor: float) -> execution.RunReport:
-        return execution.run_scenario(
-            execution.RunRequest(
+    def run(factor: float) -> scenario_execution.RunReport:
+        return scenario_execution.run_scenario(
+            scenario_execution.RunRequest(
                 scenario=SCENARIO,
                 nets_dir=tmp_path / "nets",
                 simulation=SimulationSettings(real_time_factor=factor),

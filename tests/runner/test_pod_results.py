@@ -29,7 +29,7 @@ import pytest
 
 from simtest_operator import results
 from simtest_operator.render import RunSpec, ScenarioRef, messages
-from simtest_operator.runner import delivering, entrypoint, execution
+from simtest_operator.runner import delivering, entrypoint, scenario_execution
 from simtest_operator.verdicts import ScenarioOutcome, Verdict
 from tests.runner import podsupport
 
@@ -235,7 +235,7 @@ def test_a_pinned_source_the_pod_cannot_read_is_an_error_not_invalid(tmp_path: P
 def test_sigterm_keeps_what_finished_and_makes_the_rest_error(tmp_path: Path) -> None:
     job = podsupport.job(tmp_path, {"a": "pass", "b": "pass", "c": "pass"})
 
-    def terminated_on_b(request: execution.RunRequest) -> ScenarioOutcome:
+    def terminated_on_b(request: scenario_execution.RunRequest) -> ScenarioOutcome:
         if request.scenario.name == "b.xosc":
             raise entrypoint.Terminated
         return podsupport.fake_run_one(request)
@@ -266,7 +266,7 @@ def test_the_message_holds_every_verdict_so_far_after_each_scenario(tmp_path: Pa
 def test_stopped_scenarios_are_flagged_in_the_message(tmp_path: Path) -> None:
     job = podsupport.job(tmp_path, {"a": "pass", "b": "pass"})
 
-    def terminated_on_b(request: execution.RunRequest) -> ScenarioOutcome:
+    def terminated_on_b(request: scenario_execution.RunRequest) -> ScenarioOutcome:
         if request.scenario.name == "b.xosc":
             raise entrypoint.Terminated
         return podsupport.fake_run_one(request)

@@ -78,10 +78,12 @@ if order == "pyarrow-first":
     import pyarrow.parquet
 
 from simtest_operator.recording import read_trajectories
-from simtest_operator.runner import execution
+from simtest_operator.runner import scenario_execution
 
-report = execution.run_scenario(
-    execution.RunRequest(scenario=scenario, nets_dir=work / "nets", output_dir=work / "out")
+report = scenario_execution.run_scenario(
+    scenario_execution.RunRequest(
+        scenario=scenario, nets_dir=work / "nets", output_dir=work / "out"
+    )
 )
 outcome = report.outcome
 ours = {

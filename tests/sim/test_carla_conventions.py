@@ -20,7 +20,7 @@ from mcap.reader import make_reader
 
 from simtest_operator import evaluation
 from simtest_operator.drivermodel import SutConfig, Takeover
-from simtest_operator.runner import execution
+from simtest_operator.runner import scenario_execution
 from simtest_operator.sim.session import BackendChoice
 from simtest_operator.verdicts import Verdict
 
@@ -34,9 +34,9 @@ def run(
     time_limit: float = 60.0,
     out: Path | None = None,
     overrides: dict[str, str] | None = None,
-) -> execution.RunReport:
-    return execution.run_scenario(
-        execution.RunRequest(
+) -> scenario_execution.RunReport:
+    return scenario_execution.run_scenario(
+        scenario_execution.RunRequest(
             scenario=path,
             nets_dir=path.parent / "nets",
             sut=sut or SutConfig(),

@@ -8,7 +8,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from simtest_operator.evaluation import reference as references
-from simtest_operator.runner import execution
+from simtest_operator.runner import scenario_execution
 from simtest_operator.sim import BackendChoice, SutConfig, Takeover
 from simtest_operator.verdicts import Verdict
 
@@ -16,9 +16,9 @@ CORPUS = Path(__file__).resolve().parents[3] / "shared" / "scenarios-dev"
 XOSC = CORPUS / "esmini" / "resources" / "xosc"
 
 
-def run(name: str, tmp_path: Path) -> execution.RunReport:
-    return execution.run_scenario(
-        execution.RunRequest(
+def run(name: str, tmp_path: Path) -> scenario_execution.RunReport:
+    return scenario_execution.run_scenario(
+        scenario_execution.RunRequest(
             scenario=XOSC / name,
             nets_dir=tmp_path,
             record=False,

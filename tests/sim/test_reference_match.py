@@ -16,7 +16,7 @@ from pathlib import Path
 import pytest
 
 from simtest_operator.evaluation import reference as references
-from simtest_operator.runner import execution
+from simtest_operator.runner import scenario_execution
 from simtest_operator.sim import BackendChoice, SutConfig, Takeover
 
 CORPUS = Path(__file__).resolve().parents[3] / "shared" / "scenarios-dev"
@@ -25,8 +25,8 @@ RESOURCES = CORPUS / "esmini" / "resources"
 
 def compare(relative: str, tmp_path: Path) -> references.Comparison:
     scenario = RESOURCES / relative
-    report = execution.run_scenario(
-        execution.RunRequest(
+    report = scenario_execution.run_scenario(
+        scenario_execution.RunRequest(
             scenario=scenario,
             nets_dir=tmp_path,
             record=False,

@@ -16,7 +16,7 @@ import pytest
 
 from simtest_operator.errors import SimulationError
 from simtest_operator.recording import read_trajectories
-from simtest_operator.runner import execution
+from simtest_operator.runner import scenario_execution
 from simtest_operator.sim import SutConfig, Takeover, netcache
 from simtest_operator.sim.backends import ActorSpec, BackendConfig
 from simtest_operator.sim.sumo import SumoBackend, odr_heading, sumo_angle
@@ -102,8 +102,8 @@ def test_background_traffic_from_sumocfg_is_reported() -> None:
 
 @pytest.mark.slow
 def test_scenario_on_sumo_with_recording(tmp_path: Path) -> None:
-    report = execution.run_scenario(
-        execution.RunRequest(
+    report = scenario_execution.run_scenario(
+        scenario_execution.RunRequest(
             scenario=CORPUS / "xosc" / "cut-in.xosc",
             nets_dir=tmp_path / "nets",
             output_dir=tmp_path / "out",

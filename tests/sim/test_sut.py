@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from simtest_operator.drivermodel import DriverModel, Leader
-from simtest_operator.runner import execution
+from simtest_operator.runner import scenario_execution
 from simtest_operator.sim import BackendChoice, SutConfig, Takeover
 from simtest_operator.verdicts import Verdict
 
@@ -47,9 +47,9 @@ def test_aeb_latches_below_threshold_and_releases() -> None:
     assert not model.command(speed=9.0, leader=Leader(gap=12.0, speed=10.0)).aeb_active
 
 
-def run(sut: SutConfig, tmp_path: Path) -> execution.RunReport:
-    return execution.run_scenario(
-        execution.RunRequest(
+def run(sut: SutConfig, tmp_path: Path) -> scenario_execution.RunReport:
+    return scenario_execution.run_scenario(
+        scenario_execution.RunRequest(
             scenario=DATA / "hard_braking_lead.xosc",
             nets_dir=tmp_path,
             sut=sut,

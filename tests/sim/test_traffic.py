@@ -13,7 +13,7 @@ import pytest
 
 from simtest_operator.errors import UnsupportedFeatureError
 from simtest_operator.evaluation import reference as references
-from simtest_operator.runner import execution
+from simtest_operator.runner import scenario_execution
 from simtest_operator.sim import BackendChoice, SutConfig, Takeover
 from simtest_operator.snapshots import WorldSnapshot
 from simtest_operator.verdicts import Verdict
@@ -205,8 +205,8 @@ def test_memory_backend_and_open_space_cannot_host_traffic(tmp_path: Path, nets:
 
 def test_corpus_swarm_runs_and_its_ego_matches_the_reference(tmp_path: Path) -> None:
     scenario = CORPUS / "xosc" / "swarm.xosc"
-    report = execution.run_scenario(
-        execution.RunRequest(
+    report = scenario_execution.run_scenario(
+        scenario_execution.RunRequest(
             scenario=scenario,
             nets_dir=tmp_path,
             record=False,

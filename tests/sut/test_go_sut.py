@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 from simtest_operator.drivermodel import ExternalSut, Launch
-from simtest_operator.runner import execution
+from simtest_operator.runner import scenario_execution
 from simtest_operator.sim import BackendChoice, SutConfig
 from simtest_operator.verdicts import Verdict
 
@@ -40,9 +40,9 @@ def go_sut() -> Path:
     return binary
 
 
-def run(sut: SutConfig) -> execution.RunReport:
-    return execution.run_scenario(
-        execution.RunRequest(
+def run(sut: SutConfig) -> scenario_execution.RunReport:
+    return scenario_execution.run_scenario(
+        scenario_execution.RunRequest(
             scenario=SCENARIO, nets_dir=Path(), sut=sut, record=False, backend=BackendChoice.MEMORY
         )
     )

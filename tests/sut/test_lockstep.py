@@ -15,7 +15,7 @@ import pytest
 from mcap.reader import make_reader
 
 from simtest_operator.drivermodel import ExternalSut, Launch
-from simtest_operator.runner import execution
+from simtest_operator.runner import scenario_execution
 from simtest_operator.settings import SimulationSettings
 from simtest_operator.sim import BackendChoice, SutConfig
 from simtest_operator.sut.launching import reference_command
@@ -32,9 +32,9 @@ def external(command: tuple[str, ...], **extra: float) -> ExternalSut:
     return ExternalSut(launch=Launch.LOCAL, command=command, **options)  # type: ignore[arg-type]
 
 
-def run(sut: SutConfig, out: Path | None, **simulation: float) -> execution.RunReport:
-    return execution.run_scenario(
-        execution.RunRequest(
+def run(sut: SutConfig, out: Path | None, **simulation: float) -> scenario_execution.RunReport:
+    return scenario_execution.run_scenario(
+        scenario_execution.RunRequest(
             scenario=SCENARIO,
             nets_dir=out or Path(),
             sut=sut,

@@ -1,6 +1,6 @@
 """``simtest run MANIFEST``: a whole TestCampaign on this machine, with the operator's artifacts.
 
-Wiring only: options become a :class:`~simtest_operator.runner.campaigns.LocalRunRequest`, the
+Wiring only: options become a :class:`~simtest_operator.runner.preparing.LocalRunRequest`, the
 runner does the work, and this module shows progress (a rich progress bar on a terminal, one plain
 line per scenario otherwise), prints the summary and exits 0 (all passed), 1 (some failed) or
 2 (errors, invalid input, interrupted) with a one-line reason.
@@ -34,7 +34,7 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from rich.table import Table
 
 from simtest_operator.errors import ScenarioError, SimtestError, SourceError
-from simtest_operator.runner import campaigns, executing, summaries
+from simtest_operator.runner import campaigns, preparing, scheduling, summaries
 from simtest_operator.runner.tasks import ExecuteFn
 from simtest_operator.scenarios.specs import SecretRef
 from simtest_operator.settings import ENV_PREFIX, Settings
@@ -142,7 +142,7 @@ def run(
         _fail(errors, "give a MANIFEST (or --rerun-failed OUTDIR)")
     if frozen is not None and rerun_failed is not None:
         _fail(errors, "--frozen and --rerun-failed exclude each other")
-    request = campaigns.LocalRunRequest(
+    request = preparing.LocalRunRequest(
         manifest=manifest,
         output=output or _default_output(manifest, rerun_failed),
         settings=Settings.from_env(),
@@ -243,14 +243,14 @@ class _Plain:
             _print_prepared(self.console, event)
             self.total = event.total
             self.counts.done = event.finished
-        elif isinstance(event, executing.Retrying):
+        elif isinstance(event, scheduling.Retrying):
             o = event.outcome
             self.console.print(
                 f"retry   {o.scenario_id} after attempt {o.attempts}: {o.reason}",
                 markup=False,
                 soft_wrap=True,
             )
-        elif isinstance(event, executing.Finished):
+        elif isinstance(event, scheduling.Finished):
             o = event.outcome
             self.counts.add(o.verdict)
             width = len(str(self.total))
@@ -298,14 +298,14 @@ class _Live(_Plain):
                 description=escape(event.campaign),
                 counts=self.counts.line(),
             )
-        elif isinstance(event, executing.Retrying):
+        elif isinstance(event, scheduling.Retrying):
             o = event.outcome
             self.console.print(
                 f"[yellow]retry[/] {escape(o.scenario_id)} after attempt {o.attempts}: "
                 f"{escape(o.reason)}",
                 soft_wrap=True,
             )
-        elif isinstance(event, executing.Finished):
+        elif isinstance(event, scheduling.Finished):
             o = event.outcome
             self.counts.add(o.verdict)
             if o.verdict is not Verdict.PASSED:

@@ -1,9 +1,10 @@
 """``simtest scenario run|check``: run one scenario, or every scenario under a directory.
 
-Thin wiring: options -> :mod:`simtest_operator.runner.execution` -> formatted output. ``check``
-expands ParameterValueDistribution files into their concrete runs and skips catalogs. ``run``
-exits like ``simtest run`` over a one-scenario list (:mod:`simtest_operator.runner.summaries`), so
-a script or CI step can use either command with the same meaning of 0, 1 and 2.
+Thin wiring: options -> :mod:`simtest_operator.runner.scenario_execution` -> formatted output.
+``check`` expands ParameterValueDistribution files into their concrete runs and skips catalogs.
+``run`` exits like ``simtest run`` over a one-scenario list
+(:mod:`simtest_operator.runner.summaries`), so a script or CI step can use either command with
+the same meaning of 0, 1 and 2.
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ from simtest_operator.openscenario import (
 )
 from simtest_operator.openscenario.confinement import default_root
 from simtest_operator.openscenario.loading import MAX_SCENARIO_BYTES
-from simtest_operator.runner import execution, summaries
+from simtest_operator.runner import scenario_execution, summaries
 from simtest_operator.settings import Settings
 from simtest_operator.sim import SutConfig, Takeover
 from simtest_operator.verdicts import Verdict
@@ -128,8 +129,8 @@ def run(
     the exit code unless --strict makes them Invalid.
     """
     settings = Settings.from_env()
-    report = execution.run_scenario(
-        execution.RunRequest(
+    report = scenario_execution.run_scenario(
+        scenario_execution.RunRequest(
             scenario=file,
             nets_dir=settings.cache.nets,
             sut=SutConfig(takeover=Takeover(takeover)),
@@ -159,7 +160,7 @@ def run(
 
 def _requests(
     directory: Path, settings: Settings, sut: SutConfig, loading: LoadOptions
-) -> list[execution.RunRequest]:
+) -> list[scenario_execution.RunRequest]:
     requests = []
     for path in sorted(directory.rglob("*.xosc")):
         overrides_list: list[tuple[str, Path, Mapping[str, str]]]
@@ -184,7 +185,7 @@ def _requests(
             overrides_list = [(scenario_id, path, {})]
         for run_id, scenario_path, overrides in overrides_list:
             requests.append(
-                execution.RunRequest(
+                scenario_execution.RunRequest(
                     scenario=scenario_path,
                     scenario_id=run_id,
                     overrides=dict(overrides),
@@ -199,7 +200,9 @@ def _requests(
 
 
 def _comparison(
-    reference: Mapping[str, Any], request: execution.RunRequest, report: execution.RunReport
+    reference: Mapping[str, Any],
+    request: scenario_execution.RunRequest,
+    report: scenario_execution.RunReport,
 ) -> references.Comparison | None:
     if request.overrides or not report.outcome.verdict.counts_as_ran:
         return None
@@ -265,8 +268,8 @@ def check(
     loading = _loading(settings, strict, root or directory, maps, max_mb)
     requests = _requests(directory, settings, SutConfig(takeover=Takeover(takeover)), loading)
     ref = references.load(reference) if reference is not None else None
-    reports: dict[int, execution.RunReport] = {}
-    for index, report in execution.run_many(requests, jobs=jobs or os.cpu_count() or 1):
+    reports: dict[int, scenario_execution.RunReport] = {}
+    for index, report in scenario_execution.run_many(requests, jobs=jobs or os.cpu_count() or 1):
         reports[index] = report
     table = Table(title=f"scenarios under {directory}")
     columns = ["file", "verdict", "reason", "warnings", "simulated s", "wall s"]

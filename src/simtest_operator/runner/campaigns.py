@@ -3,7 +3,7 @@
 Steps: read and validate the manifest (as the API server would) -> take the frozen list (resolve
 the sources, or reuse ``--frozen``, an earlier run's failures, or this output folder's own list
 when resuming) -> locate every scenario file and verify its sha256 -> open the results store ->
-run the scenarios on worker processes (:mod:`executing`) writing each final result as it arrives
+run the scenarios on worker processes (:mod:`scheduling`) writing each final result as it arrives
 -> mark what did not run -> write JUnit and the HTML report. The CLI only parses options, shows
 progress from the events and prints the returned :class:`LocalRunResult`.
 """
@@ -22,40 +22,15 @@ from pathlib import Path
 from simtest_operator import recording
 from simtest_operator.errors import ResultsError, ScenarioError, SimtestError, SourceError
 from simtest_operator.results import details, dsn, publishing
-from simtest_operator.runner import executing, outputs, storing, summaries, tasks
+from simtest_operator.runner import outputs, scheduling, storing, summaries, tasks
 from simtest_operator.runner import preparing as prep
-from simtest_operator.runner.tasks import ExecuteFn
 from simtest_operator.runner.workers import Worker
 from simtest_operator.scenarios import batching
 from simtest_operator.scenarios.locating import Locator
 from simtest_operator.scenarios.pinned import PinnedScenario
-from simtest_operator.scenarios.querying import SecretProvider
-from simtest_operator.settings import Settings
 from simtest_operator.verdicts import ScenarioOutcome, Verdict
 
 NOT_RUN_REASON = "not run: the campaign was interrupted before this scenario finished"
-
-
-@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
-class LocalRunRequest:
-    """Everything ``simtest run`` decided from its options."""
-
-    manifest: Path | None
-    """The TestCampaign manifest; None with ``rerun_failed`` uses that run's copy."""
-    output: Path
-    settings: Settings
-    execute: ExecuteFn
-    """Runs one task in a worker (the engine adapter, or the test double)."""
-    parallel: int | None = None
-    """Worker processes; None means all cores (capped by ``spec.execution.maxParallel``)."""
-    frozen: Path | None = None
-    """A frozen list to run instead of resolving the sources."""
-    rerun_failed: Path | None = None
-    """An earlier output folder whose non-passed scenarios to run again."""
-    database: str | None = None
-    """Results store (DSN or path); None: the campaign's secret, else SQLite in ``output``."""
-    secrets: SecretProvider | None = None
-    cpu_count: int = 1
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
@@ -73,7 +48,7 @@ class Prepared:
     resumed: bool
 
 
-Event = Prepared | executing.Event
+Event = Prepared | scheduling.Event
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
@@ -100,7 +75,7 @@ class LocalRunResult:
 
 
 def run(
-    request: LocalRunRequest,
+    request: prep.LocalRunRequest,
     *,
     on_event: Callable[[Event], None] = lambda event: None,
     stop: threading.Event | None = None,
@@ -122,7 +97,7 @@ def run(
 
 
 def _run(
-    request: LocalRunRequest,
+    request: prep.LocalRunRequest,
     *,
     on_event: Callable[[Event], None],
     stop: threading.Event,
@@ -144,7 +119,7 @@ def _run(
 
 
 def _run_planned(
-    request: LocalRunRequest,
+    request: prep.LocalRunRequest,
     plan: prep.Plan,
     *,
     on_event: Callable[[Event], None],
@@ -184,12 +159,12 @@ def _run_planned(
             failed = ScenarioOutcome(scenario_id=pinned.id, verdict=Verdict.ERROR, reason=reason)
             results[pinned.id] = _finish(out, store, pinned, batch, failed, on_event)
 
-        def forward(event: executing.Event) -> None:
-            if isinstance(event, executing.Retrying):
+        def forward(event: scheduling.Event) -> None:
+            if isinstance(event, scheduling.Retrying):
                 tally.add(event.outcome)
                 store.attempt(plan.by_id[event.outcome.scenario_id], event.outcome)
                 on_event(event)
-            elif isinstance(event, executing.Finished):
+            elif isinstance(event, scheduling.Finished):
                 tally.add(event.outcome)
                 results[event.pinned.id] = _finish(
                     out, store, event.pinned, event.batch, event.outcome, on_event, event.timing
@@ -200,7 +175,7 @@ def _run_planned(
         batches = batching.plan(plan.frozen.scenarios, batch_size=plan.policy.batch_size)
         not_runnable = frozenset(s.id for s in plan.frozen.scenarios) - frozenset(paths)
         cpu_before = _children_cpu()
-        executor = executing.Executor(
+        executor = scheduling.Executor(
             request.execute,
             policy=plan.policy,
             parallel=parallel,
@@ -276,7 +251,7 @@ def _todo(plan: prep.Plan) -> list[tuple[int, PinnedScenario]]:
     ]
 
 
-def _parallel(request: LocalRunRequest, plan: prep.Plan) -> int:
+def _parallel(request: prep.LocalRunRequest, plan: prep.Plan) -> int:
     parallel = request.parallel or request.cpu_count
     if request.parallel is None and plan.policy.max_parallel is not None:
         parallel = min(parallel, plan.policy.max_parallel)
@@ -291,16 +266,16 @@ def _finish(
     batch: int,
     outcome: ScenarioOutcome,
     on_event: Callable[[Event], None],
-    timing: executing.Timing | None = None,
+    timing: scheduling.Timing | None = None,
 ) -> ScenarioOutcome:
     outcome = dataclasses.replace(outcome, artifacts=_artifacts(out, pinned))
     out.write_result(pinned, batch, outcome, timing=_timing_json(timing))
     store.attempt(pinned, outcome)
-    on_event(executing.Finished(outcome=outcome, batch=batch, pinned=pinned, timing=timing))
+    on_event(scheduling.Finished(outcome=outcome, batch=batch, pinned=pinned, timing=timing))
     return outcome
 
 
-def _timing_json(timing: executing.Timing | None) -> dict[str, object] | None:
+def _timing_json(timing: scheduling.Timing | None) -> dict[str, object] | None:
     if timing is None:
         return None
 

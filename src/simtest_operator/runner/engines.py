@@ -1,7 +1,7 @@
 """The real engine behind the executor's task interface.
 
 :func:`execute` adapts a :class:`~simtest_operator.runner.tasks.ScenarioTask` to the engine's
-:func:`~simtest_operator.runner.execution.run_scenario` (simulation, online evaluation and
+:func:`~simtest_operator.runner.scenario_execution.run_scenario` (simulation, online evaluation and
 recording in this process). The engine gets a wall-clock limit a little below the executor's, so
 a slow run normally ends as a clean ``Timeout`` with its metrics and a closed recording; the
 executor's kill is the backstop for a simulator that stops responding altogether.
@@ -10,7 +10,7 @@ executor's kill is the backstop for a simulator that stops responding altogether
 from __future__ import annotations
 
 from simtest_operator.openscenario import LoadOptions
-from simtest_operator.runner import execution
+from simtest_operator.runner import scenario_execution
 from simtest_operator.runner.tasks import ScenarioTask
 from simtest_operator.verdicts import ScenarioOutcome
 
@@ -22,7 +22,7 @@ def soft_limit(timeout: float) -> float:
 
 def execute(task: ScenarioTask) -> ScenarioOutcome:
     """Run one attempt of a scenario on the SUMO stand-in (module-level: workers import it)."""
-    request = execution.RunRequest(
+    request = scenario_execution.RunRequest(
         scenario=task.scenario_path,
         nets_dir=task.settings.cache.nets,
         scenario_id=task.scenario_id,
@@ -35,4 +35,4 @@ def execute(task: ScenarioTask) -> ScenarioOutcome:
         wall_clock_limit=soft_limit(task.timeout_seconds),
         loading=LoadOptions(source_root=task.source_root, maps=task.settings.maps),
     )
-    return execution.run_scenario(request).outcome
+    return scenario_execution.run_scenario(request).outcome

@@ -2,10 +2,10 @@
 
 The operator renders a run spec (:mod:`simtest_operator.render.runspecs`) into the pod's
 ``SIMTEST_RUN_SPEC`` variable. The runner fetches each scenario by its pinned URI (sha256
-verified), runs it with :func:`simtest_operator.runner.execution.run_scenario` — simulation,
-online evaluation, recording — writes the artifacts and the full result below the artifacts
-folder, and leaves the compact result in the termination message (``/dev/termination-log``,
-at most 4 KiB) where the operator reads it from the pod status.
+verified), runs it with :func:`simtest_operator.runner.scenario_execution.run_scenario` —
+simulation, online evaluation, recording — writes the artifacts and the full result below the
+artifacts folder, and leaves the compact result in the termination message
+(``/dev/termination-log``, at most 4 KiB) where the operator reads it from the pod status.
 
 Isolation ``Reuse``: one warm pod runs a queue of scenarios. The runner loads libsumo and reads
 the reproducibility record once (most of a simulator's start-up) and runs each scenario in a
@@ -58,7 +58,7 @@ from simtest_operator.errors import (
 from simtest_operator.openscenario import LoadOptions
 from simtest_operator.render import RunSpec, ScenarioRef, messages, runspecs
 from simtest_operator.render.inputs import STARTUP_ALLOWANCE_SECONDS
-from simtest_operator.runner import execution
+from simtest_operator.runner import scenario_execution
 from simtest_operator.scenarios import (
     FetchContext,
     Locator,
@@ -86,11 +86,11 @@ CONFIG_MAP_ROOT = Path(runspecs.CONFIG_MAP_DIR)
 DEADLINE_MARGIN_SECONDS = 10.0
 """Time kept free before the pod's activeDeadlineSeconds (pod start precedes the runner's)."""
 
-RunOne = Callable[[execution.RunRequest], ScenarioOutcome]
+RunOne = Callable[[scenario_execution.RunRequest], ScenarioOutcome]
 
 
-def _run_one(request: execution.RunRequest) -> ScenarioOutcome:
-    return execution.run_scenario(request).outcome
+def _run_one(request: scenario_execution.RunRequest) -> ScenarioOutcome:
+    return scenario_execution.run_scenario(request).outcome
 
 
 class Terminated(BaseException):
@@ -118,13 +118,13 @@ class Job:
     settings: Settings
 
 
-def requests_for(job: Job, scenario: ScenarioRef, path: Path) -> execution.RunRequest:
+def requests_for(job: Job, scenario: ScenarioRef, path: Path) -> scenario_execution.RunRequest:
     """The engine request of one scenario of the job."""
     spec = job.spec
     evaluation = EvaluationSpec.model_validate(dict(spec.evaluation))
     simulator = SimulatorSettings.model_validate(dict(spec.simulator))
     sut = SutConfig.model_validate(dict(spec.sut))
-    return execution.RunRequest(
+    return scenario_execution.RunRequest(
         scenario=path,
         nets_dir=job.settings.cache.nets,
         scenario_id=scenario.id,
@@ -287,7 +287,9 @@ def reset_problem() -> str | None:
 
 
 def _child(
-    conn: multiprocessing.connection.Connection, run_one: RunOne, request: execution.RunRequest
+    conn: multiprocessing.connection.Connection,
+    run_one: RunOne,
+    request: scenario_execution.RunRequest,
 ) -> None:
     try:
         conn.send(run_one(request).to_json())
@@ -303,7 +305,7 @@ def _child(
         conn.close()
 
 
-def run_forked(run_one: RunOne, request: execution.RunRequest) -> ScenarioOutcome:
+def run_forked(run_one: RunOne, request: scenario_execution.RunRequest) -> ScenarioOutcome:
     """Run one scenario in a fresh forked worker and wait for it to exit."""
     context = multiprocessing.get_context("fork")
     receiver, sender = context.Pipe(duplex=False)

@@ -17,7 +17,7 @@ behaviour is written into the scenario file itself, as a FileHeader property
 A missing property means ``pass``. Every run writes a small recording file and log lines, so
 output layout and artifact handling are exercised too. The process id is reported as metric
 ``pid``, so tests can check that a killed worker is really gone and that tasks are spread over
-processes. Not for production: the real engine is :mod:`simtest_operator.runner.execution`.
+processes. Not for production: the real engine is :mod:`simtest_operator.runner.scenario_execution`.
 """
 
 from __future__ import annotations

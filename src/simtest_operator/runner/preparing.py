@@ -1,4 +1,4 @@
-"""Preparing a local run: manifest, output folder, frozen list, and the per-scenario task recipe.
+"""Preparing a local run: the request, manifest, output folder, frozen list, and the task recipe.
 
 Everything here happens before a worker starts, and every problem is a ScenarioError with a
 message that says what to do (exit code 2 in the CLI): an invalid manifest, an output folder that
@@ -12,23 +12,43 @@ import dataclasses
 import datetime
 from collections.abc import Mapping
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from simtest_operator.api import converting, manifestfiles, v1alpha1
 from simtest_operator.drivermodel import SutConfig
 from simtest_operator.errors import ScenarioError
 from simtest_operator.openscenario import headers
-from simtest_operator.runner import executing, outputs, resolving, tasks
+from simtest_operator.runner import outputs, resolving, scheduling, tasks
 from simtest_operator.scenarios import selecting, uris
 from simtest_operator.scenarios.batching import ExecutionPolicy
 from simtest_operator.scenarios.pinned import FrozenList, PinnedScenario, sha256_hex
+from simtest_operator.scenarios.querying import SecretProvider
 from simtest_operator.scenarios.resolving import FetchContext
 from simtest_operator.scenarios.specs import DatabaseSource, GraphqlSource, RestSource
 from simtest_operator.settings import Settings
 from simtest_operator.verdicts import ScenarioOutcome, Verdict
 
-if TYPE_CHECKING:
-    from simtest_operator.runner.campaigns import LocalRunRequest
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class LocalRunRequest:
+    """Everything ``simtest run`` decided from its options."""
+
+    manifest: Path | None
+    """The TestCampaign manifest; None with ``rerun_failed`` uses that run's copy."""
+    output: Path
+    settings: Settings
+    execute: tasks.ExecuteFn
+    """Runs one task in a worker (the engine adapter, or the test double)."""
+    parallel: int | None = None
+    """Worker processes; None means all cores (capped by ``spec.execution.maxParallel``)."""
+    frozen: Path | None = None
+    """A frozen list to run instead of resolving the sources."""
+    rerun_failed: Path | None = None
+    """An earlier output folder whose non-passed scenarios to run again."""
+    database: str | None = None
+    """Results store (DSN or path); None: the campaign's secret, else SQLite in ``output``."""
+    secrets: SecretProvider | None = None
+    cpu_count: int = 1
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
@@ -150,7 +170,7 @@ def read_manifest(path: Path) -> tuple[str, v1alpha1.Manifest[v1alpha1.TestCampa
     return text, v1alpha1.parse_campaign(documents[0], source=str(path))
 
 
-def task_factory(plan: Plan, paths: Mapping[str, Path]) -> executing.TaskFactory:
+def task_factory(plan: Plan, paths: Mapping[str, Path]) -> scheduling.TaskFactory:
     """How to build the task of (scenario, attempt)."""
 
     def make(pinned: PinnedScenario, attempt: int) -> tasks.ScenarioTask:
