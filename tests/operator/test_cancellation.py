@@ -20,7 +20,7 @@ from simtest_operator.operator import cancelling
 from simtest_operator.operator.actions import Kind
 from simtest_operator.operator.environments import Assessment, Phase
 from simtest_operator.operator.observed import Timings, environment_view
-from simtest_operator.operator.records import ResultRecord
+from simtest_operator.operator.status.records import ResultRecord
 from simtest_operator.verdicts import Verdict
 from tests.operator.fakecluster import T0, FakeCluster, Script, campaign_body, frozen_list
 

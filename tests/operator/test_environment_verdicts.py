@@ -16,8 +16,9 @@ from typing import Any
 
 import pytest
 
-from simtest_operator.operator import environments, environmentstatus, observed
+from simtest_operator.operator import environments, observed
 from simtest_operator.operator.environments import Limits, Phase
+from simtest_operator.operator.status import environmentstatus
 from simtest_operator.verdicts import Verdict
 
 T0 = datetime.datetime(2030, 1, 1, tzinfo=datetime.UTC)

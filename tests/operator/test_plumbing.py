@@ -17,11 +17,12 @@ import json
 import pytest
 
 from simtest_operator.errors import SourceError
-from simtest_operator.operator import client, conditions, names, observed, planning, scenariolists
+from simtest_operator.operator import client, names, observed, planning, scenariolists
 from simtest_operator.operator.actions import Emit, Kind, PatchStatus, Plan
 from simtest_operator.operator.caching import ALL_NODES, Cache
 from simtest_operator.operator.configuration import OperatorConfig
 from simtest_operator.operator.expectations import Expectation, Expectations, Want
+from simtest_operator.operator.status import conditions
 from simtest_operator.scenarios import FrozenList, PinnedScenario
 from tests.operator.fakecluster import REPO, T0, FakeCluster, campaign_body, frozen_list
 

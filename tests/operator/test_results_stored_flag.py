@@ -13,7 +13,7 @@ from __future__ import annotations
 import json
 
 from simtest_operator.operator.actions import Kind
-from simtest_operator.operator.records import ResultRecord
+from simtest_operator.operator.status.records import ResultRecord
 from simtest_operator.render import messages
 from simtest_operator.verdicts import Verdict
 from tests.operator.fakecluster import FakeCluster, Script, campaign_body, frozen_list

@@ -13,7 +13,7 @@ import enum
 from collections.abc import Mapping
 from typing import Any
 
-from simtest_operator.operator.records import ResultRecord
+from simtest_operator.operator.status.records import ResultRecord
 from simtest_operator.render import EnvironmentRequest
 
 

@@ -17,7 +17,7 @@ from collections.abc import Callable, Mapping
 from typing import Any
 
 from simtest_operator.errors import ClusterError, RenderError
-from simtest_operator.operator import bodies, environmentstatus, names, observed
+from simtest_operator.operator import bodies, names, observed
 from simtest_operator.operator.actions import (
     Action,
     Create,
@@ -38,6 +38,7 @@ from simtest_operator.operator.client import (
 )
 from simtest_operator.operator.expectations import Expectation, Want
 from simtest_operator.operator.metrics import Metrics
+from simtest_operator.operator.status import environmentstatus
 from simtest_operator.render import EnvironmentRequest, RenderedEnvironment
 
 log = logging.getLogger(__name__)

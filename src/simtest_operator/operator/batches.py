@@ -25,7 +25,7 @@ from collections.abc import Iterable, Mapping, Sequence
 
 from simtest_operator.operator.environments import Assessment
 from simtest_operator.operator.observed import BatchView, EnvironmentView, NodeView
-from simtest_operator.operator.records import ResultRecord
+from simtest_operator.operator.status.records import ResultRecord
 from simtest_operator.verdicts import Verdict
 
 

@@ -8,7 +8,8 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from simtest_operator.api.v1alpha1 import API_VERSION
-from simtest_operator.operator import conditions, names
+from simtest_operator.operator import names
+from simtest_operator.operator.status import conditions
 from simtest_operator.render.inputs import ScenarioRef
 from simtest_operator.scenarios import PinnedScenario
 

@@ -25,11 +25,12 @@ from collections.abc import Collection, Mapping, Sequence
 from typing import Any
 
 from simtest_operator.api.v1alpha1 import TestCampaignSpec
-from simtest_operator.operator import conditions, observed
+from simtest_operator.operator import observed
 from simtest_operator.operator.batches import Layout, ScenarioState, State
 from simtest_operator.operator.environments import Assessment, Phase
 from simtest_operator.operator.observed import EnvironmentView
-from simtest_operator.operator.records import ResultRecord, clip
+from simtest_operator.operator.status import conditions
+from simtest_operator.operator.status.records import ResultRecord, clip
 from simtest_operator.verdicts import Verdict
 
 CANCELLED_PHASE = "Cancelled"

@@ -18,7 +18,7 @@ import enum
 from collections.abc import Mapping
 
 from simtest_operator.operator.observed import EnvironmentView, NodeView, PodView, Timings
-from simtest_operator.operator.records import ResultRecord, clip
+from simtest_operator.operator.status.records import ResultRecord, clip
 from simtest_operator.render import messages
 from simtest_operator.verdicts import ScenarioOutcome, Verdict
 

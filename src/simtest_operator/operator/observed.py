@@ -14,7 +14,7 @@ from typing import Any
 
 from simtest_operator.api.v1alpha1 import ManifestError, TestCampaignSpec, parse_campaign
 from simtest_operator.operator import names
-from simtest_operator.operator.records import ResultRecord
+from simtest_operator.operator.status.records import ResultRecord
 from simtest_operator.render.inputs import SIMULATOR_RESOURCE, ScenarioRef
 
 Raw = Mapping[str, Any]

@@ -32,7 +32,7 @@ from typing import Any
 
 from simtest_operator.api.v1alpha1 import API_VERSION, Provisioner, TestCampaignSpec
 from simtest_operator.errors import RenderError
-from simtest_operator.operator import bodies, environments, environmentstatus, names
+from simtest_operator.operator import bodies, environments, names
 from simtest_operator.operator.actions import Action, Kind, PatchStatus, RunHelmfile
 from simtest_operator.operator.configuration import OperatorConfig
 from simtest_operator.operator.environments import Assessment, Limits, Phase
@@ -43,7 +43,8 @@ from simtest_operator.operator.observed import (
     PodView,
     Timings,
 )
-from simtest_operator.operator.records import clip
+from simtest_operator.operator.status import environmentstatus
+from simtest_operator.operator.status.records import clip
 from simtest_operator.packaging import helmfilejobs
 from simtest_operator.packaging.helmfilejobs import Action as JobAction
 from simtest_operator.packaging.helmfilejobs import HelmfileJobRequest, Owner

@@ -23,9 +23,10 @@ from typing import Any, Protocol
 
 from simtest_operator import results
 from simtest_operator.errors import ResultsError, SimtestError
-from simtest_operator.operator import observed, statuses
+from simtest_operator.operator import observed
 from simtest_operator.operator.observed import CampaignView
 from simtest_operator.operator.scenariolists import StoredList
+from simtest_operator.operator.status import counting
 from simtest_operator.render import documents
 
 log = logging.getLogger(__name__)
@@ -83,7 +84,7 @@ def finish_of(campaign: CampaignView) -> results.Finish | None:
     finished_at = observed.timestamp(status.get("completionTime"))
     if phase not in FINAL_PHASES or finished_at is None:
         return None
-    counts = {k: int(v) for k in statuses.COUNTER_KEYS if isinstance(v := status.get(k), int)}
+    counts = {k: int(v) for k in counting.COUNTER_KEYS if isinstance(v := status.get(k), int)}
     return results.Finish(phase=str(phase), counts=counts, finished_at=finished_at)
 
 

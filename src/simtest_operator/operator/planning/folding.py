@@ -10,12 +10,12 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from simtest_operator.operator import statuses
 from simtest_operator.operator.actions import Action, Emit, Kind, PatchStatus
 from simtest_operator.operator.batches import ScenarioState, State, unstored_by_environment
 from simtest_operator.operator.observed import BatchView
 from simtest_operator.operator.planning.inputs import Step
 from simtest_operator.operator.planning.outcomes import Outcome
+from simtest_operator.operator.status import batchstatus, patches
 
 _FINAL_PHASES = ("Succeeded", "Failed", "Error")
 
@@ -35,8 +35,8 @@ def fold(step: Step, states: Sequence[ScenarioState]) -> Outcome:
 def _batch(
     step: Step, index: int, batch: BatchView, mine: Sequence[ScenarioState]
 ) -> tuple[Action, ...]:
-    desired = statuses.batch_status(states=mine, current=batch.status, now=step.now)
-    patch = statuses.changed_fields(desired, batch.status)
+    desired = batchstatus.batch_status(states=mine, current=batch.status, now=step.now)
+    patch = patches.changed_fields(desired, batch.status)
     if not patch:
         return ()
     actions: list[Action] = []

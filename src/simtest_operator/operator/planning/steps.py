@@ -8,7 +8,7 @@ between any two steps leaves enough behind for the next operator to continue fro
 
 from __future__ import annotations
 
-from simtest_operator.operator import campaignstatus, cancelling, statuses
+from simtest_operator.operator import cancelling
 from simtest_operator.operator.actions import Observation, Plan
 from simtest_operator.operator.batches import State
 from simtest_operator.operator.configuration import OperatorConfig
@@ -21,6 +21,7 @@ from simtest_operator.operator.planning import (
     tending,
 )
 from simtest_operator.operator.planning.outcomes import Outcome
+from simtest_operator.operator.status import campaignstatus, counting
 
 
 def plan(given: inputs.Inputs, *, config: OperatorConfig, render: inputs.Renderer) -> Plan:
@@ -63,7 +64,7 @@ def _run(step: inputs.Step) -> Plan:
         limit = cancelling.deadline(spec, campaign.status)
         if limit is not None:
             outcome += Outcome(wakes=(limit,))
-    counts = statuses.counters(states)
+    counts = counting.counters(states)
     update = campaignstatus.progressed(
         campaign,
         spec,

@@ -9,18 +9,13 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 from simtest_operator.errors import RenderError
-from simtest_operator.operator import (
-    environments,
-    environmentstatus,
-    provisioning,
-    requests,
-    statuses,
-)
+from simtest_operator.operator import environments, provisioning, requests
 from simtest_operator.operator.actions import Action, Delete, Kind, PatchStatus, Provision
 from simtest_operator.operator.environments import Assessment
 from simtest_operator.operator.observed import EnvironmentView
 from simtest_operator.operator.planning.inputs import Step
 from simtest_operator.operator.planning.outcomes import Outcome
+from simtest_operator.operator.status import environmentstatus, patches
 
 
 def tend(step: Step, judged: Mapping[str, Assessment]) -> Outcome:
@@ -40,7 +35,7 @@ def _environment(step: Step, env: EnvironmentView, assessment: Assessment) -> Ou
     actions: list[Action] = []
     latencies: list[float] = []
     desired = environmentstatus.desired_status(env, assessment)
-    patch = statuses.changed_fields(desired, env.status)
+    patch = patches.changed_fields(desired, env.status)
     if patch:
         actions.append(PatchStatus(kind=Kind.ENVIRONMENT, name=env.name, patch=patch))
         started = assessment.timings.started

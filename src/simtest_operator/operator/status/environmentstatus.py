@@ -11,10 +11,10 @@ import datetime
 from collections.abc import Sequence
 from typing import Any
 
-from simtest_operator.operator import conditions
 from simtest_operator.operator.environments import Assessment, Phase
 from simtest_operator.operator.observed import EnvironmentView
-from simtest_operator.operator.records import ResultRecord, clip
+from simtest_operator.operator.status import conditions
+from simtest_operator.operator.status.records import ResultRecord, clip
 from simtest_operator.verdicts import Verdict
 
 

@@ -2,8 +2,8 @@
 
 Pure: from the campaign's current status and what the step found, the smallest status patch
 (unchanged fields are left out, counter-only changes are coalesced to one write per
-``statusInterval``) and at most one event. The planner (:mod:`campaigns`) decides, this module
-words it.
+``statusInterval``) and at most one event. The planner
+(:mod:`simtest_operator.operator.planning`) decides, this module words it.
 """
 
 from __future__ import annotations
@@ -14,9 +14,10 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from simtest_operator.api.v1alpha1 import TestCampaignSpec
-from simtest_operator.operator import cancelling, conditions, names, observed, statuses
+from simtest_operator.operator import cancelling, names, observed
 from simtest_operator.operator.actions import Action, Emit, Kind, PatchStatus
 from simtest_operator.operator.observed import CampaignView
+from simtest_operator.operator.status import conditions, counting, patches
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
@@ -63,7 +64,7 @@ def halted(
     }
     if final:
         desired["completionTime"] = campaign.status.get("completionTime") or conditions.rfc3339(now)
-    patch = statuses.changed_fields(desired, campaign.status)
+    patch = patches.changed_fields(desired, campaign.status)
     actions: list[Action] = []
     if patch:
         actions.append(PatchStatus(kind=Kind.CAMPAIGN, name=campaign.name, patch=patch))
@@ -104,19 +105,19 @@ def progressed(
         phase = cancelling.CANCELLED_PHASE
         reason, message = cancellation.reason.value, cancellation.message
     elif complete:
-        phase = statuses.final_phase(counts)
+        phase = counting.final_phase(counts)
         reason, message = phase, _summary(counts)
     elif spec.suspend:
         phase, reason, message = "Suspended", "Suspended", "spec.suspend is true"
     else:
         phase, reason, message = "Running", "Running", _summary(counts)
     start = status.get("startTime") or conditions.rfc3339(now)
-    finished = statuses.finished_count(counts)
+    finished = counting.finished_count(counts)
     desired: dict[str, Any] = {
         **counts,
         "phase": phase,
         "observedGeneration": campaign.generation,
-        "progress": statuses.progress(counts),
+        "progress": counting.progress(counts),
         "startTime": start,
         "scenarioList": names.scenario_list(campaign.name),
         "batches": batches,
@@ -131,12 +132,12 @@ def progressed(
         campaign, counts, phase=phase, reason=reason, message=message, complete=complete,
         cancelling_=cancellation is not None, now=now,
     )  # fmt: skip
-    patch = statuses.changed_fields(desired, status)
+    patch = patches.changed_fields(desired, status)
     if not patch:
         return Update()
     if "conditions" in patch and _same_conditions(patch["conditions"], status.get("conditions")):
         patch.pop("conditions")
-    if statuses.only_progress(patch) and last_write is not None:
+    if patches.only_progress(patch) and last_write is not None:
         due = last_write + datetime.timedelta(seconds=status_interval)
         if now < due:
             return Update(due=due)
@@ -215,7 +216,7 @@ def _same_conditions(new: Sequence[Mapping[str, Any]], old: Any) -> bool:
 
 def _summary(counts: Mapping[str, int]) -> str:
     return (
-        f"{statuses.progress(counts)} finished: {counts['passed']} passed, {counts['failed']} "
+        f"{counting.progress(counts)} finished: {counts['passed']} passed, {counts['failed']} "
         f"failed, {counts['errored']} errored, {counts['timedOut']} timed out, "
         f"{counts['invalid']} invalid"
     )
