@@ -74,12 +74,10 @@ def operator(
     verbose: bool,
 ) -> None:
     """Run the simtest operator: TestCampaigns in, simulator pods and verdicts out."""
-    from simtest_operator.operator import running  # kopf loads only when the command runs
+    from simtest_operator import operator as operating  # the operator's stack loads only here
 
-    running.run(
-        namespaces=namespaces,
-        kubeconfig=kubeconfig,
-        options={
+    config = operating.OperatorConfig.from_env(
+        overrides={
             "templates_dir": templates,
             "sources_dir": sources,
             "cache_dir": cache,
@@ -87,6 +85,6 @@ def operator(
             "keep_finished_environments": keep_environments,
             "leader_election": leader_election,
             "identity": identity,
-        },
-        verbose=verbose,
+        }
     )
+    operating.run(config, namespaces=namespaces, kubeconfig=kubeconfig, verbose=verbose)

@@ -1,9 +1,9 @@
 """``simtest render MANIFEST --scenario ID``: the files one scenario's environment renders to.
 
 Wiring only. The scenario list is resolved exactly as ``simtest run`` resolves it (``runner``),
-and the environment request is built by the operator's own pure functions — the SimEnvironment
-body, its view and ``requests.environment_request`` — so the output is what the operator would
-create for that scenario (first attempt, isolation ``PerScenario`` granularity). Without
+and the environment request is built by the operator's own pure functions
+(``operator.environment_request``), so the output is what the operator would create for that
+scenario (first attempt, isolation ``PerScenario`` granularity). Without
 ``--out`` a summary and the content hash are printed; with it, ``values.yaml``, ``pod.yaml`` and
 ``helmfile.yaml`` are written. Exit code 2 with a one-line reason on any input problem.
 """
@@ -20,18 +20,16 @@ from typing import NoReturn
 import click
 import yaml
 
+from simtest_operator import operator as operating
 from simtest_operator import render as rendering
 from simtest_operator.api import converting, v1alpha1
 from simtest_operator.cli.run import env_secrets
 from simtest_operator.errors import ScenarioError, SimtestError
-from simtest_operator.operator import bodies, configuration, names, observed, requests
 from simtest_operator.runner import preparing, resolving
 from simtest_operator.scenarios.pinned import PinnedScenario
 from simtest_operator.scenarios.resolving import FetchContext
 from simtest_operator.settings import Settings
 
-PLACEHOLDER_UID = "00000000-0000-0000-0000-000000000000"
-"""uid of the SimEnvironment and batch that do not exist yet (owner references show it)."""
 CLOSE_MATCHES = 3
 
 
@@ -73,7 +71,7 @@ def render(
         _, campaign = preparing.read_manifest(manifest)
         frozen = _frozen_list(manifest, campaign)
         position = _position(frozen, scenario_id, campaign.name)
-        request = _environment_request(
+        request = operating.environment_request(
             campaign,
             frozen,
             position,
@@ -126,33 +124,6 @@ def _position(frozen: Sequence[PinnedScenario], scenario_id: str, campaign: str)
         f"unknown scenario {scenario_id!r}: campaign {campaign} selects {len(ids)} "
         f"scenario(s); {hint}"
     )
-
-
-def _environment_request(
-    campaign: v1alpha1.Manifest[v1alpha1.TestCampaignSpec],
-    frozen: Sequence[PinnedScenario],
-    position: int,
-    *,
-    namespace: str,
-    templates: Path,
-) -> rendering.EnvironmentRequest:
-    """The operator's request for the scenario's first environment, built by its own functions."""
-    spec = campaign.spec
-    batch_size = spec.execution.batch_size
-    batch_index, first = divmod(position, batch_size)
-    body = bodies.environment(
-        campaign=campaign.name,
-        namespace=namespace,
-        batch_name=names.batch(campaign.name, batch_index),
-        batch_uid=PLACEHOLDER_UID,
-        name=names.environment(campaign.name, batch_index, first, 1),
-        attempt=1,
-        isolation=spec.execution.isolation.value,
-        scenarios=[frozen[position]],
-    )
-    body["metadata"]["uid"] = PLACEHOLDER_UID
-    config = configuration.OperatorConfig(templates_dir=templates)
-    return requests.environment_request(spec, observed.environment_view(body), config=config)
 
 
 def _summary(

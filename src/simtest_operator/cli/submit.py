@@ -12,21 +12,21 @@ from __future__ import annotations
 
 import datetime
 import time
-from collections.abc import Iterator, Mapping
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 import click
 
+from simtest_operator import operator as operating
 from simtest_operator.api import manifestfiles
-from simtest_operator.api.v1alpha1 import GROUP, VERSION, ManifestError, parse_campaign
-from simtest_operator.errors import ScenarioError
+from simtest_operator.api.v1alpha1 import ManifestError, parse_campaign
+from simtest_operator.errors import ClusterError, ScenarioError
 from simtest_operator.results import junit, records
 from simtest_operator.verdicts import ScenarioOutcome, Verdict
 
 EXIT_PASSED, EXIT_FAILED, EXIT_ERROR = 0, 1, 2
 EXIT_BY_PHASE = {"Succeeded": EXIT_PASSED, "Failed": EXIT_FAILED}
-CAMPAIGN_LABEL = "simtest.dev/campaign"
 
 
 def _documents(path: Path) -> list[Any]:
@@ -35,29 +35,6 @@ def _documents(path: Path) -> list[Any]:
     except ScenarioError as exc:  # exit 2 like an invalid manifest, not click's 1 ("failed")
         click.echo(f"error: {exc}", err=True)
         raise SystemExit(EXIT_ERROR) from None
-
-
-def _api(kubeconfig: Path | None, context: str | None) -> tuple[Any, str]:
-    import kubernetes.client
-    import kubernetes.config
-
-    try:
-        if kubeconfig is None:
-            try:
-                kubernetes.config.load_incluster_config()  # type: ignore[no-untyped-call]
-                return kubernetes.client.ApiClient(), "default"
-            except kubernetes.config.ConfigException:
-                pass
-        api = kubernetes.config.new_client_from_config(  # type: ignore[no-untyped-call]
-            config_file=str(kubeconfig) if kubeconfig else None, context=context
-        )
-        _, active = kubernetes.config.list_kube_config_contexts(  # type: ignore[no-untyped-call]
-            config_file=str(kubeconfig) if kubeconfig else None
-        )
-        namespace = (active or {}).get("context", {}).get("namespace") or "default"
-    except (kubernetes.config.ConfigException, OSError) as exc:
-        raise click.ClickException(f"cannot load Kubernetes credentials: {exc}") from exc
-    return api, str(namespace)
 
 
 @click.command("submit")
@@ -101,20 +78,20 @@ def submit(
         for path, message in exc.problems:
             click.echo(f"{manifest}: {path}: {message}", err=True)
         raise SystemExit(EXIT_ERROR) from exc
-    api, default_namespace = _api(kubeconfig, context)
-    namespace = namespace or parsed.namespace or default_namespace
-    body = {**document, "metadata": {**document["metadata"], "namespace": namespace}}
-    body.pop("status", None)
-    name = parsed.name
-    import kubernetes.client
-
-    custom = kubernetes.client.CustomObjectsApi(api)
-    _create(custom, namespace, body, replace=replace)
-    click.echo(f"testcampaign/{name} created in {namespace}")
-    if not (wait or junit_file):
-        return
-    status = _wait(custom, namespace, name, timeout=timeout)
-    results = _results(custom, namespace, name)
+    try:
+        client, default_namespace = operating.connect(kubeconfig, context)
+        namespace = namespace or parsed.namespace or default_namespace
+        body = {**document, "metadata": {**document["metadata"], "namespace": namespace}}
+        body.pop("status", None)
+        name = parsed.name
+        client.create(namespace, body, replace=replace)
+        click.echo(f"testcampaign/{name} created in {namespace}")
+        if not (wait or junit_file):
+            return
+        status = _wait(client, namespace, name, timeout=timeout)
+        results = client.results(namespace, name)
+    except ClusterError as exc:
+        raise click.ClickException(str(exc)) from exc
     if junit_file is not None:
         junit_file.parent.mkdir(parents=True, exist_ok=True)
         junit_file.write_text(_junit(namespace, name, status, results), encoding="utf-8")
@@ -127,50 +104,6 @@ def submit(
     if phase == "Cancelled":
         click.echo(f"{name}: cancelled: {_complete_reason(status)}", err=True)
     raise SystemExit(EXIT_BY_PHASE.get(phase, EXIT_ERROR))
-
-
-def _create(custom: Any, namespace: str, body: Mapping[str, Any], *, replace: bool) -> None:
-    from kubernetes.client.exceptions import ApiException
-
-    name = body["metadata"]["name"]
-    for attempt in range(2):
-        try:
-            custom.create_namespaced_custom_object(GROUP, VERSION, namespace, "testcampaigns", body)
-            return
-        except ApiException as exc:
-            if exc.status == 409 and replace and attempt == 0:
-                custom.delete_namespaced_custom_object(
-                    GROUP,
-                    VERSION,
-                    namespace,
-                    "testcampaigns",
-                    name,
-                    propagation_policy="Foreground",
-                )
-                _wait_gone(custom, namespace, name)
-                continue
-            if exc.status == 409:
-                raise click.ClickException(
-                    f"testcampaign/{name} already exists in {namespace}; pass --replace to rerun it"
-                ) from exc
-            raise click.ClickException(
-                f"the API server refused the campaign: {exc.status} {exc.reason}: {exc.body}"
-            ) from exc
-
-
-def _wait_gone(custom: Any, namespace: str, name: str, timeout: float = 120.0) -> None:
-    from kubernetes.client.exceptions import ApiException
-
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        try:
-            custom.get_namespaced_custom_object(GROUP, VERSION, namespace, "testcampaigns", name)
-        except ApiException as exc:
-            if exc.status == 404:
-                return
-            raise
-        time.sleep(0.5)
-    raise click.ClickException(f"testcampaign/{name} was not deleted within {timeout:.0f}s")
 
 
 def _complete(status: Mapping[str, Any]) -> bool:
@@ -190,28 +123,13 @@ def _complete_reason(status: Mapping[str, Any]) -> str:
     return "no reason recorded"
 
 
-def _watch(custom: Any, namespace: str, name: str, timeout: float) -> Iterator[Mapping[str, Any]]:
-    import kubernetes.watch
-
-    watcher = kubernetes.watch.Watch()  # type: ignore[no-untyped-call]
-    stream = watcher.stream(  # type: ignore[no-untyped-call]
-        custom.list_namespaced_custom_object,
-        GROUP,
-        VERSION,
-        namespace,
-        "testcampaigns",
-        field_selector=f"metadata.name={name}",
-        timeout_seconds=max(int(timeout), 1),
-    )
-    for event in stream:
-        yield event["object"]
-
-
-def _wait(custom: Any, namespace: str, name: str, *, timeout: float) -> Mapping[str, Any]:
+def _wait(
+    client: operating.CampaignClient, namespace: str, name: str, *, timeout: float
+) -> Mapping[str, Any]:
     deadline = time.monotonic() + timeout
     last = ""
     while time.monotonic() < deadline:
-        for obj in _watch(custom, namespace, name, deadline - time.monotonic()):
+        for obj in client.watch(namespace, name, deadline - time.monotonic()):
             status = obj.get("status") or {}
             line = f"{status.get('phase', 'Pending')} {status.get('progress', '')}".strip()
             if line != last:
@@ -223,18 +141,6 @@ def _wait(custom: Any, namespace: str, name: str, *, timeout: float) -> Mapping[
                 break
     click.echo(f"{name}: not Complete after {timeout:.0f}s", err=True)
     raise SystemExit(EXIT_ERROR)
-
-
-def _results(custom: Any, namespace: str, name: str) -> list[Mapping[str, Any]]:
-    reply = custom.list_namespaced_custom_object(
-        GROUP, VERSION, namespace, "scenariobatches", label_selector=f"{CAMPAIGN_LABEL}={name}"
-    )
-    results: list[Mapping[str, Any]] = []
-    for batch in reply.get("items", []):
-        digests = {s["id"]: s.get("sha256", "") for s in batch.get("spec", {}).get("scenarios", [])}
-        for result in (batch.get("status") or {}).get("results", []):
-            results.append({**result, "sha256": digests.get(result.get("id"), "")})
-    return results
 
 
 def _counts(status: Mapping[str, Any]) -> str:

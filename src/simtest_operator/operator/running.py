@@ -1,8 +1,9 @@
 """Running the operator: configure kopf, register the handlers, hand kopf our memo.
 
-``simtest operator`` calls :func:`run`; ``kopf run -m simtest_operator.operator.handlers`` works
-too (configuration then comes from ``SIMTEST_OPERATOR_*`` variables and the credentials from
-``$KUBECONFIG`` or the in-cluster service account).
+``simtest operator`` reads the configuration once and calls :func:`run` (through the package's
+public entry); ``kopf run -m simtest_operator.operator.handlers`` works too (configuration then
+comes from ``SIMTEST_OPERATOR_*`` variables and the credentials from ``$KUBECONFIG`` or the
+in-cluster service account).
 """
 
 from __future__ import annotations
@@ -11,7 +12,7 @@ import dataclasses
 import importlib
 import logging
 import threading
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 
 import kopf
@@ -21,10 +22,10 @@ from simtest_operator.operator.configuration import OperatorConfig
 
 
 def run(
+    config: OperatorConfig,
     *,
     namespaces: Sequence[str] = (),
     kubeconfig: Path | None = None,
-    options: Mapping[str, object] | None = None,
     verbose: bool = False,
     stop_flag: threading.Event | None = None,
     ready_flag: threading.Event | None = None,
@@ -38,7 +39,6 @@ def run(
         # kopf reports every handler call per object ("Handler ... succeeded"): five lines per
         # scenario at scale; our own loggers say what matters.
         logging.getLogger("kopf.objects").setLevel(logging.WARNING)
-    config = OperatorConfig.from_env(overrides=options)
     if config.leader_election and not config.lease_namespace and namespaces:
         config = dataclasses.replace(config, lease_namespace=namespaces[0])
     memo = kopf.Memo(
