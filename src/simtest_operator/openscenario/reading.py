@@ -12,7 +12,7 @@ from __future__ import annotations
 import dataclasses
 import enum
 from collections.abc import Callable, Iterator, Mapping
-from typing import TYPE_CHECKING, TypeVar
+from typing import Protocol, TypeVar
 
 from simtest_operator.errors import ScenarioError
 from simtest_operator.openscenario import parameters
@@ -23,9 +23,6 @@ from simtest_operator.openscenario.model.common import (
     Unsupported,
 )
 from simtest_operator.xmlsafe import Element
-
-if TYPE_CHECKING:
-    from simtest_operator.openscenario.catalogs import Catalogs
 
 E = TypeVar("E", bound=enum.StrEnum)
 
@@ -72,13 +69,38 @@ def first_child(el: Element) -> Element | None:
     return next(children(el), None)
 
 
+class CatalogEntry(Protocol):
+    """A catalog entry as readers use it (:class:`.catalogs.Entry`)."""
+
+    @property
+    def element(self) -> Element: ...
+
+    @property
+    def entry_name(self) -> str: ...
+
+
+class CatalogLookup(Protocol):
+    """What readers need of the scenario's catalogs.
+
+    :class:`~simtest_operator.openscenario.catalogs.Catalogs` implements it. It is a protocol
+    because the catalogs read their entries through a :class:`Context`: importing them here would
+    make the two modules import each other.
+    """
+
+    def find(
+        self, ref: Element, ctx: Context, expected: tuple[str, ...]
+    ) -> tuple[CatalogEntry, Context]:
+        """Resolve the CatalogReference ``ref`` to an entry whose tag is one of ``expected``."""
+        ...
+
+
 @dataclasses.dataclass(frozen=True, slots=True)
 class Context:
     """Where we are while reading: file, visible parameters, catalogs, findings."""
 
     file: str
     scope: parameters.Scope
-    catalogs: Catalogs
+    catalogs: CatalogLookup
     findings: Findings
     root_scope: parameters.Scope = parameters.EMPTY
     """The scenario's global parameters (catalog entries see these beneath their own)."""

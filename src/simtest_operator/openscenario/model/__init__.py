@@ -112,11 +112,17 @@ from simtest_operator.openscenario.model.entities import (
     ScenarioObject,
 )
 from simtest_operator.openscenario.model.positions import (
+    Clothoid,
+    ClothoidSpline,
+    ClothoidSplineSegment,
+    ControlPoint,
     FromCurrentEntity,
     FromLaneCoordinates,
     FromRoadCoordinates,
     InRoutePosition,
     LanePosition,
+    Nurbs,
+    Polyline,
     Position,
     RelativeLanePosition,
     RelativeObjectPosition,
@@ -126,7 +132,10 @@ from simtest_operator.openscenario.model.positions import (
     Route,
     RoutePosition,
     RouteStrategy,
+    Shape,
+    Trajectory,
     TrajectoryPosition,
+    Vertex,
     Waypoint,
     WorldPosition,
 )
@@ -156,17 +165,6 @@ from simtest_operator.openscenario.model.traffic import (
     TrafficSourceAction,
     TrafficStopAction,
     TrafficSwarmAction,
-)
-from simtest_operator.openscenario.model.trajectories import (
-    Clothoid,
-    ClothoidSpline,
-    ClothoidSplineSegment,
-    ControlPoint,
-    Nurbs,
-    Polyline,
-    Shape,
-    Trajectory,
-    Vertex,
 )
 
 __all__ = [

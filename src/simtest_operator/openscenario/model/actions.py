@@ -27,9 +27,8 @@ from simtest_operator.openscenario.model.controls import (
     SetValueAction,
     TrafficSignalStateAction,
 )
-from simtest_operator.openscenario.model.positions import Position, Route
+from simtest_operator.openscenario.model.positions import Position, Route, Trajectory
 from simtest_operator.openscenario.model.traffic import TrafficAction
-from simtest_operator.openscenario.model.trajectories import Trajectory
 
 
 class DynamicsShape(enum.StrEnum):

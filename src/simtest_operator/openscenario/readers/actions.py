@@ -10,7 +10,6 @@ from simtest_operator.openscenario.readers import (
     controllers,
     positions,
     traffic,
-    trajectories,
     world_actions,
 )
 from simtest_operator.xmlsafe import Element
@@ -317,7 +316,7 @@ def _follow_trajectory(el: Element, ctx: reading.Context) -> a.FollowTrajectoryA
         else a.FollowingMode.POSITION
     )
     return a.FollowTrajectoryAction(
-        trajectory=trajectories.trajectory_or_ref(source, ctx),
+        trajectory=positions.trajectory_or_ref(source, ctx),
         following_mode=mode,
         timing=timing,
         initial_distance_offset=ctx.opt_double(el, "initialDistanceOffset"),
