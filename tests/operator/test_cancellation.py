@@ -20,6 +20,7 @@ from simtest_operator.operator import cancelling
 from simtest_operator.operator.actions import Kind
 from simtest_operator.operator.environments import Assessment, Phase
 from simtest_operator.operator.observed import Timings, environment_view
+from simtest_operator.operator.status import reading
 from simtest_operator.operator.status.records import ResultRecord
 from simtest_operator.verdicts import Verdict
 from tests.operator.fakecluster import T0, FakeCluster, Script, campaign_body, frozen_list
@@ -235,17 +236,19 @@ def test_decide() -> None:
     spec = TestCampaignSpec.model_validate(
         {"scenarios": {"sources": [{"path": "s"}]}, "activeDeadlineSeconds": 60}
     )
-    start = {"phase": "Running", "startTime": "2030-01-01T00:00:00.000Z"}
+    start = reading.campaign({"phase": "Running", "startTime": "2030-01-01T00:00:00.000Z"})
     assert cancelling.decide(spec, start, now=T0 + datetime.timedelta(seconds=59)) is None
     late = cancelling.decide(spec, start, now=T0 + datetime.timedelta(seconds=60))
     assert late is not None and late.reason is cancelling.Reason.DEADLINE_EXCEEDED
     assert cancelling.deadline(spec, start) == T0 + datetime.timedelta(seconds=60)
-    assert cancelling.deadline(spec, {}) is None  # not started: no clock yet
-    kept = {
-        "phase": "Cancelled",
-        "conditions": [
-            {"type": "Running", "status": "False", "reason": "DeadlineExceeded", "message": "m"}
-        ],
-    }
+    assert cancelling.deadline(spec, reading.campaign({})) is None  # not started: no clock yet
+    kept = reading.campaign(
+        {
+            "phase": "Cancelled",
+            "conditions": [
+                {"type": "Running", "status": "False", "reason": "DeadlineExceeded", "message": "m"}
+            ],
+        }
+    )
     again = cancelling.decide(spec, kept, now=T0)
     assert again == cancelling.Cancellation(reason=cancelling.Reason.DEADLINE_EXCEEDED, message="m")

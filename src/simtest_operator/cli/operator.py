@@ -1,8 +1,7 @@
 """``simtest operator``: run the Kubernetes operator in the foreground.
 
-The settings are read once here: flags override the ``SIMTEST_OPERATOR_*`` variables the chart
-sets (``settings.OperatorSettings``). The operator package (and kopf with it) is imported only
-when the command runs.
+Flags override the ``SIMTEST_OPERATOR_*`` variables the chart sets (``operator.configuration``).
+The operator package (and kopf with it) is imported only when the command runs.
 """
 
 from __future__ import annotations
@@ -10,8 +9,6 @@ from __future__ import annotations
 from pathlib import Path
 
 import click
-
-from simtest_operator.settings import Settings
 
 
 @click.command("operator")
@@ -79,8 +76,8 @@ def operator(
     """Run the simtest operator: TestCampaigns in, simulator pods and verdicts out."""
     from simtest_operator import operator as operating  # the operator's stack loads only here
 
-    settings = Settings.from_env(
-        operator_flags={
+    config = operating.OperatorConfig.from_env(
+        overrides={
             "templates_dir": templates,
             "sources_dir": sources,
             "cache_dir": cache,
@@ -90,4 +87,4 @@ def operator(
             "identity": identity,
         }
     )
-    operating.run(settings.operator, namespaces=namespaces, kubeconfig=kubeconfig, verbose=verbose)
+    operating.run(config, namespaces=namespaces, kubeconfig=kubeconfig, verbose=verbose)

@@ -21,15 +21,13 @@ from __future__ import annotations
 import dataclasses
 import datetime
 import enum
-from collections.abc import Collection, Mapping, Sequence
-from typing import Any
+from collections.abc import Collection, Sequence
 
-from simtest_operator.api.v1alpha1 import TestCampaignSpec
-from simtest_operator.operator import observed
+from simtest_operator.api.v1alpha1 import TestCampaignSpec, TestCampaignStatus
 from simtest_operator.operator.batches import Layout, ScenarioState, State
 from simtest_operator.operator.environments import Assessment, Phase
 from simtest_operator.operator.observed import EnvironmentView
-from simtest_operator.operator.status import conditions
+from simtest_operator.operator.status import conditions, reading
 from simtest_operator.operator.status.records import ResultRecord, clip
 from simtest_operator.verdicts import Verdict
 
@@ -62,44 +60,45 @@ class Cancellation:
         return "cancelled"
 
 
-def deadline(spec: TestCampaignSpec, status: Mapping[str, Any]) -> datetime.datetime | None:
+def deadline(spec: TestCampaignSpec, status: TestCampaignStatus) -> datetime.datetime | None:
     """When ``activeDeadlineSeconds`` runs out (None without a limit or before the start)."""
-    start = observed.timestamp(status.get("startTime"))
+    start = status.start_time
     if spec.active_deadline_seconds is None or start is None:
         return None
     return start + datetime.timedelta(seconds=spec.active_deadline_seconds)
 
 
-def recorded(status: Mapping[str, Any]) -> Cancellation | None:
+def recorded(status: TestCampaignStatus) -> Cancellation | None:
     """The cancellation the status already records (None when it records none)."""
-    if status.get("phase") != CANCELLED_PHASE:
+    if status.phase != CANCELLED_PHASE:
         return None
-    running = conditions.get(status.get("conditions"), "Running") or {}
+    running = reading.condition(status, "Running")
     try:
-        reason = Reason(str(running.get("reason", "")))
+        reason = Reason(running.reason if running is not None else "")
     except ValueError:
         reason = Reason.CANCELLED
-    return Cancellation(reason=reason, message=str(running.get("message") or "cancelled"))
+    message = running.message if running is not None else ""
+    return Cancellation(reason=reason, message=message or "cancelled")
 
 
 def decide(
-    spec: TestCampaignSpec, status: Mapping[str, Any], *, now: datetime.datetime
+    spec: TestCampaignSpec, status: TestCampaignStatus, *, now: datetime.datetime
 ) -> Cancellation | None:
     """Whether the campaign is cancelled, and why: once recorded always; otherwise by
     ``spec.cancel`` or the deadline, unless the campaign has already ended on its own."""
     kept = recorded(status)
     if kept is not None:
         return kept
-    if status.get("phase") in FINISHED_PHASES:
+    if status.phase in FINISHED_PHASES:
         return None
     if spec.cancel:
         return Cancellation(reason=Reason.CANCELLED, message="spec.cancel is true")
     limit = deadline(spec, status)
-    if limit is not None and now >= limit:
+    if limit is not None and status.start_time is not None and now >= limit:
         return Cancellation(
             reason=Reason.DEADLINE_EXCEEDED,
             message=f"activeDeadlineSeconds ({spec.active_deadline_seconds} s) exceeded "
-            f"since the start at {status.get('startTime')}",
+            f"since the start at {conditions.rfc3339(status.start_time)}",
         )
     return None
 

@@ -13,6 +13,7 @@ from collections.abc import Mapping
 
 from simtest_operator.operator import names, observed
 from simtest_operator.operator.observed import Raw
+from simtest_operator.operator.status import reading
 
 LABEL_JOB_ENVIRONMENT = "simtest.dev/environment"
 """Label of a helmfile Job naming its SimEnvironment (``packaging.helmfilejobs``)."""
@@ -76,11 +77,11 @@ def job_view(body: Raw) -> JobView:
         environment=str(labels.get(LABEL_JOB_ENVIRONMENT, "")),
         batch=str(labels.get(names.LABEL_BATCH, "")),
         action=str(labels.get(LABEL_JOB_ACTION, "")),
-        created=observed.timestamp(meta.get("creationTimestamp")),
+        created=reading.timestamp(meta.get("creationTimestamp")),
         deleting=meta.get("deletionTimestamp") is not None,
         succeeded=succeeded,
         failed=is_failed,
         reason=reason,
-        finished_at=observed.timestamp((ended or {}).get("lastTransitionTime"))
-        or observed.timestamp(status.get("completionTime")),
+        finished_at=reading.timestamp((ended or {}).get("lastTransitionTime"))
+        or reading.timestamp(status.get("completionTime")),
     )

@@ -12,23 +12,19 @@ import datetime
 from collections.abc import Mapping
 from typing import Any
 
-from simtest_operator.api.v1alpha1 import ManifestError, TestCampaignSpec, parse_campaign
+from simtest_operator.api.v1alpha1 import (
+    ManifestError,
+    ScenarioBatchStatus,
+    TestCampaignSpec,
+    TestCampaignStatus,
+    parse_campaign,
+)
 from simtest_operator.operator import names
+from simtest_operator.operator.status import reading
 from simtest_operator.operator.status.records import ResultRecord
 from simtest_operator.render.inputs import SIMULATOR_RESOURCE, ScenarioRef
 
 Raw = Mapping[str, Any]
-
-
-def timestamp(value: Any) -> datetime.datetime | None:
-    """An RFC 3339 timestamp as an aware datetime; None when absent or malformed."""
-    if not isinstance(value, str) or not value:
-        return None
-    try:
-        parsed = datetime.datetime.fromisoformat(value.replace("Z", "+00:00"))
-    except ValueError:
-        return None
-    return parsed if parsed.tzinfo else parsed.replace(tzinfo=datetime.UTC)
 
 
 def _meta(body: Raw) -> Raw:
@@ -123,7 +119,7 @@ def pod_view(body: Raw) -> PodView:
     unschedulable = ""
     if scheduled is not None:
         if scheduled.get("status") == "True":
-            scheduled_at = timestamp(scheduled.get("lastTransitionTime"))
+            scheduled_at = reading.timestamp(scheduled.get("lastTransitionTime"))
         else:
             unschedulable = " ".join(
                 str(p) for p in (scheduled.get("reason"), scheduled.get("message")) if p
@@ -140,7 +136,7 @@ def pod_view(body: Raw) -> PodView:
         uid=str(meta.get("uid", "")),
         resource_version=str(meta.get("resourceVersion", "")),
         campaign=str((meta.get("labels") or {}).get(names.LABEL_CAMPAIGN, "")),
-        created=timestamp(meta.get("creationTimestamp")),
+        created=reading.timestamp(meta.get("creationTimestamp")),
         deleting=meta.get("deletionTimestamp") is not None,
         node_name=spec.get("nodeName") or None,
         phase=str(status.get("phase", "Pending")),
@@ -148,7 +144,7 @@ def pod_view(body: Raw) -> PodView:
         message=str(status.get("message", "")),
         scheduled_at=scheduled_at,
         unschedulable=unschedulable,
-        start_time=timestamp(status.get("startTime")),
+        start_time=reading.timestamp(status.get("startTime")),
         container=_container(status),
         disruption=disruption_text,
         job=next(
@@ -180,8 +176,8 @@ def _container(status: Raw) -> ContainerView:
                 reason=str(detail.get("reason", "")),
                 message=str(detail.get("message", "")),
                 exit_code=int(exit_code) if isinstance(exit_code, int) else None,
-                started_at=timestamp(detail.get("startedAt")),
-                finished_at=timestamp(detail.get("finishedAt")),
+                started_at=reading.timestamp(detail.get("startedAt")),
+                finished_at=reading.timestamp(detail.get("finishedAt")),
             )
     return ContainerView()
 
@@ -226,7 +222,7 @@ def node_view(body: Raw) -> NodeView:
         ready=is_ready,
         not_ready_since=None
         if is_ready or ready is None
-        else timestamp(ready.get("lastTransitionTime")),
+        else reading.timestamp(ready.get("lastTransitionTime")),
         unschedulable=bool(spec.get("unschedulable")),
         slots=slots,
         labels=tuple(sorted((str(k), str(v)) for k, v in (meta.get("labels") or {}).items())),
@@ -271,7 +267,8 @@ class EnvironmentView:
     results: tuple[ResultRecord, ...]
     provisioned_at: datetime.datetime | None
     """When the operator recorded creating the pod (condition ``Provisioned``)."""
-    status: Raw
+    status_wire: Raw
+    """The status as stored, for merge patches; the fields above are its typed reading."""
     provisioner: str = ""
     """``Pod`` or ``Helmfile`` once provisioned (empty before, and for older environments)."""
     sync_job: str | None = None
@@ -315,7 +312,7 @@ def environment_view(body: Raw) -> EnvironmentView:
         batch=str(spec.get("batch", "")),
         attempt=int(spec.get("attempt", 1) or 1),
         scenarios=scenarios,
-        created=timestamp(meta.get("creationTimestamp")),
+        created=reading.timestamp(meta.get("creationTimestamp")),
         deleting=meta.get("deletionTimestamp") is not None,
         phase=str(status.get("phase", "Pending")),
         pod=status.get("pod") or None,
@@ -324,16 +321,16 @@ def environment_view(body: Raw) -> EnvironmentView:
         reason=str(status.get("reason", "")),
         rendered_hash=status.get("renderedHash") or None,
         timings=Timings(
-            queued=timestamp(timings.get("queued")),
-            scheduled=timestamp(timings.get("scheduled")),
-            started=timestamp(timings.get("started")),
-            finished=timestamp(timings.get("finished")),
+            queued=reading.timestamp(timings.get("queued")),
+            scheduled=reading.timestamp(timings.get("scheduled")),
+            started=reading.timestamp(timings.get("started")),
+            finished=reading.timestamp(timings.get("finished")),
         ),
         results=_results(status.get("results")),
-        provisioned_at=timestamp((provisioned or {}).get("lastTransitionTime"))
+        provisioned_at=reading.timestamp((provisioned or {}).get("lastTransitionTime"))
         if provisioned is not None and provisioned.get("status") == "True"
         else None,
-        status=status,
+        status_wire=status,
         provisioner=str(status.get("provisioner") or ""),
         sync_job=str(jobs.get("sync")) if isinstance(jobs, Mapping) and jobs.get("sync") else None,
         destroy_job=str(jobs.get("destroy"))
@@ -354,7 +351,11 @@ class BatchView:
     index: int
     scenario_ids: tuple[str, ...]
     results: tuple[ResultRecord, ...]
-    status: Raw
+    """The recorded results (the typed ``status`` leaves them out: read once, here)."""
+    status: ScenarioBatchStatus
+    """The status, typed (:mod:`~simtest_operator.operator.status.reading`)."""
+    status_wire: Raw
+    """The status as stored, for merge patches."""
 
 
 def batch_view(body: Raw) -> BatchView:
@@ -371,7 +372,8 @@ def batch_view(body: Raw) -> BatchView:
             str(s.get("id", "")) for s in spec.get("scenarios") or () if isinstance(s, Mapping)
         ),
         results=_results(status.get("results")),
-        status=status,
+        status=reading.batch(status),
+        status_wire=status,
     )
 
 
@@ -389,7 +391,10 @@ class CampaignView:
     spec: TestCampaignSpec | None
     spec_error: str
     """Why the spec does not validate (only when ``spec`` is None)."""
-    status: Raw
+    status: TestCampaignStatus
+    """The status, typed (:mod:`~simtest_operator.operator.status.reading`)."""
+    status_wire: Raw
+    """The status as stored, for merge patches."""
 
 
 def campaign_view(body: Raw) -> CampaignView:
@@ -413,9 +418,10 @@ def campaign_view(body: Raw) -> CampaignView:
         uid=str(meta.get("uid", "")),
         resource_version=str(meta.get("resourceVersion", "")),
         generation=int(meta.get("generation", 1) or 1),
-        created=timestamp(meta.get("creationTimestamp")),
+        created=reading.timestamp(meta.get("creationTimestamp")),
         deleting=meta.get("deletionTimestamp") is not None,
         spec=spec,
         spec_error=error,
-        status=status,
+        status=reading.campaign(status),
+        status_wire=status,
     )

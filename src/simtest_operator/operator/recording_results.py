@@ -23,15 +23,13 @@ from typing import Any, Protocol
 
 from simtest_operator import results
 from simtest_operator.errors import ResultsError, SimtestError
-from simtest_operator.operator import observed
 from simtest_operator.operator.observed import CampaignView
 from simtest_operator.operator.scenariolists import StoredList
-from simtest_operator.operator.status import counting
+from simtest_operator.operator.status import reading
 from simtest_operator.render import documents
 
 log = logging.getLogger(__name__)
 
-FINAL_PHASES = frozenset({"Succeeded", "Failed", "Error", "Cancelled"})
 FIRST_RETRY_SECONDS = 10.0
 MAX_RETRY_SECONDS = 900.0
 CONNECT_TIMEOUT_SECONDS = 5
@@ -80,12 +78,12 @@ def campaign_info(campaign: CampaignView, *, now: datetime.datetime) -> results.
 def finish_of(campaign: CampaignView) -> results.Finish | None:
     """The end of a campaign as its status tells it, or None while it is not over."""
     status = campaign.status
-    phase = status.get("phase")
-    finished_at = observed.timestamp(status.get("completionTime"))
-    if phase not in FINAL_PHASES or finished_at is None:
+    finished_at = status.completion_time
+    if not status.phase.finished or finished_at is None:
         return None
-    counts = {k: int(v) for k in counting.COUNTER_KEYS if isinstance(v := status.get(k), int)}
-    return results.Finish(phase=str(phase), counts=counts, finished_at=finished_at)
+    return results.Finish(
+        phase=status.phase.value, counts=reading.counts(status), finished_at=finished_at
+    )
 
 
 def scenario_infos(stored: StoredList | None) -> list[results.ScenarioInfo]:

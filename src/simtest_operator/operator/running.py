@@ -18,11 +18,11 @@ from pathlib import Path
 import kopf
 
 from simtest_operator.operator.client import load_credentials
-from simtest_operator.settings import OperatorSettings
+from simtest_operator.operator.configuration import OperatorConfig
 
 
 def run(
-    config: OperatorSettings,
+    config: OperatorConfig,
     *,
     namespaces: Sequence[str] = (),
     kubeconfig: Path | None = None,

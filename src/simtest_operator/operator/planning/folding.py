@@ -35,8 +35,8 @@ def fold(step: Step, states: Sequence[ScenarioState]) -> Outcome:
 def _batch(
     step: Step, index: int, batch: BatchView, mine: Sequence[ScenarioState]
 ) -> tuple[Action, ...]:
-    desired = batchstatus.batch_status(states=mine, current=batch.status, now=step.now)
-    patch = patches.changed_fields(desired, batch.status)
+    desired = batchstatus.batch_status(states=mine, current=batch.status_wire, now=step.now)
+    patch = patches.changed_fields(desired, batch.status_wire)
     if not patch:
         return ()
     actions: list[Action] = []
@@ -72,7 +72,7 @@ def _batch(
         )
     )
     phase = desired["phase"]
-    if batch.status.get("phase") != phase and phase in _FINAL_PHASES:
+    if batch.status.phase != phase and phase in _FINAL_PHASES:
         actions.append(
             Emit(
                 kind=Kind.BATCH,

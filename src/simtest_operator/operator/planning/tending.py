@@ -35,12 +35,12 @@ def _environment(step: Step, env: EnvironmentView, assessment: Assessment) -> Ou
     actions: list[Action] = []
     latencies: list[float] = []
     desired = environmentstatus.desired_status(env, assessment)
-    patch = patches.changed_fields(desired, env.status)
+    patch = patches.changed_fields(desired, env.status_wire)
     if patch:
         actions.append(PatchStatus(kind=Kind.ENVIRONMENT, name=env.name, patch=patch))
         started = assessment.timings.started
         queued = assessment.timings.queued
-        if started and queued and "started" not in (env.status.get("timings") or {}):
+        if started and queued and "started" not in (env.status_wire.get("timings") or {}):
             latencies.append(max((started - queued).total_seconds(), 0.0))
     pod = step.inputs.pods.get(env.pod or env.name)
     if env.finished and pod is not None:

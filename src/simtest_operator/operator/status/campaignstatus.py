@@ -14,10 +14,10 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from simtest_operator.api.v1alpha1 import TestCampaignSpec
-from simtest_operator.operator import cancelling, names, observed
+from simtest_operator.operator import cancelling, names
 from simtest_operator.operator.actions import Action, Emit, Kind, PatchStatus
 from simtest_operator.operator.observed import CampaignView
-from simtest_operator.operator.status import conditions, counting, patches
+from simtest_operator.operator.status import conditions, counting, patches, reading
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
@@ -44,7 +44,7 @@ def halted(
         "phase": phase,
         "observedGeneration": campaign.generation,
         "conditions": conditions.merge(
-            campaign.status.get("conditions"),
+            campaign.status_wire.get("conditions"),
             [
                 conditions.Desired(
                     type="Resolved", status=resolved, reason=reason, message=message
@@ -63,12 +63,14 @@ def halted(
         ),
     }
     if final:
-        desired["completionTime"] = campaign.status.get("completionTime") or conditions.rfc3339(now)
-    patch = patches.changed_fields(desired, campaign.status)
+        desired["completionTime"] = campaign.status_wire.get(
+            "completionTime"
+        ) or conditions.rfc3339(now)
+    patch = patches.changed_fields(desired, campaign.status_wire)
     actions: list[Action] = []
     if patch:
         actions.append(PatchStatus(kind=Kind.CAMPAIGN, name=campaign.name, patch=patch))
-    if campaign.status.get("phase") != phase:
+    if campaign.status.phase != phase:
         actions.append(
             Emit(
                 kind=Kind.CAMPAIGN,
@@ -96,7 +98,7 @@ def progressed(
     status_interval: float,
 ) -> Update:
     """Status of a resolved campaign from its scenario counters."""
-    status = campaign.status
+    wire = campaign.status_wire
     total = counts["total"]
     if total == 0:
         phase, reason, message = "Error", "NoScenarios", "the selection matched no scenarios"
@@ -111,7 +113,7 @@ def progressed(
         phase, reason, message = "Suspended", "Suspended", "spec.suspend is true"
     else:
         phase, reason, message = "Running", "Running", _summary(counts)
-    start = status.get("startTime") or conditions.rfc3339(now)
+    start = wire.get("startTime") or conditions.rfc3339(now)
     finished = counting.finished_count(counts)
     desired: dict[str, Any] = {
         **counts,
@@ -122,20 +124,20 @@ def progressed(
         "scenarioList": names.scenario_list(campaign.name),
         "batches": batches,
     }
-    started_at = observed.timestamp(start) or now
+    started_at = reading.timestamp(start) or now
     minutes = (now - started_at).total_seconds() / 60.0
     if minutes > 0 and finished:
         desired["throughput"] = round(finished / minutes, 2)
     if complete:
-        desired["completionTime"] = status.get("completionTime") or conditions.rfc3339(now)
+        desired["completionTime"] = wire.get("completionTime") or conditions.rfc3339(now)
     desired["conditions"] = _conditions(
         campaign, counts, phase=phase, reason=reason, message=message, complete=complete,
         cancelling_=cancellation is not None, now=now,
     )  # fmt: skip
-    patch = patches.changed_fields(desired, status)
+    patch = patches.changed_fields(desired, wire)
     if not patch:
         return Update()
-    if "conditions" in patch and _same_conditions(patch["conditions"], status.get("conditions")):
+    if "conditions" in patch and _same_conditions(patch["conditions"], wire.get("conditions")):
         patch.pop("conditions")
     if patches.only_progress(patch) and last_write is not None:
         due = last_write + datetime.timedelta(seconds=status_interval)
@@ -144,7 +146,7 @@ def progressed(
     actions: list[Action] = []
     if patch:
         actions.append(PatchStatus(kind=Kind.CAMPAIGN, name=campaign.name, patch=patch))
-    if status.get("phase") != phase:
+    if campaign.status.phase != phase:
         actions.append(
             Emit(
                 kind=Kind.CAMPAIGN,
@@ -173,7 +175,7 @@ def _conditions(
     total = counts["total"]
     degraded = counts["errored"] + counts["invalid"]
     return conditions.merge(
-        campaign.status.get("conditions"),
+        campaign.status_wire.get("conditions"),
         [
             conditions.Desired(
                 type="Resolved",

@@ -77,7 +77,7 @@ def provisioned_status(
         **extra,
         "timings": {"queued": conditions.rfc3339(queued)},
         "conditions": conditions.merge(
-            env.status.get("conditions"),
+            env.status_wire.get("conditions"),
             [
                 conditions.Desired(
                     type="Provisioned",

@@ -1,0 +1,154 @@
+"""Operator-level configuration: knobs that belong to the installation, not to a campaign.
+
+Built once by ``simtest operator`` (flags and ``SIMTEST_OPERATOR_*`` variables, see
+:func:`from_env`) and passed down; nothing below reads the environment.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+from collections.abc import Mapping
+from pathlib import Path
+
+from simtest_operator.render.inputs import PvcVolume
+
+ENV_PREFIX = "SIMTEST_OPERATOR_"
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class OperatorConfig:
+    """How the operator runs."""
+
+    templates_dir: Path = Path("helm-templates")
+    """Root of the environment templates (``helm-templates/``); ``SIMTEST_OPERATOR_TEMPLATES``."""
+    sources_dir: Path = Path()
+    """Folder relative ``path`` scenario sources are resolved against (the operator's scenario
+    volume); ``SIMTEST_OPERATOR_SOURCES``."""
+    cache_dir: Path = Path("/tmp/simtest-operator-cache")
+    """Downloads, git mirrors and unpacked archives of resolution; ``SIMTEST_OPERATOR_CACHE``."""
+    scenario_volume: PvcVolume | None = None
+    """PVC holding ``path`` sources, mounted read-only into simulator pods at ``sources_dir``
+    (``SIMTEST_OPERATOR_SCENARIO_CLAIM``); without it a pod cannot read ``file://`` sources
+    (its scenarios end ``Error`` with a hint to set this)."""
+    status_interval: float = 1.0
+    """Minimum seconds between two campaign status writes that change counters only; phase and
+    condition changes are written at once. Fewer writes, same end state."""
+    event_interval: float = 10.0
+    """Minimum seconds between two events on the same object (terminal phases always post)."""
+    missing_pod_grace: float = 10.0
+    """Seconds a pod recorded as created may be missing from the cache before it counts as
+    deleted."""
+    backstop_grace: float = 30.0
+    """Seconds past a pod's activeDeadlineSeconds before the operator ends the run as Timeout
+    itself (when no kubelet enforces the deadline)."""
+    node_not_ready_grace: float = 60.0
+    """Seconds a simulator pod's node may be NotReady (kubelet stopped, node cut off) before its
+    scenarios end Error and are retried on another node; the pod is force-deleted."""
+    keep_finished_environments: bool = False
+    """Keep SimEnvironments after their results are folded into the batch (debugging); by
+    default they are deleted so live objects stay bounded by the in-flight window."""
+    prefetch_per_node: int = 1
+    """Window mode with a derived window (no maxParallel): pods created beyond the free
+    simulator slots, per usable node. They wait in Pending and the scheduler starts one the
+    moment a slot frees, without a round trip through the operator. 0 turns it off."""
+    max_starts_per_step: int = 64
+    """Environments one step may create; the rest start in the next step, right after. Keeps a
+    step short when a large window opens at once (a 150-slot ramp), so results that arrive
+    meanwhile are folded without waiting for hundreds of writes."""
+    reuse_queue: int = 8
+    """Scenarios per warm simulator with isolation ``Reuse`` (bounded by the 4 KiB termination
+    message that carries their results)."""
+    coalesce_seconds: float = 0.02
+    """How long a campaign loop waits after a wake-up for more events to arrive."""
+    api_workers: int = 16
+    """Threads for Kubernetes API calls."""
+    metrics_port: int = 8080
+    """Port of ``/metrics``, ``/healthz`` and ``/readyz``; 0 disables the server."""
+    leader_election: bool = False
+    """Run campaign loops only while holding the Lease ``lease_name`` (two or more replicas);
+    ``SIMTEST_OPERATOR_LEADER_ELECTION``. Off: this process always acts (one replica)."""
+    lease_name: str = "simtest-operator"
+    """Name of the coordination.k8s.io Lease; ``SIMTEST_OPERATOR_LEASE_NAME``."""
+    lease_namespace: str = ""
+    """Namespace of the Lease (the operator's own); empty: the first watched namespace, else
+    ``default``; ``SIMTEST_OPERATOR_LEASE_NAMESPACE``."""
+    identity: str = ""
+    """Holder identity in the Lease (the pod name); empty: ``<hostname>_<pid>``;
+    ``SIMTEST_OPERATOR_IDENTITY``."""
+    lease_duration: float = 15.0
+    """Seconds without a renewal before a follower takes over (client-go's default)."""
+    renew_deadline: float = 10.0
+    """Seconds the leader keeps acting without a successful renewal (client-go's default)."""
+    retry_period: float = 2.0
+    """Seconds between two acquire/renew attempts (client-go's default)."""
+    helmfile_image: str = ""
+    """Image of the ``provisioner: Helmfile`` Jobs (helm, helmfile and ``charts/``);
+    ``SIMTEST_OPERATOR_HELMFILE_IMAGE``. Empty: campaigns asking for the Helmfile provisioner end
+    their environments as Error with a reason saying so."""
+    helmfile_role: str = ""
+    """ClusterRole bound (per campaign, in its namespace) to the helmfile Jobs' ServiceAccount;
+    ``SIMTEST_OPERATOR_HELMFILE_ROLE`` (the chart's ``<release>-helmfile-provisioner``)."""
+    helmfile_node_selector: Mapping[str, str] = dataclasses.field(default_factory=dict)
+    """Node selector of the helmfile Jobs (``key=value,...``;
+    ``SIMTEST_OPERATOR_HELMFILE_NODE_SELECTOR``): provisioning needs no simulator node, and may
+    need nodes that reach chart registries."""
+
+    @classmethod
+    def from_env(
+        cls, env: Mapping[str, str] | None = None, overrides: Mapping[str, object] | None = None
+    ) -> OperatorConfig:
+        """Defaults, then ``SIMTEST_OPERATOR_*`` variables, then ``overrides`` (CLI flags)."""
+        env = os.environ if env is None else env
+        values: dict[str, object] = {}
+        for name, key, kind in (
+            ("templates_dir", "TEMPLATES", Path),
+            ("sources_dir", "SOURCES", Path),
+            ("cache_dir", "CACHE", Path),
+            ("status_interval", "STATUS_INTERVAL", float),
+            ("event_interval", "EVENT_INTERVAL", float),
+            ("missing_pod_grace", "MISSING_POD_GRACE", float),
+            ("backstop_grace", "BACKSTOP_GRACE", float),
+            ("node_not_ready_grace", "NODE_NOT_READY_GRACE", float),
+            ("reuse_queue", "REUSE_QUEUE", int),
+            ("max_starts_per_step", "MAX_STARTS_PER_STEP", int),
+            ("prefetch_per_node", "PREFETCH", int),
+            ("metrics_port", "METRICS_PORT", int),
+            ("lease_name", "LEASE_NAME", str),
+            ("lease_namespace", "LEASE_NAMESPACE", str),
+            ("identity", "IDENTITY", str),
+            ("lease_duration", "LEASE_DURATION", float),
+            ("renew_deadline", "RENEW_DEADLINE", float),
+            ("retry_period", "RETRY_PERIOD", float),
+        ):
+            raw = env.get(ENV_PREFIX + key)
+            if raw:
+                values[name] = kind(raw)
+        if env.get(ENV_PREFIX + "KEEP_ENVIRONMENTS", "").lower() in ("1", "true", "yes"):
+            values["keep_finished_environments"] = True
+        if env.get(ENV_PREFIX + "LEADER_ELECTION", "").lower() in ("1", "true", "yes"):
+            values["leader_election"] = True
+        for name, key in (("helmfile_image", "HELMFILE_IMAGE"), ("helmfile_role", "HELMFILE_ROLE")):
+            if env.get(ENV_PREFIX + key):
+                values[name] = env[ENV_PREFIX + key]
+        selector = env.get(ENV_PREFIX + "HELMFILE_NODE_SELECTOR", "")
+        if selector.strip():
+            values["helmfile_node_selector"] = _pairs(selector)
+        claim = env.get(ENV_PREFIX + "SCENARIO_CLAIM")
+        if claim:
+            values["scenario_volume"] = PvcVolume(claim_name=claim, read_only=True)
+        values.update({k: v for k, v in (overrides or {}).items() if v is not None})
+        return cls(**values)  # type: ignore[arg-type]
+
+
+def _pairs(text: str) -> dict[str, str]:
+    """``a=b,c=d`` as a mapping (blank items ignored)."""
+    pairs = {}
+    for item in text.split(","):
+        if not item.strip():
+            continue
+        key, sep, value = item.partition("=")
+        if not sep or not key.strip():
+            raise ValueError(f"{ENV_PREFIX}HELMFILE_NODE_SELECTOR: {item!r} is not key=value")
+        pairs[key.strip()] = value.strip()
+    return pairs

@@ -1,0 +1,118 @@
+"""Reading watched statuses as the api's typed status models.
+
+A status read here is a :class:`~simtest_operator.api.v1alpha1.TestCampaignStatus` or
+:class:`~simtest_operator.api.v1alpha1.ScenarioBatchStatus` -- the models the CRDs are generated
+from -- built with ``model_construct`` after a lenient parse of each field, not validated:
+
+* the views are parsed on every watch event, for thousands of objects per campaign
+  (``bench/operator_scale.py``), and full validation of a status (patterns, bounds, every
+  condition) costs far more than the few fields the planner reads;
+* one odd field (a hand-edited status, a newer operator's phase) must not stop a campaign, so a
+  value that does not parse reads as if absent: the model's default, and not in
+  ``model_fields_set``.
+
+Decisions read these models; merge patches are computed against the wire form the views keep
+beside them (:mod:`.patches`), and fields the builders carry over (times, conditions) are copied
+from it verbatim.
+"""
+
+from __future__ import annotations
+
+import datetime
+from collections.abc import Mapping
+from typing import Any
+
+from simtest_operator.api.v1alpha1 import (
+    Condition,
+    Counters,
+    Phase,
+    ScenarioBatchStatus,
+    TestCampaignStatus,
+)
+from simtest_operator.api.v1alpha1.common import ConditionStatus
+
+Raw = Mapping[str, Any]
+
+_UNKNOWN_TIME = datetime.datetime(1970, 1, 1, tzinfo=datetime.UTC)
+"""The transition time of a condition whose own is missing or malformed (a required field)."""
+_COUNTERS = tuple((name, str(field.alias)) for name, field in Counters.model_fields.items())
+
+
+def timestamp(value: Any) -> datetime.datetime | None:
+    """An RFC 3339 timestamp as an aware datetime; None when absent or malformed."""
+    if not isinstance(value, str) or not value:
+        return None
+    try:
+        parsed = datetime.datetime.fromisoformat(value.replace("Z", "+00:00"))
+    except ValueError:
+        return None
+    return parsed if parsed.tzinfo else parsed.replace(tzinfo=datetime.UTC)
+
+
+def campaign(wire: Raw) -> TestCampaignStatus:
+    """A TestCampaign's status."""
+    fields = _common(wire)
+    if isinstance(scenario_list := wire.get("scenarioList"), str):
+        fields["scenario_list"] = scenario_list
+    if isinstance(batches := wire.get("batches"), int):
+        fields["batches"] = int(batches)
+    if isinstance(throughput := wire.get("throughput"), int | float):
+        fields["throughput"] = float(throughput)
+    return TestCampaignStatus.model_construct(**fields)
+
+
+def batch(wire: Raw) -> ScenarioBatchStatus:
+    """A ScenarioBatch's status without its results: those are read once, into domain records
+    (:attr:`~simtest_operator.operator.observed.BatchView.results`)."""
+    return ScenarioBatchStatus.model_construct(**_common(wire))
+
+
+def _common(wire: Raw) -> dict[str, Any]:
+    fields: dict[str, Any] = {}
+    for name, alias in _COUNTERS:
+        if isinstance(count := wire.get(alias), int):
+            fields[name] = int(count)
+    phase = wire.get("phase")
+    if isinstance(phase, str) and phase in Phase.__members__.values():
+        fields["phase"] = Phase(phase)
+    if isinstance(generation := wire.get("observedGeneration"), int):
+        fields["observed_generation"] = int(generation)
+    if isinstance(progress := wire.get("progress"), str):
+        fields["progress"] = progress
+    for name, alias in (("start_time", "startTime"), ("completion_time", "completionTime")):
+        if (moment := timestamp(wire.get(alias))) is not None:
+            fields[name] = moment
+    conditions = [c for c in map(_condition, wire.get("conditions") or ()) if c is not None]
+    if conditions:
+        fields["conditions"] = conditions
+    return fields
+
+
+def _condition(wire: Any) -> Condition | None:
+    if not isinstance(wire, Mapping):
+        return None
+    status = wire.get("status")
+    fields: dict[str, Any] = {
+        "type": str(wire.get("type", "")),
+        "status": ConditionStatus(str(status))
+        if status in ConditionStatus.__members__.values()
+        else ConditionStatus.UNKNOWN,
+        "reason": str(wire.get("reason", "")),
+        "message": str(wire.get("message") or ""),
+    }
+    fields["last_transition_time"] = timestamp(wire.get("lastTransitionTime")) or _UNKNOWN_TIME
+    if isinstance(generation := wire.get("observedGeneration"), int):
+        fields["observed_generation"] = int(generation)
+    return Condition.model_construct(**fields)
+
+
+def counts(status: Counters) -> dict[str, int]:
+    """The counters the status holds (absent ones left out), by wire name."""
+    return {
+        alias: getattr(status, name) for name, alias in _COUNTERS if name in status.model_fields_set
+    }
+
+
+def condition(status: TestCampaignStatus | ScenarioBatchStatus, kind: str) -> Condition | None:
+    """The condition of type ``kind``, if any."""
+    return next((c for c in status.conditions if c.type == kind), None)
