@@ -9,7 +9,7 @@ import math
 import pytest
 
 from simtest_operator.openscenario import model
-from simtest_operator.sim.conditions import Conditions
+from simtest_operator.sim.condition_checks import Conditions
 from tests.sim.worlds import Bench, lane, speed, teleport
 
 RADIUS = 50.0

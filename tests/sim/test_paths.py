@@ -11,8 +11,8 @@ import pytest
 
 from simtest_operator.openscenario import model
 from simtest_operator.sim import nurbs, shapes
-from simtest_operator.sim.paths import build
-from simtest_operator.sim.positions import Placement
+from simtest_operator.sim.placements import Placement
+from simtest_operator.sim.sampled_paths import build
 
 ORIGIN = Placement(x=0.0, y=0.0, z=0.0, heading=0.0)
 

@@ -4,7 +4,7 @@ reads it (exact state string, unknown signals match nothing)."""
 from __future__ import annotations
 
 from simtest_operator.openscenario import model
-from simtest_operator.sim.conditions import Conditions
+from simtest_operator.sim.condition_checks import Conditions
 from tests.sim.worlds import Bench
 
 

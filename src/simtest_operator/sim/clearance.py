@@ -14,7 +14,7 @@ import math
 
 from simtest_operator.errors import ScenarioError
 from simtest_operator.openscenario import model
-from simtest_operator.sim import measures, positions
+from simtest_operator.sim import measures, placements
 from simtest_operator.sim.actors import Actor
 from simtest_operator.sim.lateral import lanes_between
 from simtest_operator.sim.world import World
@@ -24,7 +24,7 @@ def is_clear(world: World, actor: Actor, condition: model.RelativeClearanceCondi
     """The condition's truth for ``actor`` as the triggering entity."""
     if world.roads is None:
         return True
-    road_id, s, _, direction = positions.road_coordinates(world, actor)
+    road_id, s, _, direction = placements.road_coordinates(world, actor)
     own_lane = world.current_lane(actor)
     if not _lanes_available(world, road_id, s, own_lane, direction, condition):
         return False
@@ -36,7 +36,7 @@ def is_clear(world: World, actor: Actor, condition: model.RelativeClearanceCondi
         if other is actor or not other.placed:
             continue
         try:
-            other_road, _, _, _ = positions.road_coordinates(world, other)
+            other_road, _, _, _ = placements.road_coordinates(world, other)
         except ScenarioError:
             continue  # not on any road: not in the area
         if other_road != road_id:

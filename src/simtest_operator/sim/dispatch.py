@@ -17,7 +17,7 @@ from collections.abc import Callable, Sequence
 
 from simtest_operator.errors import ScenarioError
 from simtest_operator.openscenario import model
-from simtest_operator.sim import carla, positions, routes, routing
+from simtest_operator.sim import carla, placements, positions, route_legs, route_planning
 from simtest_operator.sim.actors import Actor, Domain, Mode
 from simtest_operator.sim.backends import TrafficHost
 from simtest_operator.sim.following import DistanceRun, SynchronizeRun
@@ -159,7 +159,7 @@ class Dispatcher:
             self._ignore(body.kind)
             return Done()
         if isinstance(body, model.Unsupported):
-            raise positions.unsupported(body)
+            raise placements.unsupported(body)
         raise ScenarioError(f"{type(body).__name__} is not a global action")
 
     def remove(self, actor: Actor) -> None:
@@ -173,12 +173,12 @@ class Dispatcher:
     def start_private(self, actor: Actor, body: model.AnyAction) -> Run:
         world = self._world
         if isinstance(body, model.Unsupported):
-            raise positions.unsupported(body)
+            raise placements.unsupported(body)
         if isinstance(body, model.IgnoredAction):
             self._ignore(body.kind)
             return Done(actor)
         if actor.obj.unsupported is not None:
-            raise positions.unsupported(actor.obj.unsupported)
+            raise placements.unsupported(actor.obj.unsupported)
         if isinstance(body, model.TeleportAction):
             self.teleport(actor, positions.resolve(world, body.position))
             return Done(actor)
@@ -188,16 +188,17 @@ class Dispatcher:
         if isinstance(body, model.AssignControllerAction):
             controller = body.controller
             if isinstance(controller, model.Unsupported):
-                raise positions.unsupported(controller)
+                raise placements.unsupported(controller)
             self._assign(actor, controller, body)
             return Done(actor)
         if isinstance(body, model.AssignRouteAction):
             route = body.route
             if isinstance(route, model.Unsupported):
-                raise positions.unsupported(route)
+                raise placements.unsupported(route)
             self._route(actor, [wp.position for wp in route.waypoints[:1]])
             if world.roads is not None:
-                leg_roads = [leg.road_id for leg in routes.legs(world, route)]
+                legs = route_legs.legs(world, route, lambda p: positions.resolve(world, p))
+                leg_roads = [leg.road_id for leg in legs]
                 approach = list(actor.route)
                 if approach and leg_roads and approach[-1] == leg_roads[0]:
                     approach.pop()
@@ -257,7 +258,7 @@ class Dispatcher:
                 mine[domain] = run
         return run
 
-    def teleport(self, actor: Actor, placement: positions.Placement) -> None:
+    def teleport(self, actor: Actor, placement: placements.Placement) -> None:
         world = self._world
         actor.x, actor.y, actor.z, actor.heading = (
             placement.x,
@@ -324,7 +325,9 @@ class Dispatcher:
             if coord is not None:
                 goals.append(coord.road_id)
         if actor.mode is Mode.ROAD and actor.road_id is not None:
-            roads_on_route = routing.plan_through(roads, (actor.road_id, actor.direction), goals)
+            roads_on_route = route_planning.plan_through(
+                roads, (actor.road_id, actor.direction), goals
+            )
         else:
             roads_on_route = goals
         actor.route = tuple(roads_on_route)

@@ -24,7 +24,7 @@ from simtest_operator.openscenario.loading import CARLA_PREFIX
 from simtest_operator.sim import carla, motion, perception
 from simtest_operator.sim.actors import Actor, Domain, Mode
 from simtest_operator.sim.backends import ActorSpec, Backend, BackendConfig
-from simtest_operator.sim.conditions import Conditions
+from simtest_operator.sim.condition_checks import Conditions
 from simtest_operator.sim.dispatch import Dispatcher
 from simtest_operator.sim.storyboard import Storyboard
 from simtest_operator.sim.sut import Pilot, PilotView

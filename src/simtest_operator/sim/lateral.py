@@ -13,7 +13,7 @@ import math
 
 from simtest_operator.errors import ScenarioError
 from simtest_operator.openscenario import model
-from simtest_operator.sim import positions
+from simtest_operator.sim import placements
 from simtest_operator.sim.actors import Actor, Mode
 from simtest_operator.sim.runs import LATERAL, Run, shape_fraction
 from simtest_operator.sim.world import World
@@ -55,7 +55,7 @@ class LaneChangeRun(Run):
             target_lane = target.lane_id
         else:
             ref = world.actor(target.entity_ref)
-            target_lane = positions.add_lanes(world.current_lane(ref), target.value)
+            target_lane = placements.add_lanes(world.current_lane(ref), target.value)
         self._delta = lanes_between(actor.lane_id, target_lane)
         self._target_offset = action.target_lane_offset or 0.0
         self._offset0 = actor.offset
@@ -76,7 +76,7 @@ class LaneChangeRun(Run):
 
     def _target_lane(self) -> int:
         assert self.actor is not None
-        return positions.add_lanes(self.actor.lane_id, self._delta)
+        return placements.add_lanes(self.actor.lane_id, self._delta)
 
     def _relative_target(self, world: World, road_id: str) -> float:
         assert self.actor is not None

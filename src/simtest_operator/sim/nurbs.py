@@ -15,8 +15,8 @@ from collections.abc import Sequence
 
 from simtest_operator.errors import ScenarioError
 from simtest_operator.openscenario import model
-from simtest_operator.sim.paths import Path, build
-from simtest_operator.sim.positions import Placement
+from simtest_operator.sim.placements import Placement
+from simtest_operator.sim.sampled_paths import Path, build
 
 STEPS_PER_METRE = 2.0
 """Curve samples per metre of control polygon."""

@@ -13,23 +13,21 @@ from __future__ import annotations
 import bisect
 import dataclasses
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 
 from simtest_operator.openscenario import model
-from simtest_operator.sim import nurbs, positions
-from simtest_operator.sim.paths import Path, build
-from simtest_operator.sim.positions import Placement
+from simtest_operator.sim import nurbs, placements
+from simtest_operator.sim.placements import Placement
+from simtest_operator.sim.sampled_paths import Path, build
 
 SAMPLE_STEP = 0.5
 """Sampling distance (m) along curved shapes."""
 
-Resolver = Callable[[model.Position], Placement]
 
-
-def sample(shape: model.Shape, resolve: Resolver, start: Placement) -> Path:
+def sample(shape: model.Shape, resolve: placements.Resolver, start: Placement) -> Path:
     """Sample ``shape``; ``start`` is the following entity's pose at the action start."""
     if isinstance(shape, model.Unsupported):
-        raise positions.unsupported(shape)
+        raise placements.unsupported(shape)
     if isinstance(shape, model.Polyline):
         placed = [resolve(vertex.position) for vertex in shape.vertices]
         return build([(p.x, p.y) for p in placed], [v.time for v in shape.vertices])

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 
 from simtest_operator.openscenario import model
-from simtest_operator.sim import positions, shapes
+from simtest_operator.sim import placements, positions, shapes
 from simtest_operator.sim.actors import Actor, Mode
 from simtest_operator.sim.runs import BOTH, LATERAL, Run
 from simtest_operator.sim.world import World
@@ -25,8 +25,8 @@ class PathRun(Run):
     def __init__(self, world: World, actor: Actor, action: model.FollowTrajectoryAction) -> None:
         trajectory = action.trajectory
         if isinstance(trajectory, model.Unsupported):
-            raise positions.unsupported(trajectory)
-        start = positions.Placement(x=actor.x, y=actor.y, z=actor.z, heading=actor.heading)
+            raise placements.unsupported(trajectory)
+        start = placements.Placement(x=actor.x, y=actor.y, z=actor.z, heading=actor.heading)
         self._path = shapes.sample(trajectory.shape, lambda p: positions.resolve(world, p), start)
         self._timing = action.timing if self._path.times is not None else None
         if self._timing is not None and action.following_mode is model.FollowingMode.FOLLOW:

@@ -1,8 +1,8 @@
 """Triggers: condition edges, delays, condition groups and triggering-entity rules.
 
 A trigger is an OR over condition groups, a group an AND over conditions (standard, 6.4). Each
-condition turns a raw truth value (computed by :mod:`~simtest_operator.sim.conditions`) into its
-result through
+condition turns a raw truth value (computed by :mod:`~simtest_operator.sim.condition_checks`)
+into its result through
 
 - its **edge**: ``none`` passes the value through; ``rising``/``falling``/``risingOrFalling`` are
   true only in the evaluation where the value changed that way since the previous evaluation (the

@@ -1,9 +1,9 @@
-"""Routes as paths: the legs of road a route runs along, and positions along them.
+"""Route legs: the stretches of road a route runs along, and positions along them.
 
 A route's path starts at its first waypoint and runs in that waypoint's travel direction (the
 driving direction of its lane, or the heading given); between waypoints it follows the road
-sequence :mod:`~simtest_operator.sim.routing` finds; after the last waypoint it continues to the
-end of that road. ``pathS`` of a RoutePosition is measured along these legs.
+sequence :mod:`~simtest_operator.sim.route_planning` finds; after the last waypoint it continues
+to the end of that road. ``pathS`` of a RoutePosition is measured along these legs.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ import math
 
 from simtest_operator.errors import ScenarioError
 from simtest_operator.openscenario import model
-from simtest_operator.sim import positions, routing
+from simtest_operator.sim import placements, route_planning
 from simtest_operator.sim.world import World
 
 
@@ -31,8 +31,10 @@ class Leg:
         return abs(self.s_to - self.s_from)
 
 
-def _anchor(world: World, position: model.Position) -> tuple[str, float, int]:
-    placement = positions.resolve(world, position)
+def _anchor(
+    world: World, position: model.Position, place: placements.Resolver
+) -> tuple[str, float, int]:
+    placement = place(position)
     if placement.lane is not None:
         lane = placement.lane
         return lane.road_id, lane.s, lane.direction
@@ -43,24 +45,24 @@ def _anchor(world: World, position: model.Position) -> tuple[str, float, int]:
     return coord.road_id, coord.s, 1 if aligned else -1
 
 
-def legs(world: World, route: model.Route) -> list[Leg]:
-    """The legs of ``route`` (at least one)."""
+def legs(world: World, route: model.Route, place: placements.Resolver) -> list[Leg]:
+    """The legs of ``route`` (at least one); ``place`` places its waypoints."""
     roads = world.roads
     if roads is None:
         raise ScenarioError("routes need a road network", element="Route", line=route.line)
     if not route.waypoints:
         raise ScenarioError("route has no waypoints", element="Route", line=route.line)
-    road_id, s, direction = _anchor(world, route.waypoints[0].position)
+    road_id, s, direction = _anchor(world, route.waypoints[0].position, place)
     result: list[Leg] = []
     for waypoint in route.waypoints[1:]:
-        goal_road, goal_s, goal_direction = _anchor(world, waypoint.position)
+        goal_road, goal_s, goal_direction = _anchor(world, waypoint.position, place)
         if goal_road == road_id and (goal_s - s) * direction >= 0.0:
             result.append(Leg(road_id=road_id, direction=direction, s_from=s, s_to=goal_s))
             s = goal_s
             continue
-        path = routing.plan(roads, (road_id, direction), goal_road, goal_direction)
+        path = route_planning.plan(roads, (road_id, direction), goal_road, goal_direction)
         if path is None:
-            path = routing.plan(roads, (road_id, direction), goal_road)
+            path = route_planning.plan(roads, (road_id, direction), goal_road)
         if path is None:
             raise ScenarioError(
                 f"no road path from road {road_id} to road {goal_road}",
@@ -93,18 +95,20 @@ def at_path_s(route_legs: list[Leg], path_s: float) -> tuple[str, float, int]:
     return last.road_id, last.s_to, last.direction
 
 
-def resolve(world: World, position: model.RoutePosition) -> positions.Placement:
-    """World pose of a RoutePosition."""
+def resolve(
+    world: World, position: model.RoutePosition, place: placements.Resolver
+) -> placements.Placement:
+    """World pose of a RoutePosition; ``place`` places the route's waypoints."""
     route = position.route
     if isinstance(route, model.Unsupported):
-        raise positions.unsupported(route)
+        raise placements.unsupported(route)
     where = position.in_route
     if isinstance(where, model.FromCurrentEntity):
         actor = world.actor(where.entity_ref)
-        return positions.Placement(x=actor.x, y=actor.y, z=actor.z, heading=actor.heading)
-    road_id, s, direction = at_path_s(legs(world, route), where.path_s)
+        return placements.Placement(x=actor.x, y=actor.y, z=actor.z, heading=actor.heading)
+    road_id, s, direction = at_path_s(legs(world, route, place), where.path_s)
     if isinstance(where, model.FromLaneCoordinates):
-        return positions.lane_placement(
+        return placements.lane_placement(
             world,
             road_id,
             where.lane_id,
@@ -113,4 +117,4 @@ def resolve(world: World, position: model.RoutePosition) -> positions.Placement:
             orientation=position.orientation,
             direction=direction,
         )
-    return positions.road_placement(world, road_id, s, where.t, direction, position.orientation)
+    return placements.road_placement(world, road_id, s, where.t, direction, position.orientation)

@@ -14,7 +14,7 @@ from collections.abc import Callable
 from simtest_operator import geometry
 from simtest_operator.errors import ScenarioError
 from simtest_operator.openscenario import model
-from simtest_operator.sim import clearance, measures, positions
+from simtest_operator.sim import clearance, measures, placements, positions
 from simtest_operator.sim.actors import Actor
 from simtest_operator.sim.triggers import Truth
 from simtest_operator.sim.world import World
@@ -114,7 +114,7 @@ class Conditions:
             return _compare_typed(current, condition.rule, condition.value)
         if isinstance(condition, model.TrafficSignalCondition):
             return world.signals.get(condition.name) == condition.state
-        raise positions.unsupported(condition)
+        raise placements.unsupported(condition)
 
     # --- entity conditions --------------------------------------------------------------------
 
@@ -122,7 +122,7 @@ class Conditions:
         world = self._world
         actor = world.actor(name)
         if isinstance(condition, model.Unsupported):
-            raise positions.unsupported(condition)
+            raise placements.unsupported(condition)
         if not actor.placed:
             return False
         if isinstance(condition, model.SpeedCondition):
