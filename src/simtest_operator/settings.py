@@ -1,7 +1,10 @@
 """Settings: one root object of small topic groups, built once at the edge and passed down.
 
-Only :func:`Settings.from_env` reads the environment (prefix ``SIMTEST_``); inner packages receive
-the object as an argument and never look at ``os.environ`` themselves.
+The shape is kopf's ``OperatorSettings``: a root (:class:`Settings`) of frozen topic dataclasses,
+each field documented with its default and why. Only :meth:`Settings.from_env` reads the
+environment (``SIMTEST_*``, and ``SIMTEST_OPERATOR_*`` for the operator's topic), once per entry
+point: ``simtest`` commands, ``simtest operator`` and the runner pod's entrypoint. Inner packages
+receive the object (or one topic of it) as an argument and never look at ``os.environ``.
 """
 
 from __future__ import annotations
@@ -12,6 +15,8 @@ from collections.abc import Mapping
 from pathlib import Path
 
 ENV_PREFIX = "SIMTEST_"
+OPERATOR_PREFIX = "SIMTEST_OPERATOR_"
+"""Prefix of the operator's installation knobs (the chart sets them; flags override them)."""
 
 
 def _default_cache_dir(env: Mapping[str, str]) -> Path:
@@ -59,6 +64,85 @@ class SimulationSettings:
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class OperatorSettings:
+    """How the operator runs: knobs of the installation, not of a campaign."""
+
+    templates_dir: Path = Path("helm-templates")
+    """Root of the environment templates (``helm-templates/``); ``SIMTEST_OPERATOR_TEMPLATES``."""
+    sources_dir: Path = Path()
+    """Folder relative ``path`` scenario sources are resolved against (the operator's scenario
+    volume); ``SIMTEST_OPERATOR_SOURCES``."""
+    cache_dir: Path = Path("/tmp/simtest-operator-cache")
+    """Downloads, git mirrors and unpacked archives of resolution; ``SIMTEST_OPERATOR_CACHE``."""
+    scenario_claim: str = ""
+    """PVC holding ``path`` sources, mounted read-only into simulator pods at ``sources_dir``
+    (``SIMTEST_OPERATOR_SCENARIO_CLAIM``); empty: none, and a pod cannot read ``file://``
+    sources (its scenarios end ``Error`` with a hint to set this)."""
+    status_interval: float = 1.0
+    """Minimum seconds between two campaign status writes that change counters only; phase and
+    condition changes are written at once. Fewer writes, same end state."""
+    event_interval: float = 10.0
+    """Minimum seconds between two events on the same object (terminal phases always post)."""
+    missing_pod_grace: float = 10.0
+    """Seconds a pod recorded as created may be missing from the cache before it counts as
+    deleted."""
+    backstop_grace: float = 30.0
+    """Seconds past a pod's activeDeadlineSeconds before the operator ends the run as Timeout
+    itself (when no kubelet enforces the deadline)."""
+    node_not_ready_grace: float = 60.0
+    """Seconds a simulator pod's node may be NotReady (kubelet stopped, node cut off) before its
+    scenarios end Error and are retried on another node; the pod is force-deleted."""
+    keep_finished_environments: bool = False
+    """Keep SimEnvironments after their results are folded into the batch (debugging); by
+    default they are deleted so live objects stay bounded by the in-flight window."""
+    prefetch_per_node: int = 1
+    """Window mode with a derived window (no maxParallel): pods created beyond the free
+    simulator slots, per usable node. They wait in Pending and the scheduler starts one the
+    moment a slot frees, without a round trip through the operator. 0 turns it off."""
+    max_starts_per_step: int = 64
+    """Environments one step may create; the rest start in the next step, right after. Keeps a
+    step short when a large window opens at once (a 150-slot ramp), so results that arrive
+    meanwhile are folded without waiting for hundreds of writes."""
+    reuse_queue: int = 8
+    """Scenarios per warm simulator with isolation ``Reuse`` (bounded by the 4 KiB termination
+    message that carries their results)."""
+    coalesce_seconds: float = 0.02
+    """How long a campaign loop waits after a wake-up for more events to arrive."""
+    api_workers: int = 16
+    """Threads for Kubernetes API calls."""
+    metrics_port: int = 8080
+    """Port of ``/metrics``, ``/healthz`` and ``/readyz``; 0 disables the server."""
+    leader_election: bool = False
+    """Run campaign loops only while holding the Lease ``lease_name`` (two or more replicas);
+    ``SIMTEST_OPERATOR_LEADER_ELECTION``. Off: this process always acts (one replica)."""
+    lease_name: str = "simtest-operator"
+    """Name of the coordination.k8s.io Lease; ``SIMTEST_OPERATOR_LEASE_NAME``."""
+    lease_namespace: str = ""
+    """Namespace of the Lease (the operator's own); empty: the first watched namespace, else
+    ``default``; ``SIMTEST_OPERATOR_LEASE_NAMESPACE``."""
+    identity: str = ""
+    """Holder identity in the Lease (the pod name); empty: ``<hostname>_<pid>``;
+    ``SIMTEST_OPERATOR_IDENTITY``."""
+    lease_duration: float = 15.0
+    """Seconds without a renewal before a follower takes over (client-go's default)."""
+    renew_deadline: float = 10.0
+    """Seconds the leader keeps acting without a successful renewal (client-go's default)."""
+    retry_period: float = 2.0
+    """Seconds between two acquire/renew attempts (client-go's default)."""
+    helmfile_image: str = ""
+    """Image of the ``provisioner: Helmfile`` Jobs (helm, helmfile and ``charts/``);
+    ``SIMTEST_OPERATOR_HELMFILE_IMAGE``. Empty: campaigns asking for the Helmfile provisioner end
+    their environments as Error with a reason saying so."""
+    helmfile_role: str = ""
+    """ClusterRole bound (per campaign, in its namespace) to the helmfile Jobs' ServiceAccount;
+    ``SIMTEST_OPERATOR_HELMFILE_ROLE`` (the chart's ``<release>-helmfile-provisioner``)."""
+    helmfile_node_selector: Mapping[str, str] = dataclasses.field(default_factory=dict)
+    """Node selector of the helmfile Jobs (``key=value,...``;
+    ``SIMTEST_OPERATOR_HELMFILE_NODE_SELECTOR``): provisioning needs no simulator node, and may
+    need nodes that reach chart registries."""
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
 class Settings:
     """The root settings object."""
 
@@ -68,10 +152,18 @@ class Settings:
     """User map libraries (``SIMTEST_MAP_PATH``, folders separated by ``:``): folders of
     ``<name>.xodr`` a scenario names with ``<LogicFile filepath="<name>"/>``, searched before
     the CARLA towns shipped with the product."""
+    operator: OperatorSettings = dataclasses.field(default_factory=OperatorSettings)
+    """The operator's knobs (``SIMTEST_OPERATOR_*``); only ``simtest operator`` uses them."""
 
     @classmethod
-    def from_env(cls, env: Mapping[str, str] | None = None) -> Settings:
-        """Build settings from ``SIMTEST_*`` variables (defaults for the rest)."""
+    def from_env(
+        cls,
+        env: Mapping[str, str] | None = None,
+        *,
+        operator_flags: Mapping[str, object] | None = None,
+    ) -> Settings:
+        """Defaults, then ``SIMTEST_*`` variables, then ``operator_flags`` (the CLI's flags of
+        ``simtest operator``; a None value means the flag was not given)."""
         env = os.environ if env is None else env
         cache_root = env.get(f"{ENV_PREFIX}CACHE_DIR")
         defaults = SimulationSettings()
@@ -79,6 +171,8 @@ class Settings:
             step_length=float(env.get(f"{ENV_PREFIX}STEP_LENGTH", defaults.step_length)),
             seed=int(env.get(f"{ENV_PREFIX}SEED", defaults.seed)),
         )
+        operator = _operator(env)
+        flags = {k: v for k, v in (operator_flags or {}).items() if v is not None}
         return cls(
             cache=CacheSettings(
                 root=Path(cache_root) if cache_root else _default_cache_dir(env),
@@ -87,4 +181,60 @@ class Settings:
             maps=tuple(
                 Path(p) for p in env.get(f"{ENV_PREFIX}MAP_PATH", "").split(os.pathsep) if p
             ),
+            operator=dataclasses.replace(operator, **flags) if flags else operator,  # type: ignore[arg-type]
         )
+
+
+def _operator(env: Mapping[str, str]) -> OperatorSettings:
+    """The operator's topic from ``SIMTEST_OPERATOR_*`` (unset or empty: the default)."""
+    values: dict[str, object] = {}
+    for name, key, kind in (
+        ("templates_dir", "TEMPLATES", Path),
+        ("sources_dir", "SOURCES", Path),
+        ("cache_dir", "CACHE", Path),
+        ("status_interval", "STATUS_INTERVAL", float),
+        ("event_interval", "EVENT_INTERVAL", float),
+        ("missing_pod_grace", "MISSING_POD_GRACE", float),
+        ("backstop_grace", "BACKSTOP_GRACE", float),
+        ("node_not_ready_grace", "NODE_NOT_READY_GRACE", float),
+        ("reuse_queue", "REUSE_QUEUE", int),
+        ("max_starts_per_step", "MAX_STARTS_PER_STEP", int),
+        ("prefetch_per_node", "PREFETCH", int),
+        ("metrics_port", "METRICS_PORT", int),
+        ("lease_name", "LEASE_NAME", str),
+        ("lease_namespace", "LEASE_NAMESPACE", str),
+        ("identity", "IDENTITY", str),
+        ("lease_duration", "LEASE_DURATION", float),
+        ("renew_deadline", "RENEW_DEADLINE", float),
+        ("retry_period", "RETRY_PERIOD", float),
+    ):
+        raw = env.get(OPERATOR_PREFIX + key)
+        if raw:
+            values[name] = kind(raw)
+    if env.get(OPERATOR_PREFIX + "KEEP_ENVIRONMENTS", "").lower() in ("1", "true", "yes"):
+        values["keep_finished_environments"] = True
+    if env.get(OPERATOR_PREFIX + "LEADER_ELECTION", "").lower() in ("1", "true", "yes"):
+        values["leader_election"] = True
+    for name, key in (("helmfile_image", "HELMFILE_IMAGE"), ("helmfile_role", "HELMFILE_ROLE")):
+        if env.get(OPERATOR_PREFIX + key):
+            values[name] = env[OPERATOR_PREFIX + key]
+    selector = env.get(OPERATOR_PREFIX + "HELMFILE_NODE_SELECTOR", "")
+    if selector.strip():
+        values["helmfile_node_selector"] = _pairs(selector)
+    claim = env.get(OPERATOR_PREFIX + "SCENARIO_CLAIM")
+    if claim:
+        values["scenario_claim"] = claim
+    return OperatorSettings(**values)  # type: ignore[arg-type]
+
+
+def _pairs(text: str) -> dict[str, str]:
+    """``a=b,c=d`` as a mapping (blank items ignored)."""
+    pairs = {}
+    for item in text.split(","):
+        if not item.strip():
+            continue
+        key, sep, value = item.partition("=")
+        if not sep or not key.strip():
+            raise ValueError(f"{OPERATOR_PREFIX}HELMFILE_NODE_SELECTOR: {item!r} is not key=value")
+        pairs[key.strip()] = value.strip()
+    return pairs

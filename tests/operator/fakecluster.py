@@ -28,9 +28,9 @@ from simtest_operator.operator.actions import (
     Plan,
     Provision,
 )
-from simtest_operator.operator.configuration import OperatorConfig
 from simtest_operator.render import TemplateLibrary, render_environment
 from simtest_operator.scenarios import FrozenList, PinnedScenario
+from simtest_operator.settings import OperatorSettings
 
 REPO = Path(__file__).resolve().parents[2]
 T0 = datetime.datetime(2030, 1, 1, tzinfo=datetime.UTC)
@@ -94,13 +94,13 @@ class FakeCluster:
         *,
         nodes: Mapping[str, int] | None = None,
         script: ScriptFn = passing,
-        config: OperatorConfig | None = None,
+        config: OperatorSettings | None = None,
     ) -> None:
         self.now = T0
         self.objects: dict[tuple[Kind | str, str], dict[str, Any]] = {}
         self.nodes = dict(nodes if nodes is not None else {"n0": 3, "n1": 3, "n2": 3})
         self.script = script
-        self.config = config or OperatorConfig(templates_dir=REPO / "helm-templates")
+        self.config = config or OperatorSettings(templates_dir=REPO / "helm-templates")
         self.library = TemplateLibrary(self.config.templates_dir)
         self._uids = itertools.count(1)
         self._rv = itertools.count(1)

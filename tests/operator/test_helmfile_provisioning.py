@@ -24,10 +24,10 @@ import pytest
 
 from simtest_operator.operator import helmfileteardown, jobviews, observed, provisioning, requests
 from simtest_operator.operator.actions import Delete, Emit, Kind, PatchStatus, RunHelmfile
-from simtest_operator.operator.configuration import OperatorConfig
 from simtest_operator.operator.environments import Limits, Phase
 from simtest_operator.render import EnvironmentRequest, RenderedEnvironment
 from simtest_operator.render.rendering import run_spec_for
+from simtest_operator.settings import OperatorSettings
 from simtest_operator.verdicts import Verdict
 
 T0 = datetime.datetime(2030, 1, 1, tzinfo=datetime.UTC)
@@ -39,7 +39,7 @@ LIMITS = Limits(
     backstop_grace=30,
     missing_grace=10,
 )
-CONFIG = OperatorConfig(
+CONFIG = OperatorSettings(
     helmfile_image="simtest-helmfile:1",
     helmfile_role="op-helmfile-provisioner",
     helmfile_node_selector={"pool": "system"},
@@ -281,12 +281,12 @@ def test_sync_action_builds_job_config_map_identities_and_status() -> None:
 @pytest.mark.parametrize(
     ("config", "helmfile", "words"),
     [
-        (OperatorConfig(), HELMFILE, "not enabled in this operator"),
+        (OperatorSettings(), HELMFILE, "not enabled in this operator"),
         (CONFIG, None, "has no helmfile.yaml.j2"),
     ],
 )
 def test_sync_impossible_ends_the_environment_as_error(
-    config: OperatorConfig, helmfile: str | None, words: str
+    config: OperatorSettings, helmfile: str | None, words: str
 ) -> None:
     spec = campaign().spec
     assert spec is not None

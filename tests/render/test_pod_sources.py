@@ -21,9 +21,10 @@ import pytest
 from simtest_operator import render
 from simtest_operator.api import v1alpha1
 from simtest_operator.errors import RenderError
-from simtest_operator.operator import configuration, observed, requests
+from simtest_operator.operator import observed, requests
 from simtest_operator.render import runspecs
 from simtest_operator.scenarios import GraphqlSource, Needs, RestSource, SecretRef
+from simtest_operator.settings import OperatorSettings
 from tests.render.cases import CASES, request
 
 REPO = Path(__file__).resolve().parents[2]
@@ -115,7 +116,7 @@ def test_the_operator_requests_what_the_scenarios_need() -> None:
         render.ScenarioRef(id="e.xosc", source="https://files/e.xosc", sha256="03" * 32),
     )
     view = dataclasses.replace(probe_view(), scenarios=refs)
-    config = configuration.OperatorConfig(templates_dir=REPO / "helm-templates")
+    config = OperatorSettings(templates_dir=REPO / "helm-templates")
     built = requests.environment_request(campaign_spec(), view, config=config)
     assert built.source_needs == Needs(
         config_maps=("suite-a",),

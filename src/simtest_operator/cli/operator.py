@@ -1,7 +1,8 @@
 """``simtest operator``: run the Kubernetes operator in the foreground.
 
-Flags override the ``SIMTEST_OPERATOR_*`` variables the chart sets (``operator.configuration``).
-The operator package (and kopf with it) is imported only when the command runs.
+The settings are read once here: flags override the ``SIMTEST_OPERATOR_*`` variables the chart
+sets (``settings.OperatorSettings``). The operator package (and kopf with it) is imported only
+when the command runs.
 """
 
 from __future__ import annotations
@@ -9,6 +10,8 @@ from __future__ import annotations
 from pathlib import Path
 
 import click
+
+from simtest_operator.settings import Settings
 
 
 @click.command("operator")
@@ -76,8 +79,8 @@ def operator(
     """Run the simtest operator: TestCampaigns in, simulator pods and verdicts out."""
     from simtest_operator import operator as operating  # the operator's stack loads only here
 
-    config = operating.OperatorConfig.from_env(
-        overrides={
+    settings = Settings.from_env(
+        operator_flags={
             "templates_dir": templates,
             "sources_dir": sources,
             "cache_dir": cache,
@@ -87,4 +90,4 @@ def operator(
             "identity": identity,
         }
     )
-    operating.run(config, namespaces=namespaces, kubeconfig=kubeconfig, verbose=verbose)
+    operating.run(settings.operator, namespaces=namespaces, kubeconfig=kubeconfig, verbose=verbose)

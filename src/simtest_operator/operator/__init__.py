@@ -13,15 +13,15 @@ import threading
 from collections.abc import Sequence
 from pathlib import Path
 
-from simtest_operator.operator.configuration import OperatorConfig
 from simtest_operator.operator.previewing import environment_request
 from simtest_operator.operator.submitting import CampaignClient, connect
+from simtest_operator.settings import OperatorSettings
 
-__all__ = ["CampaignClient", "OperatorConfig", "connect", "environment_request", "run"]
+__all__ = ["CampaignClient", "connect", "environment_request", "run"]
 
 
 def run(
-    config: OperatorConfig,
+    config: OperatorSettings,
     *,
     namespaces: Sequence[str] = (),
     kubeconfig: Path | None = None,

@@ -22,7 +22,7 @@ from simtest_operator.api.v1alpha1 import GROUP, VERSION
 from simtest_operator.operator import jobviews, names, observed, runtime
 from simtest_operator.operator.caching import ALL_NODES, Cache
 from simtest_operator.operator.client import Credentials, load_credentials
-from simtest_operator.operator.configuration import OperatorConfig
+from simtest_operator.settings import Settings
 
 log = logging.getLogger(__name__)
 CAMPAIGN_LABEL = {names.LABEL_CAMPAIGN: kopf.PRESENT}
@@ -144,7 +144,7 @@ async def startup(settings: kopf.OperatorSettings, memo: Any, **kwargs: Any) -> 
     settings.watching.server_timeout = 600
     config = memo.get("config")
     if config is None:
-        config = OperatorConfig.from_env()
+        config = Settings.from_env().operator  # `kopf run -m`: no CLI read it
     cache = Cache(
         campaigns=kwargs["campaign_index"],
         batches=kwargs["batch_index"],

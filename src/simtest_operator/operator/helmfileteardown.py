@@ -14,13 +14,13 @@ from simtest_operator.api.v1alpha1 import API_VERSION, TestCampaignSpec
 from simtest_operator.errors import RenderError
 from simtest_operator.operator import provisioning, requests
 from simtest_operator.operator.actions import Action, Delete, Emit, Kind, RunHelmfile
-from simtest_operator.operator.configuration import OperatorConfig
 from simtest_operator.operator.jobviews import JobView
 from simtest_operator.operator.observed import BatchView, EnvironmentView, PodView
 from simtest_operator.operator.provisioning import Renderer
 from simtest_operator.packaging import helmfilejobs
 from simtest_operator.packaging.helmfilejobs import Action as JobAction
 from simtest_operator.packaging.helmfilejobs import Owner
+from simtest_operator.settings import OperatorSettings
 
 
 def _applied(env: EnvironmentView, jobs: Mapping[str, JobView]) -> bool:
@@ -41,7 +41,7 @@ def teardown(
     jobs: Mapping[str, JobView],
     batch: BatchView | None,
     render: Renderer,
-    config: OperatorConfig,
+    config: OperatorSettings,
 ) -> tuple[Action, ...]:
     """Actions that destroy the releases of an ended (or deleted) Helmfile environment."""
     if not (env.finished or env.deleting) or not _applied(env, jobs):
@@ -96,7 +96,7 @@ def teardowns(
     pods: Mapping[str, PodView],
     batches: Iterable[BatchView],
     render: Renderer,
-    config: OperatorConfig,
+    config: OperatorSettings,
 ) -> tuple[Action, ...]:
     """Every teardown action of one planning step: destroy Jobs for ended environments, and the
     clean-up of finished destroy Jobs."""

@@ -27,12 +27,12 @@ from simtest_operator.operator.actions import Plan
 from simtest_operator.operator.applying import Applier
 from simtest_operator.operator.caching import Cache, CampaignKey
 from simtest_operator.operator.client import Client
-from simtest_operator.operator.configuration import OperatorConfig
 from simtest_operator.operator.expectations import Expectations
 from simtest_operator.operator.metrics import Metrics
 from simtest_operator.operator.observed import CampaignView
 from simtest_operator.operator.scenariolists import StoredList
 from simtest_operator.render import EnvironmentRequest, RenderedEnvironment
+from simtest_operator.settings import OperatorSettings
 
 log = logging.getLogger(__name__)
 
@@ -51,7 +51,7 @@ class Shared:
 
     client: Client
     cache: Cache
-    config: OperatorConfig
+    config: OperatorSettings
     metrics: Metrics
     render: Callable[[EnvironmentRequest], RenderedEnvironment]
     clock: Callable[[], datetime.datetime] = utcnow

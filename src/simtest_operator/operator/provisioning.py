@@ -34,7 +34,6 @@ from simtest_operator.api.v1alpha1 import API_VERSION, Provisioner, TestCampaign
 from simtest_operator.errors import RenderError
 from simtest_operator.operator import bodies, environments, names
 from simtest_operator.operator.actions import Action, Kind, PatchStatus, RunHelmfile
-from simtest_operator.operator.configuration import OperatorConfig
 from simtest_operator.operator.environments import Assessment, Limits, Phase
 from simtest_operator.operator.jobviews import JobView
 from simtest_operator.operator.observed import (
@@ -49,6 +48,7 @@ from simtest_operator.packaging import helmfilejobs
 from simtest_operator.packaging.helmfilejobs import Action as JobAction
 from simtest_operator.packaging.helmfilejobs import HelmfileJobRequest, Owner
 from simtest_operator.render import EnvironmentRequest, RenderedEnvironment
+from simtest_operator.settings import OperatorSettings
 from simtest_operator.verdicts import Verdict
 
 HELMFILE = Provisioner.HELMFILE.value
@@ -241,7 +241,7 @@ def job_request(
     helmfile: str,
     owner: Owner,
     spec: TestCampaignSpec,
-    config: OperatorConfig,
+    config: OperatorSettings,
 ) -> HelmfileJobRequest:
     return HelmfileJobRequest(
         environment=env.name,
@@ -262,7 +262,7 @@ def provision(
     env: EnvironmentView,
     rendered: RenderedEnvironment,
     *,
-    config: OperatorConfig,
+    config: OperatorSettings,
     campaign_uid: str,
     now: datetime.datetime,
 ) -> Action:

@@ -11,7 +11,6 @@ from typing import Any
 from simtest_operator.api import converting
 from simtest_operator.api.v1alpha1 import API_VERSION, TestCampaignSpec
 from simtest_operator.operator import names
-from simtest_operator.operator.configuration import OperatorConfig
 from simtest_operator.operator.observed import EnvironmentView
 from simtest_operator.render import (
     Amounts,
@@ -23,10 +22,11 @@ from simtest_operator.render import (
     SecretKey,
 )
 from simtest_operator.scenarios import needs
+from simtest_operator.settings import OperatorSettings
 
 
 def environment_request(
-    spec: TestCampaignSpec, env: EnvironmentView, *, config: OperatorConfig, run_key: str = ""
+    spec: TestCampaignSpec, env: EnvironmentView, *, config: OperatorSettings, run_key: str = ""
 ) -> EnvironmentRequest:
     """What the environment's pod renders from.
 
@@ -57,9 +57,11 @@ def environment_request(
         node_selector=dict(execution.node_selector),
         tolerations=tuple(t.to_wire() for t in execution.tolerations),
         artifacts=_artifacts(spec, env.campaign),
-        scenario_volume=config.scenario_volume,
+        scenario_volume=PvcVolume(claim_name=config.scenario_claim, read_only=True)
+        if config.scenario_claim
+        else None,
         scenario_mount=str(config.sources_dir.absolute())
-        if config.scenario_volume
+        if config.scenario_claim
         else "/scenarios",
         source_needs=needs(
             (s.source for s in env.scenarios),

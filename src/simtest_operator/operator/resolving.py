@@ -23,11 +23,11 @@ from simtest_operator.errors import ClusterError, RenderError, ScenarioError
 from simtest_operator.operator import bodies, names, observed, requests, scenariolists
 from simtest_operator.operator.actions import Kind
 from simtest_operator.operator.client import AlreadyExistsError, Client, NotFoundError
-from simtest_operator.operator.configuration import OperatorConfig
 from simtest_operator.operator.scenariolists import StoredList
 from simtest_operator.render import EnvironmentRequest, RenderedEnvironment, ScenarioRef
 from simtest_operator.runner import resolving as freezing
 from simtest_operator.scenarios import FetchContext, SecretRef
+from simtest_operator.settings import OperatorSettings
 
 
 class ResolutionError(ScenarioError):
@@ -49,7 +49,7 @@ async def resolve(
     client: Client,
     campaign: observed.CampaignView,
     *,
-    config: OperatorConfig,
+    config: OperatorSettings,
     render: Callable[[EnvironmentRequest], RenderedEnvironment],
 ) -> StoredList:
     """Freeze the campaign's list, check it renders, and store it (or read what is stored)."""
@@ -120,7 +120,7 @@ def _preflight(
     campaign: observed.CampaignView,
     stored: StoredList,
     *,
-    config: OperatorConfig,
+    config: OperatorSettings,
     render: Callable[[EnvironmentRequest], RenderedEnvironment],
 ) -> None:
     assert campaign.spec is not None

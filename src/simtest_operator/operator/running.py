@@ -18,11 +18,11 @@ from pathlib import Path
 import kopf
 
 from simtest_operator.operator.client import load_credentials
-from simtest_operator.operator.configuration import OperatorConfig
+from simtest_operator.settings import OperatorSettings
 
 
 def run(
-    config: OperatorConfig,
+    config: OperatorSettings,
     *,
     namespaces: Sequence[str] = (),
     kubeconfig: Path | None = None,

@@ -23,10 +23,10 @@ from simtest_operator.operator import leadership
 from simtest_operator.operator import metrics as metrics_module
 from simtest_operator.operator.caching import Cache, CampaignKey
 from simtest_operator.operator.client import Client, Credentials
-from simtest_operator.operator.configuration import OperatorConfig
 from simtest_operator.operator.loops import Loops, Shared
 from simtest_operator.operator.metrics import Metrics
 from simtest_operator.render import TemplateLibrary, render_environment
+from simtest_operator.settings import OperatorSettings
 
 log = logging.getLogger(__name__)
 
@@ -35,7 +35,7 @@ log = logging.getLogger(__name__)
 class Runtime:
     """Client, loops, metrics and the probe server of one operator process."""
 
-    config: OperatorConfig
+    config: OperatorSettings
     client: Client
     metrics: Metrics
     loops: Loops
@@ -88,7 +88,7 @@ class Runtime:
         await self.client.close()
 
 
-async def start(config: OperatorConfig, credentials: Credentials, cache: Cache) -> Runtime:
+async def start(config: OperatorSettings, credentials: Credentials, cache: Cache) -> Runtime:
     """Build and start the runtime."""
     metrics = Metrics()
     client = Client(credentials, on_request=metrics.count_request)

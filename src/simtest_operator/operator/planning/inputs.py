@@ -14,7 +14,6 @@ from collections.abc import Callable, Mapping, Sequence
 from simtest_operator.api.v1alpha1 import TestCampaignSpec
 from simtest_operator.operator import recording_results
 from simtest_operator.operator.batches import Layout
-from simtest_operator.operator.configuration import OperatorConfig
 from simtest_operator.operator.jobviews import JobView
 from simtest_operator.operator.observed import (
     BatchView,
@@ -26,6 +25,7 @@ from simtest_operator.operator.observed import (
 from simtest_operator.operator.scenariolists import StoredList
 from simtest_operator.render import EnvironmentRequest, RenderedEnvironment
 from simtest_operator.scenarios.pinned import PinnedScenario
+from simtest_operator.settings import OperatorSettings
 
 Renderer = Callable[[EnvironmentRequest], RenderedEnvironment]
 
@@ -55,7 +55,7 @@ class Step:
 
     inputs: Inputs
     spec: TestCampaignSpec
-    config: OperatorConfig
+    config: OperatorSettings
     render: Renderer
     frozen: tuple[PinnedScenario, ...]
     """The frozen list's scenarios, in order."""
@@ -83,7 +83,7 @@ def step(
     stored: StoredList,
     spec: TestCampaignSpec,
     *,
-    config: OperatorConfig,
+    config: OperatorSettings,
     render: Renderer,
 ) -> Step:
     """The step of a campaign whose spec is valid and whose list is frozen."""

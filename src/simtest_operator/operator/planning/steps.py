@@ -11,7 +11,6 @@ from __future__ import annotations
 from simtest_operator.operator import cancelling
 from simtest_operator.operator.actions import Observation, Plan
 from simtest_operator.operator.batches import State
-from simtest_operator.operator.configuration import OperatorConfig
 from simtest_operator.operator.planning import (
     assessing,
     cleaning,
@@ -22,9 +21,10 @@ from simtest_operator.operator.planning import (
 )
 from simtest_operator.operator.planning.outcomes import Outcome
 from simtest_operator.operator.status import campaignstatus, counting
+from simtest_operator.settings import OperatorSettings
 
 
-def plan(given: inputs.Inputs, *, config: OperatorConfig, render: inputs.Renderer) -> Plan:
+def plan(given: inputs.Inputs, *, config: OperatorSettings, render: inputs.Renderer) -> Plan:
     """One reconcile step."""
     campaign = given.campaign
     if campaign.deleting:
