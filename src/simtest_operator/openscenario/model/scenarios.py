@@ -15,8 +15,8 @@ from pathlib import Path
 from simtest_operator.openscenario.deviations import Deviation
 from simtest_operator.openscenario.model.actions import Action, GlobalAction, PrivateAction
 from simtest_operator.openscenario.model.common import ParameterDeclaration, Unsupported
-from simtest_operator.openscenario.model.conditions import Trigger
 from simtest_operator.openscenario.model.entities import ScenarioObject
+from simtest_operator.openscenario.model.trigger_conditions import Trigger
 
 
 class Priority(enum.StrEnum):

@@ -5,7 +5,7 @@ from __future__ import annotations
 from simtest_operator.openscenario import reading
 from simtest_operator.openscenario.model import actions as a
 from simtest_operator.openscenario.model import scenarios as s
-from simtest_operator.openscenario.readers import actions, conditions
+from simtest_operator.openscenario.readers import actions, trigger_conditions
 from simtest_operator.xmlsafe import Element
 
 _PRIORITY_ALIASES = {"overwrite": s.Priority.OVERRIDE}
@@ -16,7 +16,7 @@ def storyboard(el: Element, ctx: reading.Context) -> s.Storyboard:
     return s.Storyboard(
         init=_init(ctx.require(el, "Init"), ctx),
         stories=tuple(_story(story, ctx) for story in reading.all_children(el, "Story")),
-        stop_trigger=conditions.stop_trigger(reading.child(el, "StopTrigger"), ctx),
+        stop_trigger=trigger_conditions.stop_trigger(reading.child(el, "StopTrigger"), ctx),
         line=el.sourceline,
     )
 
@@ -63,8 +63,8 @@ def _act(el: Element, ctx: reading.Context) -> s.Act:
     return s.Act(
         name=ctx.string(el, "name"),
         maneuver_groups=groups,
-        start_trigger=conditions.trigger(reading.child(el, "StartTrigger"), ctx),
-        stop_trigger=conditions.trigger(reading.child(el, "StopTrigger"), ctx),
+        start_trigger=trigger_conditions.trigger(reading.child(el, "StartTrigger"), ctx),
+        stop_trigger=trigger_conditions.trigger(reading.child(el, "StopTrigger"), ctx),
         line=el.sourceline,
     )
 
@@ -116,6 +116,6 @@ def _event(el: Element, ctx: reading.Context) -> s.Event:
         priority=ctx.enum(el, "priority", s.Priority, _PRIORITY_ALIASES),
         maximum_execution_count=1 if count is None else count,
         actions=event_actions,
-        start_trigger=conditions.trigger(reading.child(el, "StartTrigger"), ctx),
+        start_trigger=trigger_conditions.trigger(reading.child(el, "StartTrigger"), ctx),
         line=el.sourceline,
     )

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from simtest_operator.openscenario import reading
 from simtest_operator.openscenario.model import common as m
-from simtest_operator.openscenario.model import conditions as c
+from simtest_operator.openscenario.model import trigger_conditions as c
 from simtest_operator.openscenario.readers import positions
 from simtest_operator.xmlsafe import Element
 
@@ -53,7 +53,7 @@ KNOWN_CRITERIA = {
 
 def stop_trigger(el: Element | None, ctx: reading.Context) -> c.Trigger | None:
     """Read the storyboard's StopTrigger, taking ScenarioRunner's ``criteria_<Test>`` conditions
-    out as :class:`~.model.conditions.Criterion` (they are tests over the run, not stop
+    out as :class:`~.model.trigger_conditions.Criterion` (they are tests over the run, not stop
     conditions; their ParameterConditions name undeclared or empty parameters)."""
     if el is None:
         return None
