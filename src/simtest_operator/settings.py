@@ -17,6 +17,8 @@ from pathlib import Path
 ENV_PREFIX = "SIMTEST_"
 OPERATOR_PREFIX = "SIMTEST_OPERATOR_"
 """Prefix of the operator's installation knobs (the chart sets them; flags override them)."""
+SECRET_PREFIX = f"{ENV_PREFIX}SECRET_"
+"""Prefix of the variables that stand in for Secret keys in local runs."""
 
 
 def _default_cache_dir(env: Mapping[str, str]) -> Path:
@@ -154,6 +156,10 @@ class Settings:
     the CARLA towns shipped with the product."""
     operator: OperatorSettings = dataclasses.field(default_factory=OperatorSettings)
     """The operator's knobs (``SIMTEST_OPERATOR_*``); only ``simtest operator`` uses them."""
+    secrets: Mapping[str, str] = dataclasses.field(default_factory=dict, repr=False, hash=False)
+    """``SIMTEST_SECRET_<NAME>_<KEY>`` variables by name: Secret values for local runs
+    (``simtest run``, ``simtest render``), which have no cluster to read Secrets from. Left out
+    of the repr so they never reach a log."""
 
     @classmethod
     def from_env(
@@ -182,6 +188,7 @@ class Settings:
                 Path(p) for p in env.get(f"{ENV_PREFIX}MAP_PATH", "").split(os.pathsep) if p
             ),
             operator=dataclasses.replace(operator, **flags) if flags else operator,  # type: ignore[arg-type]
+            secrets={k: v for k, v in env.items() if k.startswith(SECRET_PREFIX)},
         )
 
 

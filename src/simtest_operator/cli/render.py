@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
-import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import NoReturn
@@ -67,9 +66,10 @@ def render(
     Prints the environment's name, releases and content hash; --out writes the files.
     Same inputs, byte-identical files.
     """
+    settings = Settings.from_env()
     try:
         _, campaign = preparing.read_manifest(manifest)
-        frozen = _frozen_list(manifest, campaign)
+        frozen = _frozen_list(manifest, campaign, settings)
         position = _position(frozen, scenario_id, campaign.name)
         request = operating.environment_request(
             campaign,
@@ -92,14 +92,14 @@ def render(
 
 
 def _frozen_list(
-    manifest: Path, campaign: v1alpha1.Manifest[v1alpha1.TestCampaignSpec]
+    manifest: Path, campaign: v1alpha1.Manifest[v1alpha1.TestCampaignSpec], settings: Settings
 ) -> Sequence[PinnedScenario]:
     """The campaign's frozen list, resolved like ``simtest run`` resolves it."""
     spec = campaign.spec
     fetch = FetchContext(
         base_dir=manifest.absolute().parent,
-        cache_dir=Settings.from_env().cache.sources,
-        secrets=env_secrets(os.environ),
+        cache_dir=settings.cache.sources,
+        secrets=env_secrets(settings.secrets),
     )
     frozen = resolving.freeze(
         converting.selection(spec.scenarios),

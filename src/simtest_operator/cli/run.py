@@ -37,10 +37,9 @@ from simtest_operator.errors import ScenarioError, SimtestError, SourceError
 from simtest_operator.runner import campaigns, preparing, scheduling, summaries
 from simtest_operator.runner.tasks import ExecuteFn
 from simtest_operator.scenarios.specs import SecretRef
-from simtest_operator.settings import ENV_PREFIX, Settings
+from simtest_operator.settings import SECRET_PREFIX, Settings
 from simtest_operator.verdicts import Verdict
 
-SECRET_PREFIX = f"{ENV_PREFIX}SECRET_"
 LISTED = 20
 """Non-passed scenarios listed by name in the summary."""
 _COLOURS = {
@@ -142,16 +141,17 @@ def run(
         _fail(errors, "give a MANIFEST (or --rerun-failed OUTDIR)")
     if frozen is not None and rerun_failed is not None:
         _fail(errors, "--frozen and --rerun-failed exclude each other")
+    settings = Settings.from_env()
     request = preparing.LocalRunRequest(
         manifest=manifest,
         output=output or _default_output(manifest, rerun_failed),
-        settings=Settings.from_env(),
+        settings=settings,
         execute=_engine(engine),
         parallel=parallel,
         frozen=frozen,
         rerun_failed=rerun_failed,
         database=database,
-        secrets=env_secrets(os.environ),
+        secrets=env_secrets(settings.secrets),
         cpu_count=len(os.sched_getaffinity(0)),
     )
     live = console.is_terminal and not plain
