@@ -11,6 +11,7 @@ from pathlib import Path
 
 import click
 
+from simtest_operator.cli import options
 from simtest_operator.settings import Settings
 
 
@@ -22,11 +23,7 @@ from simtest_operator.settings import Settings
     multiple=True,
     help="Namespace to watch (repeatable); without it the whole cluster is watched.",
 )
-@click.option(
-    "--kubeconfig",
-    type=click.Path(exists=True, dir_okay=False, path_type=Path),
-    help="Kubeconfig to use; default: in-cluster service account, else $KUBECONFIG.",
-)
+@options.kubeconfig
 @click.option(
     "--templates",
     type=click.Path(exists=True, file_okay=False, path_type=Path),

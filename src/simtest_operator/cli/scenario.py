@@ -16,6 +16,7 @@ from typing import Any
 
 import click
 
+from simtest_operator.cli import options
 from simtest_operator.errors import ScenarioError
 from simtest_operator.evaluation import reference as references
 from simtest_operator.openscenario import (
@@ -69,6 +70,10 @@ _MAX_SIZE = click.option(
 )
 
 
+_LOADING = options.stack(_TAKEOVER, _STRICT, _MAPS, _MAX_SIZE)
+"""How a scenario is loaded and driven: what ``scenario run`` and ``scenario check`` share."""
+
+
 def _loading(
     settings: Settings, strict: bool, root: Path | None, maps: tuple[Path, ...], max_mb: float
 ) -> LoadOptions:
@@ -100,10 +105,7 @@ def scenario() -> None:
     help="Directory for recording.mcap, run.log and result.json.",
 )
 @click.option("--no-record", is_flag=True, help="Do not write the omega-prime recording.")
-@_TAKEOVER
-@_STRICT
-@_MAPS
-@_MAX_SIZE
+@_LOADING
 @click.option(
     "--root",
     type=click.Path(exists=True, file_okay=False, path_type=Path),
@@ -235,10 +237,7 @@ def _comparison(
     default=None,
     help="esmini-reference.json to compare end times and paths with.",
 )
-@_TAKEOVER
-@_STRICT
-@_MAPS
-@_MAX_SIZE
+@_LOADING
 @click.option(
     "--root",
     type=click.Path(exists=True, file_okay=False, path_type=Path),

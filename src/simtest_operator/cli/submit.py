@@ -21,6 +21,7 @@ import click
 from simtest_operator import operator as operating
 from simtest_operator.api import manifestfiles
 from simtest_operator.api.v1alpha1 import ManifestError, parse_campaign
+from simtest_operator.cli import options
 from simtest_operator.errors import ClusterError, ScenarioError
 from simtest_operator.results import junit, records
 from simtest_operator.verdicts import ScenarioOutcome, Verdict
@@ -40,7 +41,7 @@ def _documents(path: Path) -> list[Any]:
 @click.command("submit")
 @click.argument("manifest", type=click.Path(exists=True, dir_okay=False, path_type=Path))
 @click.option("--namespace", "-n", help="Namespace (default: the manifest's, else the context's).")
-@click.option("--kubeconfig", type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@options.kubeconfig
 @click.option("--context", help="Kubeconfig context.")
 @click.option("--wait", is_flag=True, help="Wait until the campaign is Complete; exit by verdict.")
 @click.option(
