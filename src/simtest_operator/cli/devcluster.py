@@ -13,19 +13,15 @@ from pathlib import Path
 
 import click
 
-from simtest_operator.devcluster import addons
-from simtest_operator.devcluster import images as built_images
-from simtest_operator.devcluster import toolchain as toolchains
-from simtest_operator.devcluster.cluster import DevCluster
-from simtest_operator.devcluster.nodes import NodeShape
+from simtest_operator import devcluster
 from simtest_operator.errors import SimtestError
 from simtest_operator.settings import Settings
 
 
-def _cluster(name: str, root: Path | None) -> DevCluster:
-    cache = Settings.from_env().cache
-    return DevCluster(
-        root or cache.root / "devcluster" / name, toolchains.Toolchain(root=cache.toolchain)
+def _cluster(name: str, root: Path | None, settings: Settings) -> devcluster.DevCluster:
+    cache = settings.cache
+    return devcluster.DevCluster(
+        root or cache.root / "devcluster" / name, devcluster.Toolchain(root=cache.toolchain)
     )
 
 
@@ -64,9 +60,9 @@ def build(components: tuple[str, ...]) -> None:
     settings = Settings.from_env()
     log = settings.cache.toolchain / "build.log"
     with _reported():
-        script = toolchains.find_build_script(Path.cwd())
+        script = devcluster.find_build_script(Path.cwd())
         click.echo(f"building with {script} (log: {log}) ...")
-        tc = toolchains.build(
+        tc = devcluster.build_toolchain(
             script, cache_root=settings.cache.root, log_file=log, components=components
         )
     click.echo(f"binaries in {tc.bin_dir}")
@@ -107,20 +103,20 @@ def up(
     real_nodes: int,
 ) -> None:
     """Start the cluster (or report the running one) and wait until it is usable."""
-    cluster = _cluster(name, root)
     settings = Settings.from_env()
+    cluster = _cluster(name, root, settings)
     with _reported():
         real_node = None
         if real_nodes:
-            real_node = built_images.real_node_setup(
+            real_node = devcluster.real_node_setup(
                 settings.cache.root,
                 helm=cluster.toolchain.binary("helm"),
-                chart=addons.find_chart(Path.cwd()),
+                chart=devcluster.find_chart(Path.cwd()),
                 slots=slots,
             )
         info = cluster.up(
             nodes=nodes,
-            shape=NodeShape(simulator_slots=slots, gpus=gpus),
+            shape=devcluster.NodeShape(simulator_slots=slots, gpus=gpus),
             crds_dir=crds_dir,
             apiserver_port=port,
             real_node=real_node,
@@ -144,7 +140,7 @@ def up(
 def down(name: str, root: Path | None) -> None:
     """Stop the processes `up` started (logs and PKI stay)."""
     with _reported():
-        stopped = _cluster(name, root).down()
+        stopped = _cluster(name, root, Settings.from_env()).down()
     click.echo(f"stopped: {', '.join(stopped)}" if stopped else "nothing was running")
 
 
@@ -154,7 +150,7 @@ def down(name: str, root: Path | None) -> None:
 def status(name: str, root: Path | None) -> None:
     """Show each component's pid and whether the apiserver is ready; exit 1 unless running."""
     with _reported():
-        st = _cluster(name, root).status()
+        st = _cluster(name, root, Settings.from_env()).status()
     if not st.started:
         click.echo(f"not started ({st.root})")
         raise SystemExit(1)
@@ -175,5 +171,5 @@ def kubeconfig_cmd(name: str, root: Path | None, path_only: bool) -> None:
     Use it as `export KUBECONFIG=$(simtest dev-cluster kubeconfig --path)`.
     """
     with _reported():
-        info = _cluster(name, root).info()
+        info = _cluster(name, root, Settings.from_env()).info()
     click.echo(str(info.kubeconfig) if path_only else info.kubeconfig.read_text(), nl=path_only)
