@@ -7,10 +7,11 @@ overhead its scenarios paid.
 
 from __future__ import annotations
 
-from collections.abc import Collection, Mapping
+from collections.abc import Mapping, Sequence
 
 from simtest_operator.operator import helmfileteardown
 from simtest_operator.operator.actions import Action, Delete, Kind
+from simtest_operator.operator.batches import ScenarioState, State
 from simtest_operator.operator.environments import Assessment
 from simtest_operator.operator.planning.inputs import Step
 from simtest_operator.operator.planning.outcomes import Outcome
@@ -33,13 +34,16 @@ def teardowns(step: Step) -> Outcome:
     )
 
 
-def removals(step: Step, judged: Mapping[str, Assessment], folded: Collection[str]) -> Outcome:
-    """Deletes of finished environments whose verdicts are all folded (``folded``: scenario
-    ids), unless the configuration keeps them."""
+def removals(
+    step: Step, judged: Mapping[str, Assessment], states: Sequence[ScenarioState]
+) -> Outcome:
+    """Deletes of finished environments whose verdicts are all folded into their batches,
+    unless the configuration keeps them."""
     actions: list[Action] = []
     overheads: list[float] = []
     if step.config.keep_finished_environments:
         return Outcome()
+    folded = {s.id for s in states if s.state is State.FOLDED}
     for env in step.envs:
         if env.deleting or not env.finished:
             continue

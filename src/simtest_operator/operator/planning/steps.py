@@ -8,9 +8,10 @@ between any two steps leaves enough behind for the next operator to continue fro
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 from simtest_operator.operator import cancelling
 from simtest_operator.operator.actions import Observation, Plan
-from simtest_operator.operator.batches import State
 from simtest_operator.operator.planning import (
     assessing,
     cleaning,
@@ -49,36 +50,23 @@ def _halt(
 
 
 def _run(step: inputs.Step) -> Plan:
-    spec, campaign = step.spec, step.campaign
-    cancellation = cancelling.decide(spec, campaign.status, now=step.now)
+    cancellation = cancelling.decide(step.spec, step.campaign.status, now=step.now)
     judged = assessing.assessments(step, cancellation)
     states = assessing.states(step, judged, cancellation)
-    outcome = tending.tend(step, judged) + cleaning.teardowns(step) + folding.fold(step, states)
-    folded = {s.id for s in states if s.state is State.FOLDED}
-    outcome += cleaning.removals(step, judged, folded)
+    counts = counting.counters(states)
     complete = all(s.state.settled for s in states)
     in_flight = assessing.in_flight(step, judged)
     window = starting.window(step)
-    if not complete and not campaign.deleting and cancellation is None:
+    outcome = (
+        tending.tend(step, judged)
+        + cleaning.teardowns(step)
+        + folding.fold(step, states)
+        + cleaning.removals(step, judged, states)
+    )
+    if not complete and cancellation is None:
         outcome += starting.start(step, states, in_flight=in_flight, window=window)
-        limit = cancelling.deadline(spec, campaign.status)
-        if limit is not None:
-            outcome += Outcome(wakes=(limit,))
-    counts = counting.counters(states)
-    update = campaignstatus.progressed(
-        campaign,
-        spec,
-        counts,
-        batches=len(step.batches),
-        complete=complete,
-        cancellation=cancellation,
-        now=step.now,
-        last_write=step.inputs.last_status_write,
-        status_interval=step.config.status_interval,
-    )
-    outcome += Outcome(
-        actions=update.actions, wakes=(update.due,) if update.due is not None else ()
-    )
+        outcome += _deadline(step)
+    outcome += _campaign(step, counts, complete=complete, cancellation=cancellation)
     return Plan(
         actions=outcome.actions,
         wake_at=min(outcome.wakes) if outcome.wakes else None,
@@ -91,3 +79,31 @@ def _run(step: inputs.Step) -> Plan:
         ),
         finished=complete and not step.envs,
     )
+
+
+def _deadline(step: inputs.Step) -> Outcome:
+    """Look again when ``activeDeadlineSeconds`` runs out."""
+    limit = cancelling.deadline(step.spec, step.campaign.status)
+    return Outcome(wakes=(limit,) if limit is not None else ())
+
+
+def _campaign(
+    step: inputs.Step,
+    counts: Mapping[str, int],
+    *,
+    complete: bool,
+    cancellation: cancelling.Cancellation | None,
+) -> Outcome:
+    """The campaign's own status and event (a counters-only change may wait: a wake-up)."""
+    update = campaignstatus.progressed(
+        step.campaign,
+        step.spec,
+        counts,
+        batches=len(step.batches),
+        complete=complete,
+        cancellation=cancellation,
+        now=step.now,
+        last_write=step.inputs.last_status_write,
+        status_interval=step.config.status_interval,
+    )
+    return Outcome(actions=update.actions, wakes=(update.due,) if update.due is not None else ())
