@@ -280,6 +280,25 @@ class Context:
         self.findings.unsupported.append(node)
         return node
 
+    def by_tag(
+        self,
+        el: Element,
+        readers: Mapping[str, Callable[[Element, Context], T]],
+        *,
+        unknown: str,
+        reasons: Mapping[str, str] | None = None,
+    ) -> T | Unsupported:
+        """Read ``el`` with the reader its tag maps to: the one place the readers choose by tag.
+
+        Any other tag becomes an :class:`Unsupported` node, with its reason from ``reasons`` or
+        else ``unknown`` followed by the tag.
+        """
+        read = readers.get(str(el.tag))
+        if read is None:
+            reason = (reasons or {}).get(str(el.tag), f"{unknown} {el.tag}")
+            return self.unsupported(el, reason)
+        return read(el, self)
+
     def ignore(self, kind: str) -> None:
         """Record an accepted-but-ignored element kind."""
         self.findings.ignored.add(kind)

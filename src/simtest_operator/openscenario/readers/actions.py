@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable, Mapping
+
 from simtest_operator.openscenario import reading
 from simtest_operator.openscenario.model import actions as a
 from simtest_operator.openscenario.model import common as m
@@ -56,77 +58,66 @@ def _ignored(el: Element, ctx: reading.Context) -> ctl.IgnoredAction:
 
 def private(el: Element, ctx: reading.Context) -> a.PrivateAction:
     """Read a ``<PrivateAction>``."""
-    chosen = ctx.choice(el)
-    tag = chosen.tag
-    if tag == "LongitudinalAction":
-        return _longitudinal(ctx.choice(chosen), ctx)
-    if tag == "LateralAction":
-        return _lateral(ctx.choice(chosen), ctx)
-    if tag == "TeleportAction":
-        return a.TeleportAction(
-            position=positions.position(ctx.require(chosen, "Position"), ctx),
-            line=chosen.sourceline,
-        )
-    if tag == "RoutingAction":
-        return _routing(ctx.choice(chosen), ctx)
-    if tag == "SynchronizeAction":
-        return _synchronize(chosen, ctx)
-    if tag == "ActivateControllerAction":
-        return controllers.activate(chosen, ctx)
-    if tag == "ControllerAction":
-        return controllers.controller_action(chosen, ctx)
-    if tag == "VisibilityAction":
-        return _ignored(chosen, ctx)
-    if tag == "AppearanceAction":
-        return _ignored(ctx.choice(chosen), ctx)
-    reason = _PRIVATE_UNSUPPORTED.get(str(tag), f"unknown private action {tag}")
-    return ctx.unsupported(chosen, reason)
+    return ctx.by_tag(
+        ctx.choice(el),
+        _PRIVATE_READERS,
+        unknown="unknown private action",
+        reasons=_PRIVATE_UNSUPPORTED,
+    )
+
+
+def _teleport(el: Element, ctx: reading.Context) -> a.TeleportAction:
+    return a.TeleportAction(
+        position=positions.position(ctx.require(el, "Position"), ctx), line=el.sourceline
+    )
 
 
 def global_(el: Element, ctx: reading.Context) -> a.GlobalAction:
     """Read a ``<GlobalAction>``."""
-    chosen = ctx.choice(el)
-    tag = chosen.tag
-    if tag == "EnvironmentAction":
-        return world_actions.environment_action(chosen, ctx)
-    if tag == "EntityAction":
-        return world_actions.entity_action(chosen, ctx)
-    if tag in ("ParameterAction", "VariableAction"):
-        scope = m.ValueScope.PARAMETER if tag == "ParameterAction" else m.ValueScope.VARIABLE
-        ref = ctx.string(chosen, "parameterRef" if tag == "ParameterAction" else "variableRef")
-        inner = ctx.choice(chosen)
-        if inner.tag == "SetAction":
-            return ctl.SetValueAction(
-                scope=scope, ref=ref, value=ctx.string(inner, "value"), line=chosen.sourceline
-            )
-        if inner.tag == "ModifyAction":
-            rule = ctx.choice(ctx.require(inner, "Rule"))
-            kind = {"AddValue": ctl.ModifyRule.ADD, "MultiplyByValue": ctl.ModifyRule.MULTIPLY}.get(
-                str(rule.tag)
-            )
-            if kind is None:
-                raise ctx.error(rule, "expected AddValue or MultiplyByValue")
-            return ctl.ModifyValueAction(
-                scope=scope,
-                ref=ref,
-                rule=kind,
-                value=ctx.double(rule, "value"),
-                line=chosen.sourceline,
-            )
-        raise ctx.error(inner, "expected SetAction or ModifyAction")
-    if tag == "TrafficAction":
-        return traffic.traffic_action(chosen, ctx)
-    if tag == "InfrastructureAction":
-        signal = ctx.choice(ctx.require(chosen, "TrafficSignalAction"))
-        if signal.tag == "TrafficSignalStateAction":
-            return ctl.TrafficSignalStateAction(
-                name=ctx.string(signal, "name"),
-                state=ctx.string(signal, "state"),
-                line=signal.sourceline,
-            )
-        return ctx.unsupported(signal, "traffic signal controllers are not simulated")
-    reason = _GLOBAL_UNSUPPORTED.get(str(tag), f"unknown global action {tag}")
-    return ctx.unsupported(chosen, reason)
+    return ctx.by_tag(
+        ctx.choice(el),
+        _GLOBAL_READERS,
+        unknown="unknown global action",
+        reasons=_GLOBAL_UNSUPPORTED,
+    )
+
+
+def _value_action(el: Element, ctx: reading.Context) -> a.GlobalAction:
+    """A ParameterAction or VariableAction (the same but for the reference attribute)."""
+    tag = el.tag
+    scope = m.ValueScope.PARAMETER if tag == "ParameterAction" else m.ValueScope.VARIABLE
+    ref = ctx.string(el, "parameterRef" if tag == "ParameterAction" else "variableRef")
+    inner = ctx.choice(el)
+    if inner.tag == "SetAction":
+        return ctl.SetValueAction(
+            scope=scope, ref=ref, value=ctx.string(inner, "value"), line=el.sourceline
+        )
+    if inner.tag == "ModifyAction":
+        rule = ctx.choice(ctx.require(inner, "Rule"))
+        kind = {"AddValue": ctl.ModifyRule.ADD, "MultiplyByValue": ctl.ModifyRule.MULTIPLY}.get(
+            str(rule.tag)
+        )
+        if kind is None:
+            raise ctx.error(rule, "expected AddValue or MultiplyByValue")
+        return ctl.ModifyValueAction(
+            scope=scope,
+            ref=ref,
+            rule=kind,
+            value=ctx.double(rule, "value"),
+            line=el.sourceline,
+        )
+    raise ctx.error(inner, "expected SetAction or ModifyAction")
+
+
+def _infrastructure(el: Element, ctx: reading.Context) -> a.GlobalAction:
+    signal = ctx.choice(ctx.require(el, "TrafficSignalAction"))
+    if signal.tag == "TrafficSignalStateAction":
+        return ctl.TrafficSignalStateAction(
+            name=ctx.string(signal, "name"),
+            state=ctx.string(signal, "state"),
+            line=signal.sourceline,
+        )
+    return ctx.unsupported(signal, "traffic signal controllers are not simulated")
 
 
 def _dynamics(el: Element, ctx: reading.Context) -> a.TransitionDynamics:
@@ -152,142 +143,137 @@ def _constraints(el: Element | None, ctx: reading.Context) -> a.DynamicConstrain
     )
 
 
-def _longitudinal(el: Element, ctx: reading.Context) -> a.PrivateAction:
-    tag, line = el.tag, el.sourceline
-    if tag == "SpeedAction":
-        target_el = ctx.choice(ctx.require(el, "SpeedActionTarget"))
-        target: a.AbsoluteTargetSpeed | a.RelativeTargetSpeed
-        if target_el.tag == "AbsoluteTargetSpeed":
-            target = a.AbsoluteTargetSpeed(
-                value=ctx.double(target_el, "value"), line=target_el.sourceline
-            )
-        elif target_el.tag == "RelativeTargetSpeed":
-            target = a.RelativeTargetSpeed(
-                entity_ref=ctx.string(target_el, "entityRef"),
-                value=ctx.double(target_el, "value"),
-                value_type=ctx.enum(target_el, "speedTargetValueType", a.SpeedTargetValueType),
-                continuous=ctx.boolean(target_el, "continuous"),
-                line=target_el.sourceline,
-            )
-        else:
-            raise ctx.error(target_el, "expected AbsoluteTargetSpeed or RelativeTargetSpeed")
-        return a.SpeedAction(
-            dynamics=_dynamics(ctx.require(el, "SpeedActionDynamics"), ctx),
-            target=target,
-            line=line,
+def _speed(el: Element, ctx: reading.Context) -> a.SpeedAction:
+    target_el = ctx.choice(ctx.require(el, "SpeedActionTarget"))
+    target: a.AbsoluteTargetSpeed | a.RelativeTargetSpeed
+    if target_el.tag == "AbsoluteTargetSpeed":
+        target = a.AbsoluteTargetSpeed(
+            value=ctx.double(target_el, "value"), line=target_el.sourceline
         )
-    if tag == "LongitudinalDistanceAction":
-        return a.LongitudinalDistanceAction(
-            entity_ref=ctx.string(el, "entityRef"),
-            freespace=ctx.boolean(el, "freespace"),
-            continuous=ctx.boolean(el, "continuous"),
-            distance=ctx.opt_double(el, "distance"),
-            time_gap=ctx.opt_double(el, "timeGap"),
-            coordinate_system=ctx.opt_enum(el, "coordinateSystem", m.CoordinateSystem)
-            or m.CoordinateSystem.ENTITY,
-            displacement=ctx.opt_enum(el, "displacement", a.LongitudinalDisplacement)
-            or a.LongitudinalDisplacement.TRAILING,
-            constraints=_constraints(reading.child(el, "DynamicConstraints"), ctx),
-            line=line,
+    elif target_el.tag == "RelativeTargetSpeed":
+        target = a.RelativeTargetSpeed(
+            entity_ref=ctx.string(target_el, "entityRef"),
+            value=ctx.double(target_el, "value"),
+            value_type=ctx.enum(target_el, "speedTargetValueType", a.SpeedTargetValueType),
+            continuous=ctx.boolean(target_el, "continuous"),
+            line=target_el.sourceline,
         )
-    if tag == "SpeedProfileAction":
-        entries = tuple(
-            a.SpeedProfileEntry(
-                speed=ctx.double(entry, "speed"),
-                time=ctx.opt_double(entry, "time"),
-                line=entry.sourceline,
-            )
-            for entry in reading.all_children(el, "SpeedProfileEntry")
-        )
-        if not entries:
-            raise ctx.error(el, "a speed profile needs at least one SpeedProfileEntry")
-        return a.SpeedProfileAction(
-            following_mode=ctx.enum(el, "followingMode", a.FollowingMode),
-            entries=entries,
-            entity_ref=ctx.opt_string(el, "entityRef"),
-            constraints=_constraints(reading.child(el, "DynamicConstraints"), ctx),
-            line=line,
-        )
-    return ctx.unsupported(el, f"unknown longitudinal action {tag}")
+    else:
+        raise ctx.error(target_el, "expected AbsoluteTargetSpeed or RelativeTargetSpeed")
+    return a.SpeedAction(
+        dynamics=_dynamics(ctx.require(el, "SpeedActionDynamics"), ctx),
+        target=target,
+        line=el.sourceline,
+    )
 
 
-def _lateral(el: Element, ctx: reading.Context) -> a.PrivateAction:
-    tag, line = el.tag, el.sourceline
-    if tag == "LaneChangeAction":
-        target_el = ctx.choice(ctx.require(el, "LaneChangeTarget"))
-        target: a.AbsoluteTargetLane | a.RelativeTargetLane
-        if target_el.tag == "AbsoluteTargetLane":
-            target = a.AbsoluteTargetLane(
-                lane_id=ctx.integer(target_el, "value"), line=target_el.sourceline
-            )
-        elif target_el.tag == "RelativeTargetLane":
-            target = a.RelativeTargetLane(
-                entity_ref=ctx.string(target_el, "entityRef"),
-                value=ctx.integer(target_el, "value"),
-                line=target_el.sourceline,
-            )
-        else:
-            raise ctx.error(target_el, "expected AbsoluteTargetLane or RelativeTargetLane")
-        return a.LaneChangeAction(
-            dynamics=_dynamics(ctx.require(el, "LaneChangeActionDynamics"), ctx),
-            target=target,
-            target_lane_offset=ctx.opt_double(el, "targetLaneOffset"),
-            line=line,
-        )
-    if tag == "LaneOffsetAction":
-        dyn = ctx.require(el, "LaneOffsetActionDynamics")
-        target_el = ctx.choice(ctx.require(el, "LaneOffsetTarget"))
-        offset: a.AbsoluteTargetLaneOffset | a.RelativeTargetLaneOffset
-        if target_el.tag == "AbsoluteTargetLaneOffset":
-            offset = a.AbsoluteTargetLaneOffset(
-                value=ctx.double(target_el, "value"), line=target_el.sourceline
-            )
-        elif target_el.tag == "RelativeTargetLaneOffset":
-            offset = a.RelativeTargetLaneOffset(
-                entity_ref=ctx.string(target_el, "entityRef"),
-                value=ctx.double(target_el, "value"),
-                line=target_el.sourceline,
-            )
-        else:
-            raise ctx.error(
-                target_el, "expected AbsoluteTargetLaneOffset or RelativeTargetLaneOffset"
-            )
-        return a.LaneOffsetAction(
-            continuous=ctx.boolean(el, "continuous"),
-            shape=ctx.enum(dyn, "dynamicsShape", a.DynamicsShape),
-            target=offset,
-            max_lateral_acc=ctx.opt_double(dyn, "maxLateralAcc"),
-            line=line,
-        )
-    if tag == "LateralDistanceAction":
-        return a.LateralDistanceAction(
-            entity_ref=ctx.string(el, "entityRef"),
-            freespace=ctx.boolean(el, "freespace"),
-            continuous=ctx.boolean(el, "continuous"),
-            distance=ctx.opt_double(el, "distance"),
-            coordinate_system=ctx.opt_enum(el, "coordinateSystem", m.CoordinateSystem)
-            or m.CoordinateSystem.ENTITY,
-            displacement=ctx.opt_enum(el, "displacement", a.LateralDisplacement)
-            or a.LateralDisplacement.ANY,
-            constraints=_constraints(reading.child(el, "DynamicConstraints"), ctx),
-            line=line,
-        )
-    return ctx.unsupported(el, f"unknown lateral action {tag}")
+def _longitudinal_distance(el: Element, ctx: reading.Context) -> a.LongitudinalDistanceAction:
+    return a.LongitudinalDistanceAction(
+        entity_ref=ctx.string(el, "entityRef"),
+        freespace=ctx.boolean(el, "freespace"),
+        continuous=ctx.boolean(el, "continuous"),
+        distance=ctx.opt_double(el, "distance"),
+        time_gap=ctx.opt_double(el, "timeGap"),
+        coordinate_system=ctx.opt_enum(el, "coordinateSystem", m.CoordinateSystem)
+        or m.CoordinateSystem.ENTITY,
+        displacement=ctx.opt_enum(el, "displacement", a.LongitudinalDisplacement)
+        or a.LongitudinalDisplacement.TRAILING,
+        constraints=_constraints(reading.child(el, "DynamicConstraints"), ctx),
+        line=el.sourceline,
+    )
 
 
-def _routing(el: Element, ctx: reading.Context) -> a.PrivateAction:
-    tag, line = el.tag, el.sourceline
-    if tag == "AssignRouteAction":
-        return a.AssignRouteAction(route=positions.route_or_ref(el, ctx), line=line)
-    if tag == "AcquirePositionAction":
-        return a.AcquirePositionAction(
-            position=positions.position(ctx.require(el, "Position"), ctx), line=line
+def _speed_profile(el: Element, ctx: reading.Context) -> a.SpeedProfileAction:
+    entries = tuple(
+        a.SpeedProfileEntry(
+            speed=ctx.double(entry, "speed"),
+            time=ctx.opt_double(entry, "time"),
+            line=entry.sourceline,
         )
-    if tag == "FollowTrajectoryAction":
-        return _follow_trajectory(el, ctx)
-    if tag == "RandomRouteAction":
-        return ctx.unsupported(el, "random routes are not supported")
-    return ctx.unsupported(el, f"unknown routing action {tag}")
+        for entry in reading.all_children(el, "SpeedProfileEntry")
+    )
+    if not entries:
+        raise ctx.error(el, "a speed profile needs at least one SpeedProfileEntry")
+    return a.SpeedProfileAction(
+        following_mode=ctx.enum(el, "followingMode", a.FollowingMode),
+        entries=entries,
+        entity_ref=ctx.opt_string(el, "entityRef"),
+        constraints=_constraints(reading.child(el, "DynamicConstraints"), ctx),
+        line=el.sourceline,
+    )
+
+
+def _lane_change(el: Element, ctx: reading.Context) -> a.LaneChangeAction:
+    target_el = ctx.choice(ctx.require(el, "LaneChangeTarget"))
+    target: a.AbsoluteTargetLane | a.RelativeTargetLane
+    if target_el.tag == "AbsoluteTargetLane":
+        target = a.AbsoluteTargetLane(
+            lane_id=ctx.integer(target_el, "value"), line=target_el.sourceline
+        )
+    elif target_el.tag == "RelativeTargetLane":
+        target = a.RelativeTargetLane(
+            entity_ref=ctx.string(target_el, "entityRef"),
+            value=ctx.integer(target_el, "value"),
+            line=target_el.sourceline,
+        )
+    else:
+        raise ctx.error(target_el, "expected AbsoluteTargetLane or RelativeTargetLane")
+    return a.LaneChangeAction(
+        dynamics=_dynamics(ctx.require(el, "LaneChangeActionDynamics"), ctx),
+        target=target,
+        target_lane_offset=ctx.opt_double(el, "targetLaneOffset"),
+        line=el.sourceline,
+    )
+
+
+def _lane_offset(el: Element, ctx: reading.Context) -> a.LaneOffsetAction:
+    dyn = ctx.require(el, "LaneOffsetActionDynamics")
+    target_el = ctx.choice(ctx.require(el, "LaneOffsetTarget"))
+    offset: a.AbsoluteTargetLaneOffset | a.RelativeTargetLaneOffset
+    if target_el.tag == "AbsoluteTargetLaneOffset":
+        offset = a.AbsoluteTargetLaneOffset(
+            value=ctx.double(target_el, "value"), line=target_el.sourceline
+        )
+    elif target_el.tag == "RelativeTargetLaneOffset":
+        offset = a.RelativeTargetLaneOffset(
+            entity_ref=ctx.string(target_el, "entityRef"),
+            value=ctx.double(target_el, "value"),
+            line=target_el.sourceline,
+        )
+    else:
+        raise ctx.error(target_el, "expected AbsoluteTargetLaneOffset or RelativeTargetLaneOffset")
+    return a.LaneOffsetAction(
+        continuous=ctx.boolean(el, "continuous"),
+        shape=ctx.enum(dyn, "dynamicsShape", a.DynamicsShape),
+        target=offset,
+        max_lateral_acc=ctx.opt_double(dyn, "maxLateralAcc"),
+        line=el.sourceline,
+    )
+
+
+def _lateral_distance(el: Element, ctx: reading.Context) -> a.LateralDistanceAction:
+    return a.LateralDistanceAction(
+        entity_ref=ctx.string(el, "entityRef"),
+        freespace=ctx.boolean(el, "freespace"),
+        continuous=ctx.boolean(el, "continuous"),
+        distance=ctx.opt_double(el, "distance"),
+        coordinate_system=ctx.opt_enum(el, "coordinateSystem", m.CoordinateSystem)
+        or m.CoordinateSystem.ENTITY,
+        displacement=ctx.opt_enum(el, "displacement", a.LateralDisplacement)
+        or a.LateralDisplacement.ANY,
+        constraints=_constraints(reading.child(el, "DynamicConstraints"), ctx),
+        line=el.sourceline,
+    )
+
+
+def _assign_route(el: Element, ctx: reading.Context) -> a.AssignRouteAction:
+    return a.AssignRouteAction(route=positions.route_or_ref(el, ctx), line=el.sourceline)
+
+
+def _acquire_position(el: Element, ctx: reading.Context) -> a.AcquirePositionAction:
+    return a.AcquirePositionAction(
+        position=positions.position(ctx.require(el, "Position"), ctx), line=el.sourceline
+    )
 
 
 def _follow_trajectory(el: Element, ctx: reading.Context) -> a.FollowTrajectoryAction:
@@ -361,3 +347,59 @@ def _steady_state(el: Element, ctx: reading.Context) -> a.SteadyState | None:
         if node.tag == "TargetTimeSteadyState":
             return a.SteadyState(time=ctx.double(node, "time"), line=node.sourceline)
     return None
+
+
+_PrivateReader = Callable[[Element, reading.Context], a.PrivateAction]
+
+
+def _one_of(
+    readers: Mapping[str, _PrivateReader], *, unknown: str, reasons: Mapping[str, str] | None = None
+) -> _PrivateReader:
+    """A reader of a category element (LongitudinalAction, ...): its one child, by tag."""
+    return lambda el, ctx: ctx.by_tag(ctx.choice(el), readers, unknown=unknown, reasons=reasons)
+
+
+_LONGITUDINAL_READERS: Mapping[str, _PrivateReader] = {
+    "SpeedAction": _speed,
+    "LongitudinalDistanceAction": _longitudinal_distance,
+    "SpeedProfileAction": _speed_profile,
+}
+
+_LATERAL_READERS: Mapping[str, _PrivateReader] = {
+    "LaneChangeAction": _lane_change,
+    "LaneOffsetAction": _lane_offset,
+    "LateralDistanceAction": _lateral_distance,
+}
+
+_ROUTING_READERS: Mapping[str, _PrivateReader] = {
+    "AssignRouteAction": _assign_route,
+    "AcquirePositionAction": _acquire_position,
+    "FollowTrajectoryAction": _follow_trajectory,
+}
+
+_PRIVATE_READERS: Mapping[str, _PrivateReader] = {
+    "LongitudinalAction": _one_of(_LONGITUDINAL_READERS, unknown="unknown longitudinal action"),
+    "LateralAction": _one_of(_LATERAL_READERS, unknown="unknown lateral action"),
+    "TeleportAction": _teleport,
+    "RoutingAction": _one_of(
+        _ROUTING_READERS,
+        unknown="unknown routing action",
+        reasons={"RandomRouteAction": "random routes are not supported"},
+    ),
+    "SynchronizeAction": _synchronize,
+    "ActivateControllerAction": controllers.activate,
+    "ControllerAction": controllers.controller_action,
+    "VisibilityAction": _ignored,
+    "AppearanceAction": lambda el, ctx: _ignored(ctx.choice(el), ctx),
+}
+"""Supported ``<PrivateAction>`` children by tag (others: :data:`_PRIVATE_UNSUPPORTED`)."""
+
+_GLOBAL_READERS: Mapping[str, Callable[[Element, reading.Context], a.GlobalAction]] = {
+    "EnvironmentAction": world_actions.environment_action,
+    "EntityAction": world_actions.entity_action,
+    "ParameterAction": _value_action,
+    "VariableAction": _value_action,
+    "TrafficAction": traffic.traffic_action,
+    "InfrastructureAction": _infrastructure,
+}
+"""Supported ``<GlobalAction>`` children by tag (others: :data:`_GLOBAL_UNSUPPORTED`)."""

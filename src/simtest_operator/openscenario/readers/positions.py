@@ -14,6 +14,7 @@ Fractional ones stay radians (esmini's tests write ``h="7.853981633974483"``, 2.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Mapping
 
 from simtest_operator.openscenario import reading
 from simtest_operator.openscenario.model import common as m
@@ -64,76 +65,86 @@ def position(el: Element, ctx: reading.Context) -> p.Position:
 
 def position_choice(el: Element, ctx: reading.Context) -> p.Position:
     """Read the concrete position element (WorldPosition, LanePosition, ...)."""
-    tag = el.tag
-    line = el.sourceline
-    if tag == "WorldPosition":
-        return p.WorldPosition(
-            x=ctx.double(el, "x"),
-            y=_lateral(ctx, ctx.double(el, "y")),
-            z=ctx.opt_double(el, "z"),
-            h=_heading(el, ctx, "h"),
-            p=ctx.opt_double(el, "p"),
-            r=ctx.opt_double(el, "r"),
-            line=line,
-        )
-    if tag in ("RelativeWorldPosition", "RelativeObjectPosition"):
-        kind = (
-            p.RelativeWorldPosition if tag == "RelativeWorldPosition" else p.RelativeObjectPosition
-        )
-        return kind(
-            entity_ref=ctx.string(el, "entityRef"),
-            dx=ctx.double(el, "dx"),
-            dy=_lateral(ctx, ctx.double(el, "dy")),
-            dz=ctx.opt_double(el, "dz"),
-            orientation=_orientation_of(el, ctx),
-            line=line,
-        )
-    if tag == "RoadPosition":
-        return p.RoadPosition(
-            road_id=ctx.string(el, "roadId"),
-            s=ctx.double(el, "s"),
-            t=_lateral(ctx, ctx.double(el, "t")),
-            orientation=_orientation_of(el, ctx),
-            line=line,
-        )
-    if tag == "RelativeRoadPosition":
-        return p.RelativeRoadPosition(
-            entity_ref=ctx.string(el, "entityRef"),
-            ds=ctx.double(el, "ds"),
-            dt=_lateral(ctx, ctx.double(el, "dt")),
-            orientation=_orientation_of(el, ctx),
-            line=line,
-        )
-    if tag == "LanePosition":
-        return p.LanePosition(
-            road_id=ctx.string(el, "roadId"),
-            lane_id=ctx.integer(el, "laneId"),
-            s=ctx.double(el, "s"),
-            offset=_lateral(ctx, ctx.double_or(el, "offset", 0.0)),
-            orientation=_orientation_of(el, ctx),
-            line=line,
-        )
-    if tag == "RelativeLanePosition":
-        ds = ctx.opt_double(el, "ds")
-        ds_lane = ctx.opt_double(el, "dsLane")
-        if ds is None and ds_lane is None:
-            raise ctx.error(el, "one of 'ds' or 'dsLane' is required")
-        return p.RelativeLanePosition(
-            entity_ref=ctx.string(el, "entityRef"),
-            d_lane=ctx.integer(el, "dLane"),
-            ds=ds,
-            ds_lane=ds_lane,
-            offset=_lateral(ctx, ctx.double_or(el, "offset", 0.0)),
-            orientation=_orientation_of(el, ctx),
-            line=line,
-        )
-    if tag == "RoutePosition":
-        return _route_position(el, ctx)
-    if tag == "TrajectoryPosition":
-        return _trajectory_position(el, ctx)
-    if tag == "GeoPosition":
-        return ctx.unsupported(el, f"{tag} is not supported (needs a geo projection)")
-    return ctx.unsupported(el, f"unknown position kind {tag}")
+    return ctx.by_tag(
+        el,
+        _POSITION_READERS,
+        unknown="unknown position kind",
+        reasons={"GeoPosition": "GeoPosition is not supported (needs a geo projection)"},
+    )
+
+
+def _world(el: Element, ctx: reading.Context) -> p.WorldPosition:
+    return p.WorldPosition(
+        x=ctx.double(el, "x"),
+        y=_lateral(ctx, ctx.double(el, "y")),
+        z=ctx.opt_double(el, "z"),
+        h=_heading(el, ctx, "h"),
+        p=ctx.opt_double(el, "p"),
+        r=ctx.opt_double(el, "r"),
+        line=el.sourceline,
+    )
+
+
+def _relative_world_or_object(
+    el: Element, ctx: reading.Context
+) -> p.RelativeWorldPosition | p.RelativeObjectPosition:
+    relative_world = el.tag == "RelativeWorldPosition"
+    kind = p.RelativeWorldPosition if relative_world else p.RelativeObjectPosition
+    return kind(
+        entity_ref=ctx.string(el, "entityRef"),
+        dx=ctx.double(el, "dx"),
+        dy=_lateral(ctx, ctx.double(el, "dy")),
+        dz=ctx.opt_double(el, "dz"),
+        orientation=_orientation_of(el, ctx),
+        line=el.sourceline,
+    )
+
+
+def _road(el: Element, ctx: reading.Context) -> p.RoadPosition:
+    return p.RoadPosition(
+        road_id=ctx.string(el, "roadId"),
+        s=ctx.double(el, "s"),
+        t=_lateral(ctx, ctx.double(el, "t")),
+        orientation=_orientation_of(el, ctx),
+        line=el.sourceline,
+    )
+
+
+def _relative_road(el: Element, ctx: reading.Context) -> p.RelativeRoadPosition:
+    return p.RelativeRoadPosition(
+        entity_ref=ctx.string(el, "entityRef"),
+        ds=ctx.double(el, "ds"),
+        dt=_lateral(ctx, ctx.double(el, "dt")),
+        orientation=_orientation_of(el, ctx),
+        line=el.sourceline,
+    )
+
+
+def _lane(el: Element, ctx: reading.Context) -> p.LanePosition:
+    return p.LanePosition(
+        road_id=ctx.string(el, "roadId"),
+        lane_id=ctx.integer(el, "laneId"),
+        s=ctx.double(el, "s"),
+        offset=_lateral(ctx, ctx.double_or(el, "offset", 0.0)),
+        orientation=_orientation_of(el, ctx),
+        line=el.sourceline,
+    )
+
+
+def _relative_lane(el: Element, ctx: reading.Context) -> p.RelativeLanePosition:
+    ds = ctx.opt_double(el, "ds")
+    ds_lane = ctx.opt_double(el, "dsLane")
+    if ds is None and ds_lane is None:
+        raise ctx.error(el, "one of 'ds' or 'dsLane' is required")
+    return p.RelativeLanePosition(
+        entity_ref=ctx.string(el, "entityRef"),
+        d_lane=ctx.integer(el, "dLane"),
+        ds=ds,
+        ds_lane=ds_lane,
+        offset=_lateral(ctx, ctx.double_or(el, "offset", 0.0)),
+        orientation=_orientation_of(el, ctx),
+        line=el.sourceline,
+    )
 
 
 def _trajectory_position(el: Element, ctx: reading.Context) -> p.TrajectoryPosition:
@@ -300,3 +311,17 @@ def _shape(el: Element, ctx: reading.Context) -> p.Shape:
             )
         return p.Nurbs(order=order, control_points=points, knots=knots, line=line)
     return ctx.unsupported(el, f"unknown trajectory shape {tag}")
+
+
+_POSITION_READERS: Mapping[str, Callable[[Element, reading.Context], p.Position]] = {
+    "WorldPosition": _world,
+    "RelativeWorldPosition": _relative_world_or_object,
+    "RelativeObjectPosition": _relative_world_or_object,
+    "RoadPosition": _road,
+    "RelativeRoadPosition": _relative_road,
+    "LanePosition": _lane,
+    "RelativeLanePosition": _relative_lane,
+    "RoutePosition": _route_position,
+    "TrajectoryPosition": _trajectory_position,
+}
+"""Supported position kinds by tag (GeoPosition and unknown ones read as Unsupported)."""

@@ -2,11 +2,17 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable, Mapping
+from typing import Protocol
+
 from simtest_operator.openscenario import reading
 from simtest_operator.openscenario.model import common as m
 from simtest_operator.openscenario.model import trigger_conditions as c
 from simtest_operator.openscenario.readers import positions
 from simtest_operator.xmlsafe import Element
+
+_EntityReader = Callable[[Element, reading.Context], c.EntityCondition]
+_ValueReader = Callable[[Element, reading.Context], c.ValueCondition]
 
 _DISTANCE_ALIASES = {"cartesianDistance": m.RelativeDistanceType.EUCLIDEAN}
 _UNSUPPORTED_ENTITY = {
@@ -137,98 +143,136 @@ def _distance_frame(
 
 def entity_condition(el: Element, ctx: reading.Context) -> c.EntityCondition:
     """Read the chosen child of ``<EntityCondition>``."""
-    tag, line = el.tag, el.sourceline
-    if tag == "EndOfRoadCondition":
-        return c.EndOfRoadCondition(duration=ctx.double(el, "duration"), line=line)
-    if tag == "OffroadCondition":
-        return c.OffRoadCondition(duration=ctx.double(el, "duration"), line=line)
-    if tag == "StandStillCondition":
-        return c.StandStillCondition(duration=ctx.double(el, "duration"), line=line)
-    if tag == "TraveledDistanceCondition":
-        return c.TraveledDistanceCondition(value=ctx.double(el, "value"), line=line)
-    if tag == "CollisionCondition":
-        target = ctx.choice(el)
-        if target.tag == "EntityRef":
-            return c.CollisionCondition(entity_ref=ctx.string(target, "entityRef"), line=line)
-        return c.CollisionCondition(by_type=ctx.string(target, "type"), line=line)
-    if tag in ("AccelerationCondition", "SpeedCondition"):
-        kind = c.AccelerationCondition if tag == "AccelerationCondition" else c.SpeedCondition
+    return ctx.by_tag(
+        el, _ENTITY_READERS, unknown="unknown entity condition", reasons=_UNSUPPORTED_ENTITY
+    )
+
+
+class _DurationKind(Protocol):
+    def __call__(self, *, duration: float, line: int | None) -> c.EntityCondition: ...
+
+
+class _MotionKind(Protocol):
+    def __call__(
+        self,
+        *,
+        value: float,
+        rule: m.Rule,
+        direction: m.DirectionalDimension | None,
+        line: int | None,
+    ) -> c.EntityCondition: ...
+
+
+def _duration(kind: _DurationKind) -> _EntityReader:
+    """A reader of a condition holding only a ``duration`` (end of road, off road, standstill)."""
+
+    def read(el: Element, ctx: reading.Context) -> c.EntityCondition:
+        return kind(duration=ctx.double(el, "duration"), line=el.sourceline)
+
+    return read
+
+
+def _motion(kind: _MotionKind) -> _EntityReader:
+    """A reader of an acceleration or speed condition (same attributes)."""
+
+    def read(el: Element, ctx: reading.Context) -> c.EntityCondition:
         return kind(
             value=ctx.double(el, "value"),
             rule=ctx.enum(el, "rule", m.Rule),
             direction=ctx.opt_enum(el, "direction", m.DirectionalDimension),
-            line=line,
+            line=el.sourceline,
         )
-    if tag == "RelativeSpeedCondition":
-        return c.RelativeSpeedCondition(
-            entity_ref=ctx.string(el, "entityRef"),
-            value=ctx.double(el, "value"),
-            rule=ctx.enum(el, "rule", m.Rule),
-            direction=ctx.opt_enum(el, "direction", m.DirectionalDimension),
-            line=line,
-        )
-    if tag == "ReachPositionCondition":
-        return c.ReachPositionCondition(
-            position=positions.position(ctx.require(el, "Position"), ctx),
-            tolerance=ctx.double(el, "tolerance"),
-            line=line,
-        )
-    if tag == "TimeHeadwayCondition":
-        system, kind_, along = _distance_frame(el, ctx, m.RelativeDistanceType.LONGITUDINAL)
-        return c.TimeHeadwayCondition(
-            entity_ref=ctx.string(el, "entityRef"),
-            value=ctx.double(el, "value"),
-            rule=ctx.enum(el, "rule", m.Rule),
-            freespace=ctx.boolean(el, "freespace"),
-            coordinate_system=system,
-            relative_distance_type=kind_,
-            along_route=along,
-            line=line,
-        )
-    if tag == "TimeToCollisionCondition":
-        return _time_to_collision(el, ctx)
-    if tag == "DistanceCondition":
-        system, kind_, along = _distance_frame(el, ctx, m.RelativeDistanceType.EUCLIDEAN)
-        return c.DistanceCondition(
-            position=positions.position(ctx.require(el, "Position"), ctx),
-            value=ctx.double(el, "value"),
-            rule=ctx.enum(el, "rule", m.Rule),
-            freespace=ctx.boolean(el, "freespace"),
-            coordinate_system=system,
-            relative_distance_type=kind_,
-            along_route=along,
-            routing_algorithm=ctx.opt_enum(el, "routingAlgorithm", m.RoutingAlgorithm),
-            line=line,
-        )
-    if tag == "RelativeClearanceCondition":
-        return c.RelativeClearanceCondition(
-            lane_ranges=tuple(
-                (ctx.opt_integer(r, "from", 0) or 0, ctx.opt_integer(r, "to", 0) or 0)
-                for r in reading.all_children(el, "RelativeLaneRange")
-            ),
-            entity_refs=tuple(
-                ctx.string(ref, "entityRef") for ref in reading.all_children(el, "EntityRef")
-            ),
-            opposite_lanes=ctx.boolean(el, "oppositeLanes"),
-            freespace=ctx.boolean(el, "freeSpace"),
-            distance_forward=ctx.opt_double(el, "distanceForward"),
-            distance_backward=ctx.opt_double(el, "distanceBackward"),
-            line=line,
-        )
-    if tag == "RelativeDistanceCondition":
-        system, kind_, _ = _distance_frame(el, ctx, m.RelativeDistanceType.EUCLIDEAN)
-        return c.RelativeDistanceCondition(
-            entity_ref=ctx.string(el, "entityRef"),
-            value=ctx.double(el, "value"),
-            rule=ctx.enum(el, "rule", m.Rule),
-            freespace=ctx.boolean(el, "freespace"),
-            relative_distance_type=kind_,
-            coordinate_system=system,
-            routing_algorithm=ctx.opt_enum(el, "routingAlgorithm", m.RoutingAlgorithm),
-            line=line,
-        )
-    reason = _UNSUPPORTED_ENTITY.get(str(tag), f"unknown entity condition {tag}")
-    return ctx.unsupported(el, reason)
+
+    return read
+
+
+def _traveled_distance(el: Element, ctx: reading.Context) -> c.TraveledDistanceCondition:
+    return c.TraveledDistanceCondition(value=ctx.double(el, "value"), line=el.sourceline)
+
+
+def _collision(el: Element, ctx: reading.Context) -> c.CollisionCondition:
+    target = ctx.choice(el)
+    if target.tag == "EntityRef":
+        return c.CollisionCondition(entity_ref=ctx.string(target, "entityRef"), line=el.sourceline)
+    return c.CollisionCondition(by_type=ctx.string(target, "type"), line=el.sourceline)
+
+
+def _relative_speed(el: Element, ctx: reading.Context) -> c.RelativeSpeedCondition:
+    return c.RelativeSpeedCondition(
+        entity_ref=ctx.string(el, "entityRef"),
+        value=ctx.double(el, "value"),
+        rule=ctx.enum(el, "rule", m.Rule),
+        direction=ctx.opt_enum(el, "direction", m.DirectionalDimension),
+        line=el.sourceline,
+    )
+
+
+def _reach_position(el: Element, ctx: reading.Context) -> c.ReachPositionCondition:
+    return c.ReachPositionCondition(
+        position=positions.position(ctx.require(el, "Position"), ctx),
+        tolerance=ctx.double(el, "tolerance"),
+        line=el.sourceline,
+    )
+
+
+def _time_headway(el: Element, ctx: reading.Context) -> c.TimeHeadwayCondition:
+    system, kind, along = _distance_frame(el, ctx, m.RelativeDistanceType.LONGITUDINAL)
+    return c.TimeHeadwayCondition(
+        entity_ref=ctx.string(el, "entityRef"),
+        value=ctx.double(el, "value"),
+        rule=ctx.enum(el, "rule", m.Rule),
+        freespace=ctx.boolean(el, "freespace"),
+        coordinate_system=system,
+        relative_distance_type=kind,
+        along_route=along,
+        line=el.sourceline,
+    )
+
+
+def _distance(el: Element, ctx: reading.Context) -> c.DistanceCondition:
+    system, kind, along = _distance_frame(el, ctx, m.RelativeDistanceType.EUCLIDEAN)
+    return c.DistanceCondition(
+        position=positions.position(ctx.require(el, "Position"), ctx),
+        value=ctx.double(el, "value"),
+        rule=ctx.enum(el, "rule", m.Rule),
+        freespace=ctx.boolean(el, "freespace"),
+        coordinate_system=system,
+        relative_distance_type=kind,
+        along_route=along,
+        routing_algorithm=ctx.opt_enum(el, "routingAlgorithm", m.RoutingAlgorithm),
+        line=el.sourceline,
+    )
+
+
+def _relative_clearance(el: Element, ctx: reading.Context) -> c.RelativeClearanceCondition:
+    return c.RelativeClearanceCondition(
+        lane_ranges=tuple(
+            (ctx.opt_integer(r, "from", 0) or 0, ctx.opt_integer(r, "to", 0) or 0)
+            for r in reading.all_children(el, "RelativeLaneRange")
+        ),
+        entity_refs=tuple(
+            ctx.string(ref, "entityRef") for ref in reading.all_children(el, "EntityRef")
+        ),
+        opposite_lanes=ctx.boolean(el, "oppositeLanes"),
+        freespace=ctx.boolean(el, "freeSpace"),
+        distance_forward=ctx.opt_double(el, "distanceForward"),
+        distance_backward=ctx.opt_double(el, "distanceBackward"),
+        line=el.sourceline,
+    )
+
+
+def _relative_distance(el: Element, ctx: reading.Context) -> c.RelativeDistanceCondition:
+    system, kind, _ = _distance_frame(el, ctx, m.RelativeDistanceType.EUCLIDEAN)
+    return c.RelativeDistanceCondition(
+        entity_ref=ctx.string(el, "entityRef"),
+        value=ctx.double(el, "value"),
+        rule=ctx.enum(el, "rule", m.Rule),
+        freespace=ctx.boolean(el, "freespace"),
+        relative_distance_type=kind,
+        coordinate_system=system,
+        routing_algorithm=ctx.opt_enum(el, "routingAlgorithm", m.RoutingAlgorithm),
+        line=el.sourceline,
+    )
 
 
 def _time_to_collision(el: Element, ctx: reading.Context) -> c.TimeToCollisionCondition:
@@ -253,35 +297,75 @@ def _time_to_collision(el: Element, ctx: reading.Context) -> c.TimeToCollisionCo
 
 def value_condition(el: Element, ctx: reading.Context) -> c.ValueCondition:
     """Read the chosen child of ``<ByValueCondition>``."""
-    tag, line = el.tag, el.sourceline
-    if tag == "SimulationTimeCondition":
-        return c.SimulationTimeCondition(
-            value=ctx.double(el, "value"), rule=ctx.enum(el, "rule", m.Rule), line=line
-        )
-    if tag == "StoryboardElementStateCondition":
-        return c.StoryboardElementStateCondition(
-            element_type=ctx.enum(el, "storyboardElementType", c.StoryboardElementType),
-            element_ref=ctx.string(el, "storyboardElementRef"),
-            state=ctx.enum(el, "state", c.StoryboardElementState),
-            line=line,
-        )
-    if tag == "ParameterCondition":
-        return c.ParameterCondition(
-            parameter_ref=ctx.string(el, "parameterRef"),
-            value=ctx.string(el, "value"),
-            rule=ctx.enum(el, "rule", m.Rule),
-            line=line,
-        )
-    if tag == "VariableCondition":
-        return c.VariableCondition(
-            variable_ref=ctx.string(el, "variableRef"),
-            value=ctx.string(el, "value"),
-            rule=ctx.enum(el, "rule", m.Rule),
-            line=line,
-        )
-    if tag == "TrafficSignalCondition":
-        return c.TrafficSignalCondition(
-            name=ctx.string(el, "name"), state=ctx.string(el, "state"), line=line
-        )
-    reason = _UNSUPPORTED_VALUE.get(str(tag), f"unknown value condition {tag}")
-    return ctx.unsupported(el, reason)
+    return ctx.by_tag(
+        el, _VALUE_READERS, unknown="unknown value condition", reasons=_UNSUPPORTED_VALUE
+    )
+
+
+def _simulation_time(el: Element, ctx: reading.Context) -> c.SimulationTimeCondition:
+    return c.SimulationTimeCondition(
+        value=ctx.double(el, "value"), rule=ctx.enum(el, "rule", m.Rule), line=el.sourceline
+    )
+
+
+def _storyboard_element_state(
+    el: Element, ctx: reading.Context
+) -> c.StoryboardElementStateCondition:
+    return c.StoryboardElementStateCondition(
+        element_type=ctx.enum(el, "storyboardElementType", c.StoryboardElementType),
+        element_ref=ctx.string(el, "storyboardElementRef"),
+        state=ctx.enum(el, "state", c.StoryboardElementState),
+        line=el.sourceline,
+    )
+
+
+def _parameter(el: Element, ctx: reading.Context) -> c.ParameterCondition:
+    return c.ParameterCondition(
+        parameter_ref=ctx.string(el, "parameterRef"),
+        value=ctx.string(el, "value"),
+        rule=ctx.enum(el, "rule", m.Rule),
+        line=el.sourceline,
+    )
+
+
+def _variable(el: Element, ctx: reading.Context) -> c.VariableCondition:
+    return c.VariableCondition(
+        variable_ref=ctx.string(el, "variableRef"),
+        value=ctx.string(el, "value"),
+        rule=ctx.enum(el, "rule", m.Rule),
+        line=el.sourceline,
+    )
+
+
+def _traffic_signal(el: Element, ctx: reading.Context) -> c.TrafficSignalCondition:
+    return c.TrafficSignalCondition(
+        name=ctx.string(el, "name"), state=ctx.string(el, "state"), line=el.sourceline
+    )
+
+
+_ENTITY_READERS: Mapping[str, _EntityReader] = {
+    "EndOfRoadCondition": _duration(c.EndOfRoadCondition),
+    "OffroadCondition": _duration(c.OffRoadCondition),
+    "StandStillCondition": _duration(c.StandStillCondition),
+    "TraveledDistanceCondition": _traveled_distance,
+    "CollisionCondition": _collision,
+    "AccelerationCondition": _motion(c.AccelerationCondition),
+    "SpeedCondition": _motion(c.SpeedCondition),
+    "RelativeSpeedCondition": _relative_speed,
+    "ReachPositionCondition": _reach_position,
+    "TimeHeadwayCondition": _time_headway,
+    "TimeToCollisionCondition": _time_to_collision,
+    "DistanceCondition": _distance,
+    "RelativeClearanceCondition": _relative_clearance,
+    "RelativeDistanceCondition": _relative_distance,
+}
+"""Supported ``<EntityCondition>`` children by tag (others: :data:`_UNSUPPORTED_ENTITY`)."""
+
+_VALUE_READERS: Mapping[str, _ValueReader] = {
+    "SimulationTimeCondition": _simulation_time,
+    "StoryboardElementStateCondition": _storyboard_element_state,
+    "ParameterCondition": _parameter,
+    "VariableCondition": _variable,
+    "TrafficSignalCondition": _traffic_signal,
+}
+"""Supported ``<ByValueCondition>`` children by tag (others: :data:`_UNSUPPORTED_VALUE`)."""
