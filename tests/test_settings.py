@@ -1,0 +1,68 @@
+"""The one settings root: every topic comes from one read of the environment.
+
+Covers: defaults without variables (cache under ``$HOME/.cache/simtest``, the operator's knobs
+as the chart documents them); ``SIMTEST_*`` and ``SIMTEST_OPERATOR_*`` variables land in their
+topics; flags of ``simtest operator`` override the variables and a flag not given does not;
+``SIMTEST_SECRET_*`` values are kept for local runs but never shown in the repr; a malformed node
+selector names the variable.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from simtest_operator.settings import OperatorSettings, Settings
+
+
+def test_defaults() -> None:
+    settings = Settings.from_env({"HOME": "/h"})
+    assert settings.cache.root == Path("/h/.cache/simtest")
+    assert settings.simulation.seed == 42 and settings.simulation.step_length == 0.05
+    assert settings.operator == OperatorSettings()
+    assert settings.operator.templates_dir == Path("helm-templates")
+    assert settings.operator.cache_dir == Path("/tmp/simtest-operator-cache")
+    assert settings.operator.scenario_claim == "" and settings.operator.metrics_port == 8080
+    assert settings.secrets == {}
+
+
+def test_variables_fill_their_topics() -> None:
+    settings = Settings.from_env(
+        {
+            "SIMTEST_CACHE_DIR": "/c",
+            "SIMTEST_SEED": "7",
+            "SIMTEST_OPERATOR_TEMPLATES": "/t",
+            "SIMTEST_OPERATOR_LEADER_ELECTION": "yes",
+            "SIMTEST_OPERATOR_HELMFILE_NODE_SELECTOR": "pool=infra, ,zone=a",
+            "SIMTEST_OPERATOR_PREFETCH": "0",
+            "SIMTEST_OPERATOR_IDENTITY": "",
+        }
+    )
+    assert settings.cache.root == Path("/c") and settings.simulation.seed == 7
+    operator = settings.operator
+    assert operator.templates_dir == Path("/t") and operator.leader_election
+    assert operator.helmfile_node_selector == {"pool": "infra", "zone": "a"}
+    assert operator.prefetch_per_node == 0
+    assert operator.identity == ""
+
+
+def test_flags_override_variables() -> None:
+    settings = Settings.from_env(
+        {"HOME": "/h", "SIMTEST_OPERATOR_METRICS_PORT": "9000", "SIMTEST_OPERATOR_IDENTITY": "a"},
+        operator_flags={"metrics_port": 0, "identity": None, "sources_dir": Path("/s")},
+    )
+    assert settings.operator.metrics_port == 0
+    assert settings.operator.identity == "a"
+    assert settings.operator.sources_dir == Path("/s")
+
+
+def test_secrets_are_kept_but_not_shown() -> None:
+    settings = Settings.from_env({"HOME": "/h", "SIMTEST_SECRET_DB_TOKEN": "hunter2"})
+    assert settings.secrets == {"SIMTEST_SECRET_DB_TOKEN": "hunter2"}
+    assert "hunter2" not in repr(settings)
+
+
+def test_malformed_node_selector_names_the_variable() -> None:
+    with pytest.raises(ValueError, match="SIMTEST_OPERATOR_HELMFILE_NODE_SELECTOR"):
+        Settings.from_env({"HOME": "/h", "SIMTEST_OPERATOR_HELMFILE_NODE_SELECTOR": "novalue"})
