@@ -8,20 +8,11 @@ from simtest_operator.openscenario import reading
 from simtest_operator.openscenario.model import actions as a
 from simtest_operator.openscenario.model import common as m
 from simtest_operator.openscenario.model import controls as ctl
-from simtest_operator.openscenario.readers import (
-    controllers,
-    positions,
-    traffic,
-    world_actions,
-)
+from simtest_operator.openscenario.readers import controllers, positions, traffic, world_actions
 from simtest_operator.xmlsafe import Element
 
-_PRIVATE_UNSUPPORTED = {
-    "TrailerAction": "trailers are not simulated",
-}
-_GLOBAL_UNSUPPORTED = {
-    "SetMonitorAction": "monitors are not supported",
-}
+_PRIVATE_UNSUPPORTED = {"TrailerAction": "trailers are not simulated"}
+_GLOBAL_UNSUPPORTED = {"SetMonitorAction": "monitors are not supported"}
 
 
 def storyboard_action(el: Element, ctx: reading.Context) -> a.Action:
