@@ -154,7 +154,7 @@ class Settings:
     """User map libraries (``SIMTEST_MAP_PATH``, folders separated by ``:``): folders of
     ``<name>.xodr`` a scenario names with ``<LogicFile filepath="<name>"/>``, searched before
     the CARLA towns shipped with the product."""
-    operator: OperatorSettings = dataclasses.field(default_factory=OperatorSettings)
+    operator: OperatorSettings = dataclasses.field(default_factory=OperatorSettings, hash=False)
     """The operator's knobs (``SIMTEST_OPERATOR_*``); only ``simtest operator`` uses them."""
     secrets: Mapping[str, str] = dataclasses.field(default_factory=dict, repr=False, hash=False)
     """``SIMTEST_SECRET_<NAME>_<KEY>`` variables by name: Secret values for local runs
