@@ -21,9 +21,10 @@ def test_defaults() -> None:
     assert settings.cache.root == Path("/h/.cache/simtest")
     assert settings.simulation.seed == 42 and settings.simulation.step_length == 0.05
     assert settings.operator == OperatorSettings()
-    assert settings.operator.templates_dir == Path("helm-templates")
-    assert settings.operator.cache_dir == Path("/tmp/simtest-operator-cache")
-    assert settings.operator.scenario_claim == "" and settings.operator.metrics_port == 8080
+    assert settings.operator.inputs.templates_dir == Path("helm-templates")
+    assert settings.operator.inputs.cache_dir == Path("/tmp/simtest-operator-cache")
+    assert settings.operator.inputs.scenario_claim == ""
+    assert settings.operator.metrics_port == 8080
     assert settings.secrets == {}
 
 
@@ -41,20 +42,24 @@ def test_variables_fill_their_topics() -> None:
     )
     assert settings.cache.root == Path("/c") and settings.simulation.seed == 7
     operator = settings.operator
-    assert operator.templates_dir == Path("/t") and operator.leader_election
-    assert operator.helmfile_node_selector == {"pool": "infra", "zone": "a"}
-    assert operator.prefetch_per_node == 0
-    assert operator.identity == ""
+    assert operator.inputs.templates_dir == Path("/t") and operator.leadership.enabled
+    assert operator.helmfile.node_selector == {"pool": "infra", "zone": "a"}
+    assert operator.pacing.prefetch_per_node == 0
+    assert operator.leadership.identity == ""
 
 
 def test_flags_override_variables() -> None:
     settings = Settings.from_env(
         {"HOME": "/h", "SIMTEST_OPERATOR_METRICS_PORT": "9000", "SIMTEST_OPERATOR_IDENTITY": "a"},
-        operator_flags={"metrics_port": 0, "identity": None, "sources_dir": Path("/s")},
+        operator_flags={
+            "metrics_port": 0,
+            "leadership.identity": None,
+            "inputs.sources_dir": Path("/s"),
+        },
     )
     assert settings.operator.metrics_port == 0
-    assert settings.operator.identity == "a"
-    assert settings.operator.sources_dir == Path("/s")
+    assert settings.operator.leadership.identity == "a"
+    assert settings.operator.inputs.sources_dir == Path("/s")
 
 
 def test_secrets_are_kept_but_not_shown() -> None:

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import os
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 
 ENV_PREFIX = "SIMTEST_"
@@ -66,8 +66,8 @@ class SimulationSettings:
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
-class OperatorSettings:
-    """How the operator runs: knobs of the installation, not of a campaign."""
+class InputSettings:
+    """Where the operator finds environment templates and scenario sources."""
 
     templates_dir: Path = Path("helm-templates")
     """Root of the environment templates (``helm-templates/``); ``SIMTEST_OPERATOR_TEMPLATES``."""
@@ -80,23 +80,17 @@ class OperatorSettings:
     """PVC holding ``path`` sources, mounted read-only into simulator pods at ``sources_dir``
     (``SIMTEST_OPERATOR_SCENARIO_CLAIM``); empty: none, and a pod cannot read ``file://``
     sources (its scenarios end ``Error`` with a hint to set this)."""
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class PacingSettings:
+    """How often the operator writes and how much one step does."""
+
     status_interval: float = 1.0
     """Minimum seconds between two campaign status writes that change counters only; phase and
     condition changes are written at once. Fewer writes, same end state."""
     event_interval: float = 10.0
     """Minimum seconds between two events on the same object (terminal phases always post)."""
-    missing_pod_grace: float = 10.0
-    """Seconds a pod recorded as created may be missing from the cache before it counts as
-    deleted."""
-    backstop_grace: float = 30.0
-    """Seconds past a pod's activeDeadlineSeconds before the operator ends the run as Timeout
-    itself (when no kubelet enforces the deadline)."""
-    node_not_ready_grace: float = 60.0
-    """Seconds a simulator pod's node may be NotReady (kubelet stopped, node cut off) before its
-    scenarios end Error and are retried on another node; the pod is force-deleted."""
-    keep_finished_environments: bool = False
-    """Keep SimEnvironments after their results are folded into the batch (debugging); by
-    default they are deleted so live objects stay bounded by the in-flight window."""
     prefetch_per_node: int = 1
     """Window mode with a derived window (no maxParallel): pods created beyond the free
     simulator slots, per usable node. They wait in Pending and the scheduler starts one the
@@ -112,13 +106,32 @@ class OperatorSettings:
     """How long a campaign loop waits after a wake-up for more events to arrive."""
     api_workers: int = 16
     """Threads for Kubernetes API calls."""
-    metrics_port: int = 8080
-    """Port of ``/metrics``, ``/healthz`` and ``/readyz``; 0 disables the server."""
-    leader_election: bool = False
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class GraceSettings:
+    """How long the operator waits before it judges a run by what is missing."""
+
+    missing_pod_grace: float = 10.0
+    """Seconds a pod recorded as created may be missing from the cache before it counts as
+    deleted."""
+    backstop_grace: float = 30.0
+    """Seconds past a pod's activeDeadlineSeconds before the operator ends the run as Timeout
+    itself (when no kubelet enforces the deadline)."""
+    node_not_ready_grace: float = 60.0
+    """Seconds a simulator pod's node may be NotReady (kubelet stopped, node cut off) before its
+    scenarios end Error and are retried on another node; the pod is force-deleted."""
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class LeadershipSettings:
+    """Leader election among replicas over a coordination.k8s.io Lease."""
+
+    enabled: bool = False
     """Run campaign loops only while holding the Lease ``lease_name`` (two or more replicas);
     ``SIMTEST_OPERATOR_LEADER_ELECTION``. Off: this process always acts (one replica)."""
     lease_name: str = "simtest-operator"
-    """Name of the coordination.k8s.io Lease; ``SIMTEST_OPERATOR_LEASE_NAME``."""
+    """Name of the Lease; ``SIMTEST_OPERATOR_LEASE_NAME``."""
     lease_namespace: str = ""
     """Namespace of the Lease (the operator's own); empty: the first watched namespace, else
     ``default``; ``SIMTEST_OPERATOR_LEASE_NAMESPACE``."""
@@ -131,17 +144,40 @@ class OperatorSettings:
     """Seconds the leader keeps acting without a successful renewal (client-go's default)."""
     retry_period: float = 2.0
     """Seconds between two acquire/renew attempts (client-go's default)."""
-    helmfile_image: str = ""
-    """Image of the ``provisioner: Helmfile`` Jobs (helm, helmfile and ``charts/``);
-    ``SIMTEST_OPERATOR_HELMFILE_IMAGE``. Empty: campaigns asking for the Helmfile provisioner end
-    their environments as Error with a reason saying so."""
-    helmfile_role: str = ""
-    """ClusterRole bound (per campaign, in its namespace) to the helmfile Jobs' ServiceAccount;
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class HelmfileSettings:
+    """The Jobs of ``provisioner: Helmfile`` environments."""
+
+    image: str = ""
+    """Image of the Jobs (helm, helmfile and ``charts/``); ``SIMTEST_OPERATOR_HELMFILE_IMAGE``.
+    Empty: campaigns asking for the Helmfile provisioner end their environments as Error with a
+    reason saying so."""
+    role: str = ""
+    """ClusterRole bound (per campaign, in its namespace) to the Jobs' ServiceAccount;
     ``SIMTEST_OPERATOR_HELMFILE_ROLE`` (the chart's ``<release>-helmfile-provisioner``)."""
-    helmfile_node_selector: Mapping[str, str] = dataclasses.field(default_factory=dict)
-    """Node selector of the helmfile Jobs (``key=value,...``;
-    ``SIMTEST_OPERATOR_HELMFILE_NODE_SELECTOR``): provisioning needs no simulator node, and may
-    need nodes that reach chart registries."""
+    node_selector: Mapping[str, str] = dataclasses.field(default_factory=dict)
+    """Node selector of the Jobs (``key=value,...``; ``SIMTEST_OPERATOR_HELMFILE_NODE_SELECTOR``):
+    provisioning needs no simulator node, and may need nodes that reach chart registries."""
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class OperatorSettings:
+    """How the operator runs: knobs of the installation, not of a campaign, by topic."""
+
+    inputs: InputSettings = dataclasses.field(default_factory=InputSettings)
+    pacing: PacingSettings = dataclasses.field(default_factory=PacingSettings)
+    graces: GraceSettings = dataclasses.field(default_factory=GraceSettings)
+    leadership: LeadershipSettings = dataclasses.field(default_factory=LeadershipSettings)
+    helmfile: HelmfileSettings = dataclasses.field(default_factory=HelmfileSettings)
+    metrics_port: int = 8080
+    """Port of ``/metrics``, ``/healthz`` and ``/readyz``; 0 disables the server;
+    ``SIMTEST_OPERATOR_METRICS_PORT``."""
+    keep_finished_environments: bool = False
+    """Keep SimEnvironments after their results are folded into the batch (debugging); by
+    default they are deleted so live objects stay bounded by the in-flight window;
+    ``SIMTEST_OPERATOR_KEEP_ENVIRONMENTS``."""
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
@@ -168,8 +204,9 @@ class Settings:
         *,
         operator_flags: Mapping[str, object] | None = None,
     ) -> Settings:
-        """Defaults, then ``SIMTEST_*`` variables, then ``operator_flags`` (the CLI's flags of
-        ``simtest operator``; a None value means the flag was not given)."""
+        """Defaults, then ``SIMTEST_*`` variables, then ``operator_flags``: the CLI's flags of
+        ``simtest operator`` by field, ``topic.field`` inside a topic (``inputs.templates_dir``);
+        a None value means the flag was not given."""
         env = os.environ if env is None else env
         cache_root = env.get(f"{ENV_PREFIX}CACHE_DIR")
         defaults = SimulationSettings()
@@ -177,8 +214,7 @@ class Settings:
             step_length=float(env.get(f"{ENV_PREFIX}STEP_LENGTH", defaults.step_length)),
             seed=int(env.get(f"{ENV_PREFIX}SEED", defaults.seed)),
         )
-        operator = _operator(env)
-        flags = {k: v for k, v in (operator_flags or {}).items() if v is not None}
+        operator = _with_flags(_operator(env), operator_flags or {})
         return cls(
             cache=CacheSettings(
                 root=Path(cache_root) if cache_root else _default_cache_dir(env),
@@ -187,51 +223,70 @@ class Settings:
             maps=tuple(
                 Path(p) for p in env.get(f"{ENV_PREFIX}MAP_PATH", "").split(os.pathsep) if p
             ),
-            operator=dataclasses.replace(operator, **flags) if flags else operator,  # type: ignore[arg-type]
+            operator=operator,
             secrets={k: v for k, v in env.items() if k.startswith(SECRET_PREFIX)},
         )
 
 
+_VARIABLES: tuple[tuple[str, str, Callable[[str], object]], ...] = (
+    ("inputs.templates_dir", "TEMPLATES", Path),
+    ("inputs.sources_dir", "SOURCES", Path),
+    ("inputs.cache_dir", "CACHE", Path),
+    ("inputs.scenario_claim", "SCENARIO_CLAIM", str),
+    ("pacing.status_interval", "STATUS_INTERVAL", float),
+    ("pacing.event_interval", "EVENT_INTERVAL", float),
+    ("pacing.reuse_queue", "REUSE_QUEUE", int),
+    ("pacing.max_starts_per_step", "MAX_STARTS_PER_STEP", int),
+    ("pacing.prefetch_per_node", "PREFETCH", int),
+    ("graces.missing_pod_grace", "MISSING_POD_GRACE", float),
+    ("graces.backstop_grace", "BACKSTOP_GRACE", float),
+    ("graces.node_not_ready_grace", "NODE_NOT_READY_GRACE", float),
+    ("metrics_port", "METRICS_PORT", int),
+    ("leadership.enabled", "LEADER_ELECTION", lambda raw: raw.lower() in ("1", "true", "yes")),
+    ("leadership.lease_name", "LEASE_NAME", str),
+    ("leadership.lease_namespace", "LEASE_NAMESPACE", str),
+    ("leadership.identity", "IDENTITY", str),
+    ("leadership.lease_duration", "LEASE_DURATION", float),
+    ("leadership.renew_deadline", "RENEW_DEADLINE", float),
+    ("leadership.retry_period", "RETRY_PERIOD", float),
+    ("helmfile.image", "HELMFILE_IMAGE", str),
+    ("helmfile.role", "HELMFILE_ROLE", str),
+    ("helmfile.node_selector", "HELMFILE_NODE_SELECTOR", lambda raw: _pairs(raw)),
+    (
+        "keep_finished_environments",
+        "KEEP_ENVIRONMENTS",
+        lambda raw: raw.lower() in ("1", "true", "yes"),
+    ),
+)
+"""Operator field (``topic.field``), variable after ``SIMTEST_OPERATOR_``, and how to read it.
+An unset or empty variable keeps the default (blank for the node selector)."""
+
+
 def _operator(env: Mapping[str, str]) -> OperatorSettings:
-    """The operator's topic from ``SIMTEST_OPERATOR_*`` (unset or empty: the default)."""
+    """The operator's topics from ``SIMTEST_OPERATOR_*``."""
     values: dict[str, object] = {}
-    for name, key, kind in (
-        ("templates_dir", "TEMPLATES", Path),
-        ("sources_dir", "SOURCES", Path),
-        ("cache_dir", "CACHE", Path),
-        ("status_interval", "STATUS_INTERVAL", float),
-        ("event_interval", "EVENT_INTERVAL", float),
-        ("missing_pod_grace", "MISSING_POD_GRACE", float),
-        ("backstop_grace", "BACKSTOP_GRACE", float),
-        ("node_not_ready_grace", "NODE_NOT_READY_GRACE", float),
-        ("reuse_queue", "REUSE_QUEUE", int),
-        ("max_starts_per_step", "MAX_STARTS_PER_STEP", int),
-        ("prefetch_per_node", "PREFETCH", int),
-        ("metrics_port", "METRICS_PORT", int),
-        ("lease_name", "LEASE_NAME", str),
-        ("lease_namespace", "LEASE_NAMESPACE", str),
-        ("identity", "IDENTITY", str),
-        ("lease_duration", "LEASE_DURATION", float),
-        ("renew_deadline", "RENEW_DEADLINE", float),
-        ("retry_period", "RETRY_PERIOD", float),
-    ):
-        raw = env.get(OPERATOR_PREFIX + key)
-        if raw:
-            values[name] = kind(raw)
-    if env.get(OPERATOR_PREFIX + "KEEP_ENVIRONMENTS", "").lower() in ("1", "true", "yes"):
-        values["keep_finished_environments"] = True
-    if env.get(OPERATOR_PREFIX + "LEADER_ELECTION", "").lower() in ("1", "true", "yes"):
-        values["leader_election"] = True
-    for name, key in (("helmfile_image", "HELMFILE_IMAGE"), ("helmfile_role", "HELMFILE_ROLE")):
-        if env.get(OPERATOR_PREFIX + key):
-            values[name] = env[OPERATOR_PREFIX + key]
-    selector = env.get(OPERATOR_PREFIX + "HELMFILE_NODE_SELECTOR", "")
-    if selector.strip():
-        values["helmfile_node_selector"] = _pairs(selector)
-    claim = env.get(OPERATOR_PREFIX + "SCENARIO_CLAIM")
-    if claim:
-        values["scenario_claim"] = claim
-    return OperatorSettings(**values)  # type: ignore[arg-type]
+    for field, key, kind in _VARIABLES:
+        raw = env.get(OPERATOR_PREFIX + key, "")
+        if raw.strip() if field == "helmfile.node_selector" else raw:
+            values[field] = kind(raw)
+    return _with_flags(OperatorSettings(), values)
+
+
+def _with_flags(operator: OperatorSettings, values: Mapping[str, object]) -> OperatorSettings:
+    """``operator`` with ``values`` (``field`` or ``topic.field``; None: left as it is)."""
+    top: dict[str, object] = {}
+    topics: dict[str, dict[str, object]] = {}
+    for name, value in values.items():
+        if value is None:
+            continue
+        topic, _, field = name.rpartition(".")
+        if topic:
+            topics.setdefault(topic, {})[field] = value
+        else:
+            top[name] = value
+    for topic, fields in topics.items():
+        top[topic] = dataclasses.replace(getattr(operator, topic), **fields)
+    return dataclasses.replace(operator, **top) if top else operator  # type: ignore[arg-type]
 
 
 def _pairs(text: str) -> dict[str, str]:

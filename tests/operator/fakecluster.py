@@ -30,7 +30,7 @@ from simtest_operator.operator.actions import (
 )
 from simtest_operator.render import TemplateLibrary, render_environment
 from simtest_operator.scenarios import FrozenList, PinnedScenario
-from simtest_operator.settings import OperatorSettings
+from simtest_operator.settings import InputSettings, OperatorSettings
 
 REPO = Path(__file__).resolve().parents[2]
 T0 = datetime.datetime(2030, 1, 1, tzinfo=datetime.UTC)
@@ -100,8 +100,10 @@ class FakeCluster:
         self.objects: dict[tuple[Kind | str, str], dict[str, Any]] = {}
         self.nodes = dict(nodes if nodes is not None else {"n0": 3, "n1": 3, "n2": 3})
         self.script = script
-        self.config = config or OperatorSettings(templates_dir=REPO / "helm-templates")
-        self.library = TemplateLibrary(self.config.templates_dir)
+        self.config = config or OperatorSettings(
+            inputs=InputSettings(templates_dir=REPO / "helm-templates")
+        )
+        self.library = TemplateLibrary(self.config.inputs.templates_dir)
         self._uids = itertools.count(1)
         self._rv = itertools.count(1)
         self.events: list[Emit] = []

@@ -15,7 +15,7 @@ import json
 import random
 
 from simtest_operator.operator.actions import Create, Kind
-from simtest_operator.settings import OperatorSettings
+from simtest_operator.settings import InputSettings, OperatorSettings, PacingSettings
 from tests.operator.fakecluster import REPO, FakeCluster, Script, campaign_body, frozen_list
 
 
@@ -130,7 +130,10 @@ def test_suspend_starts_nothing_new() -> None:
 
 
 def test_reuse_runs_queues_on_warm_workers() -> None:
-    config = OperatorSettings(templates_dir=REPO / "helm-templates", reuse_queue=4)
+    config = OperatorSettings(
+        inputs=InputSettings(templates_dir=REPO / "helm-templates"),
+        pacing=PacingSettings(reuse_queue=4),
+    )
     cluster = FakeCluster(config=config, nodes={"n0": 2})
     body = campaign_body(batchSize=10, isolation="Reuse")
     cluster.start_campaign(body, frozen_list(10), batch_size=10)
@@ -178,7 +181,10 @@ def test_explicit_max_parallel_is_never_exceeded_and_prefetch_needs_pending_head
 
 
 def test_a_large_window_opens_over_several_short_steps() -> None:
-    config = OperatorSettings(templates_dir=REPO / "helm-templates", max_starts_per_step=5)
+    config = OperatorSettings(
+        inputs=InputSettings(templates_dir=REPO / "helm-templates"),
+        pacing=PacingSettings(max_starts_per_step=5),
+    )
     cluster = FakeCluster(nodes={f"n{i}": 3 for i in range(8)}, config=config)
     cluster.start_campaign(campaign_body(batchSize=30), frozen_list(60), batch_size=30)
     created = []

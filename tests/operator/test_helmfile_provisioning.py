@@ -27,7 +27,7 @@ from simtest_operator.operator.actions import Delete, Emit, Kind, PatchStatus, R
 from simtest_operator.operator.environments import Limits, Phase
 from simtest_operator.render import EnvironmentRequest, RenderedEnvironment
 from simtest_operator.render.rendering import run_spec_for
-from simtest_operator.settings import OperatorSettings
+from simtest_operator.settings import HelmfileSettings, OperatorSettings
 from simtest_operator.verdicts import Verdict
 
 T0 = datetime.datetime(2030, 1, 1, tzinfo=datetime.UTC)
@@ -40,9 +40,9 @@ LIMITS = Limits(
     missing_grace=10,
 )
 CONFIG = OperatorSettings(
-    helmfile_image="simtest-helmfile:1",
-    helmfile_role="op-helmfile-provisioner",
-    helmfile_node_selector={"pool": "system"},
+    helmfile=HelmfileSettings(
+        image="simtest-helmfile:1", role="op-helmfile-provisioner", node_selector={"pool": "system"}
+    )
 )
 HELMFILE = "releases:\n- name: camp-b00000-e000-a1-sim\n"
 

@@ -23,7 +23,7 @@ from simtest_operator.operator.caching import ALL_NODES, Cache
 from simtest_operator.operator.expectations import Expectation, Expectations, Want
 from simtest_operator.operator.status import conditions
 from simtest_operator.scenarios import FrozenList, PinnedScenario
-from simtest_operator.settings import OperatorSettings, Settings
+from simtest_operator.settings import InputSettings, OperatorSettings, PacingSettings, Settings
 from tests.operator.fakecluster import REPO, T0, FakeCluster, campaign_body, frozen_list
 
 
@@ -130,12 +130,12 @@ def test_configuration_from_variables_and_flags(tmp_path: object) -> None:
             "SIMTEST_OPERATOR_SCENARIO_CLAIM": "scen",
             "SIMTEST_OPERATOR_METRICS_PORT": "9000",
         },
-        operator_flags={"metrics_port": 0, "templates_dir": None},
+        operator_flags={"metrics_port": 0, "inputs.templates_dir": None},
     ).operator
-    assert config.status_interval == 2.5 and config.keep_finished_environments
-    assert config.scenario_claim == "scen"
+    assert config.pacing.status_interval == 2.5 and config.keep_finished_environments
+    assert config.inputs.scenario_claim == "scen"
     assert config.metrics_port == 0
-    assert str(config.templates_dir) == "helm-templates"
+    assert str(config.inputs.templates_dir) == "helm-templates"
 
 
 def test_conditions_keep_transition_time() -> None:
@@ -173,7 +173,7 @@ def _halted(body: dict[str, object], **inputs: object) -> Plan:
     view = observed.campaign_view(body)
     return planning.plan(
         planning.Inputs(campaign=view, now=T0, **inputs),  # type: ignore[arg-type]
-        config=OperatorSettings(templates_dir=REPO / "helm-templates"),
+        config=OperatorSettings(inputs=InputSettings(templates_dir=REPO / "helm-templates")),
         render=lambda request: pytest.fail("nothing may render"),  # type: ignore[arg-type,return-value]
     )
 
@@ -208,7 +208,10 @@ def test_empty_selection_is_an_error() -> None:
 
 def test_counter_only_status_writes_are_coalesced() -> None:
     cluster = FakeCluster(
-        config=OperatorSettings(templates_dir=REPO / "helm-templates", status_interval=10.0)
+        config=OperatorSettings(
+            inputs=InputSettings(templates_dir=REPO / "helm-templates"),
+            pacing=PacingSettings(status_interval=10.0),
+        )
     )
     cluster.start_campaign(
         campaign_body(batchSize=10, maxParallel=1), frozen_list(4), batch_size=10

@@ -24,7 +24,7 @@ from simtest_operator.errors import RenderError
 from simtest_operator.operator import observed, requests
 from simtest_operator.render import runspecs
 from simtest_operator.scenarios import GraphqlSource, Needs, RestSource, SecretRef
-from simtest_operator.settings import OperatorSettings
+from simtest_operator.settings import InputSettings, OperatorSettings
 from tests.render.cases import CASES, request
 
 REPO = Path(__file__).resolve().parents[2]
@@ -116,7 +116,7 @@ def test_the_operator_requests_what_the_scenarios_need() -> None:
         render.ScenarioRef(id="e.xosc", source="https://files/e.xosc", sha256="03" * 32),
     )
     view = dataclasses.replace(probe_view(), scenarios=refs)
-    config = OperatorSettings(templates_dir=REPO / "helm-templates")
+    config = OperatorSettings(inputs=InputSettings(templates_dir=REPO / "helm-templates"))
     built = requests.environment_request(campaign_spec(), view, config=config)
     assert built.source_needs == Needs(
         config_maps=("suite-a",),

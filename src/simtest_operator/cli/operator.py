@@ -78,13 +78,13 @@ def operator(
 
     settings = Settings.from_env(
         operator_flags={
-            "templates_dir": templates,
-            "sources_dir": sources,
-            "cache_dir": cache,
+            "inputs.templates_dir": templates,
+            "inputs.sources_dir": sources,
+            "inputs.cache_dir": cache,
             "metrics_port": metrics_port,
             "keep_finished_environments": keep_environments,
-            "leader_election": leader_election,
-            "identity": identity,
+            "leadership.enabled": leader_election,
+            "leadership.identity": identity,
         }
     )
     operating.run(settings.operator, namespaces=namespaces, kubeconfig=kubeconfig, verbose=verbose)

@@ -54,7 +54,7 @@ def teardown(
         return (Delete(kind=Kind.JOB, name=sync.name, uid=sync.uid),)
     if sync is not None and not sync.done:
         return ()
-    if batch is None or not config.helmfile_image:
+    if batch is None or not config.helmfile.image:
         return ()
     request = requests.environment_request(spec, env, config=config)
     try:

@@ -79,8 +79,8 @@ class CampaignLoop:
             campaign=name,
             campaign_uid=self._uid,
             metrics=shared.metrics,
-            event_interval=shared.config.event_interval,
-            parallel=shared.config.api_workers,
+            event_interval=shared.config.pacing.event_interval,
+            parallel=shared.config.pacing.api_workers,
             render=shared.render,
         )
 
@@ -113,8 +113,8 @@ class CampaignLoop:
         if not self.wake.is_set() and timeout > 0:
             with contextlib.suppress(TimeoutError):
                 await asyncio.wait_for(self.wake.wait(), timeout)
-        if self.shared.config.coalesce_seconds > 0:
-            await asyncio.sleep(self.shared.config.coalesce_seconds)
+        if self.shared.config.pacing.coalesce_seconds > 0:
+            await asyncio.sleep(self.shared.config.pacing.coalesce_seconds)
         self.wake.clear()
 
     async def step(self) -> bool:

@@ -15,7 +15,7 @@ from simtest_operator import render
 from simtest_operator.api import v1alpha1
 from simtest_operator.operator import bodies, names, observed, requests
 from simtest_operator.scenarios.pinned import PinnedScenario
-from simtest_operator.settings import OperatorSettings
+from simtest_operator.settings import InputSettings, OperatorSettings
 
 PLACEHOLDER_UID = "00000000-0000-0000-0000-000000000000"
 """uid of the SimEnvironment and batch that do not exist yet (owner references show it)."""
@@ -44,5 +44,5 @@ def environment_request(
         scenarios=[frozen[position]],
     )
     body["metadata"]["uid"] = PLACEHOLDER_UID
-    config = OperatorSettings(templates_dir=templates)
+    config = OperatorSettings(inputs=InputSettings(templates_dir=templates))
     return requests.environment_request(spec, observed.environment_view(body), config=config)

@@ -248,12 +248,12 @@ def job_request(
         namespace=env.namespace,
         action=action,
         helmfile=helmfile,
-        image=config.helmfile_image,
+        image=config.helmfile.image,
         service_account=helmfilejobs.service_account_name(env.campaign),
         owner=owner,
         labels=_labels(env),
         deadline_seconds=int(spec.execution.pending_timeout_seconds),
-        node_selector=config.helmfile_node_selector,
+        node_selector=config.helmfile.node_selector,
     )
 
 
@@ -269,7 +269,7 @@ def provision(
     """The action that provisions a Helmfile environment: its sync Job (or, when it cannot be
     made, the environment's Error status)."""
     problem = ""
-    if not config.helmfile_image or not config.helmfile_role:
+    if not config.helmfile.image or not config.helmfile.role:
         problem = (
             "provisioner Helmfile is not enabled in this operator (no helmfile image or "
             "provisioner role: chart value helmfileProvisioner.enabled, or "
@@ -301,7 +301,7 @@ def provision(
             campaign=env.campaign,
             namespace=env.namespace,
             campaign_uid=campaign_uid,
-            role=config.helmfile_role,
+            role=config.helmfile.role,
         ),
         status=environmentstatus.provisioned_status(
             env,

@@ -57,11 +57,11 @@ def environment_request(
         node_selector=dict(execution.node_selector),
         tolerations=tuple(t.to_wire() for t in execution.tolerations),
         artifacts=_artifacts(spec, env.campaign),
-        scenario_volume=PvcVolume(claim_name=config.scenario_claim, read_only=True)
-        if config.scenario_claim
+        scenario_volume=PvcVolume(claim_name=config.inputs.scenario_claim, read_only=True)
+        if config.inputs.scenario_claim
         else None,
-        scenario_mount=str(config.sources_dir.absolute())
-        if config.scenario_claim
+        scenario_mount=str(config.inputs.sources_dir.absolute())
+        if config.inputs.scenario_claim
         else "/scenarios",
         source_needs=needs(
             (s.source for s in env.scenarios),

@@ -82,8 +82,8 @@ async def resolve(
         return base64.b64decode(raw).decode("utf-8").strip()
 
     context = FetchContext(
-        base_dir=config.sources_dir.absolute(),
-        cache_dir=config.cache_dir / "sources",
+        base_dir=config.inputs.sources_dir.absolute(),
+        cache_dir=config.inputs.cache_dir / "sources",
         config_maps=config_maps,
         secrets=secrets,
     )

@@ -39,8 +39,9 @@ def run(
         # kopf reports every handler call per object ("Handler ... succeeded"): five lines per
         # scenario at scale; our own loggers say what matters.
         logging.getLogger("kopf.objects").setLevel(logging.WARNING)
-    if config.leader_election and not config.lease_namespace and namespaces:
-        config = dataclasses.replace(config, lease_namespace=namespaces[0])
+    if config.leadership.enabled and not config.leadership.lease_namespace and namespaces:
+        leadership = dataclasses.replace(config.leadership, lease_namespace=namespaces[0])
+        config = dataclasses.replace(config, leadership=leadership)
     memo = kopf.Memo(
         config=config,
         credentials=load_credentials(kubeconfig),

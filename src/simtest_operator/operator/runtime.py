@@ -94,9 +94,11 @@ async def start(config: OperatorSettings, credentials: Credentials, cache: Cache
     client = Client(credentials, on_request=metrics.count_request)
     version: dict[str, Any] = await client.request("GET", "/version", kind="version")
     log.info("connected to %s (Kubernetes %s)", credentials.server, version.get("gitVersion", "?"))
-    library = TemplateLibrary(config.templates_dir)
+    library = TemplateLibrary(config.inputs.templates_dir)
     if "default" not in library.names():
-        log.warning("no 'default' environment template under %s", config.templates_dir.absolute())
+        log.warning(
+            "no 'default' environment template under %s", config.inputs.templates_dir.absolute()
+        )
     shared = Shared(
         client=client,
         cache=cache,
@@ -107,14 +109,14 @@ async def start(config: OperatorSettings, credentials: Credentials, cache: Cache
     runtime = Runtime(
         config=config, client=client, metrics=metrics, loops=Loops(shared), cache=cache
     )
-    if config.leader_election:
+    if config.leadership.enabled:
         settings = leadership.LeaseSettings(
-            name=config.lease_name,
-            namespace=config.lease_namespace or "default",
-            identity=config.identity or leadership.default_identity(),
-            lease_duration=config.lease_duration,
-            renew_deadline=config.renew_deadline,
-            retry_period=config.retry_period,
+            name=config.leadership.lease_name,
+            namespace=config.leadership.lease_namespace or "default",
+            identity=config.leadership.identity or leadership.default_identity(),
+            lease_duration=config.leadership.lease_duration,
+            renew_deadline=config.leadership.renew_deadline,
+            retry_period=config.leadership.retry_period,
         )
         runtime.elector = leadership.Elector(
             client,

@@ -24,9 +24,9 @@ def limits(step: Step, env: EnvironmentView) -> Limits:
         timeout_seconds=execution.timeout_seconds,
         pending_seconds=execution.pending_timeout_seconds,
         deadline_seconds=execution.timeout_seconds * len(env.scenarios) + STARTUP_ALLOWANCE_SECONDS,
-        backstop_grace=config.backstop_grace,
-        missing_grace=config.missing_pod_grace,
-        node_not_ready_grace=config.node_not_ready_grace,
+        backstop_grace=config.graces.backstop_grace,
+        missing_grace=config.graces.missing_pod_grace,
+        node_not_ready_grace=config.graces.node_not_ready_grace,
     )
 
 

@@ -36,7 +36,7 @@ def window(step: Step) -> int:
     # pendingTimeoutSeconds.
     prefetch = 0
     if execution.pending_timeout_seconds >= 2 * execution.timeout_seconds:
-        prefetch = step.config.prefetch_per_node * capacity.nodes
+        prefetch = step.config.pacing.prefetch_per_node * capacity.nodes
     return capacity.slots + prefetch
 
 
@@ -54,13 +54,13 @@ def start(step: Step, states: Sequence[ScenarioState], *, in_flight: int, window
             barrier=execution.batch_barrier,
             barrier_limit=execution.max_parallel,
             in_flight=in_flight,
-            chunk=step.config.reuse_queue if reuse else 1,
+            chunk=step.config.pacing.reuse_queue if reuse else 1,
             suspended=spec.suspend,
         ),
     )
     wakes: tuple[datetime.datetime, ...] = ()
-    if len(units) > step.config.max_starts_per_step:
-        units = units[: step.config.max_starts_per_step]
+    if len(units) > step.config.pacing.max_starts_per_step:
+        units = units[: step.config.pacing.max_starts_per_step]
         wakes = (step.now,)
     wanted_batches = {u.batch_index for u in units}
     if not execution.batch_barrier and not spec.suspend:

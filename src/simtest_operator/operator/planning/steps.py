@@ -104,6 +104,6 @@ def _campaign(
         cancellation=cancellation,
         now=step.now,
         last_write=step.inputs.last_status_write,
-        status_interval=step.config.status_interval,
+        status_interval=step.config.pacing.status_interval,
     )
     return Outcome(actions=update.actions, wakes=(update.due,) if update.due is not None else ())
