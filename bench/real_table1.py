@@ -176,7 +176,7 @@ def run_one(
         sources=SCENARIOS,
         cache=workdir / "cache",
         log=workdir / f"{config.label}.log",
-        env={"SIMTEST_OPERATOR_SCENARIO_CLAIM": "scenarios"},
+        env={"SIMTEST_OPERATOR_SCENARIO_CLAIM": "scenarios", **dict(args.operator_env)},
     ) as (_, port):
         before = metric_total(operator_metrics(port), "simtest_api_requests_total")
         with PodTimeline(api, namespace) as timeline:
@@ -311,6 +311,19 @@ def main() -> None:
     parser.add_argument("--real-time-factor", type=float, default=4.0)
     parser.add_argument("--timeout", type=int, default=35, help="timeoutSeconds per scenario")
     parser.add_argument("--name", default="")
+    parser.add_argument(
+        "--configs",
+        default="window-PerScenario,window-Reuse,barrier-PerScenario,barrier-Reuse",
+        help="which of the four runs per s, comma-separated",
+    )
+    parser.add_argument(
+        "--operator-env",
+        action="append",
+        default=[],
+        type=lambda text: tuple(text.split("=", 1)),
+        metavar="NAME=VALUE",
+        help="an environment variable for the operator, e.g. SIMTEST_OPERATOR_PREFETCH=0",
+    )
     args = parser.parse_args()
     settings = Settings.from_env()
     toolchain = Toolchain(root=settings.cache.toolchain)
@@ -331,12 +344,14 @@ def main() -> None:
             info = cluster.up(nodes=0, real_node=setup, crds_dir=REPO / "crds", timeout=300)
             api = provisioning.api_client(info.kubeconfig)
             try:
-                for barrier in (False, True):
-                    for reuse in (False, True):
-                        config = Config(slots=slots, barrier=barrier, reuse=reuse)
-                        result = run_one(api, info.kubeconfig, config, ids, args, work)
-                        results.append(result)
-                        console.print(table([result], config.label))
+                for label in args.configs.split(","):
+                    mode, isolation = label.split("-")
+                    config = Config(
+                        slots=slots, barrier=mode == "barrier", reuse=isolation == "Reuse"
+                    )
+                    result = run_one(api, info.kubeconfig, config, ids, args, work)
+                    results.append(result)
+                    console.print(table([result], config.label))
             finally:
                 api.close()  # type: ignore[no-untyped-call]
                 cluster.down()
