@@ -25,7 +25,10 @@ METRICS_PER_OUTCOME = 40
 
 WRITER = textwrap.dedent(
     """
-    import datetime, sys
+    import datetime, signal, sys
+    # Ctrl-C as a terminal delivers it, whatever the test runner was started with (a shell
+    # without job control starts background jobs with SIGINT ignored, and Python keeps that).
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     from simtest_operator import results
     from simtest_operator.verdicts import ScenarioOutcome, Verdict
 
@@ -77,18 +80,21 @@ def test_interrupt_inside_add_outcome_rolls_the_attempt_back(store: results.Stor
 
 @pytest.mark.parametrize("stop", [signal.SIGINT, signal.SIGKILL], ids=["sigint", "sigkill"])
 def test_killed_writer_leaves_whole_attempts(store_target: str, stop: signal.Signals) -> None:
-    writer = subprocess.Popen(
+    with subprocess.Popen(
         [sys.executable, "-c", WRITER, store_target, str(METRICS_PER_OUTCOME)],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
-    )
-    assert writer.stdout is not None
-    key = results.RunKey(writer.stdout.readline().strip())
-    for _ in range(40):  # let it get well into the campaign
-        assert writer.stdout.readline(), writer.stderr.read() if writer.stderr else ""
-    writer.send_signal(stop)
-    _, stderr = writer.communicate(timeout=60)
+    ) as writer:
+        try:
+            assert writer.stdout is not None
+            key = results.RunKey(writer.stdout.readline().strip())
+            for _ in range(40):  # let it get well into the campaign
+                assert writer.stdout.readline(), writer.stderr.read() if writer.stderr else ""
+            writer.send_signal(stop)
+            _, stderr = writer.communicate(timeout=60)
+        finally:
+            writer.kill()
     assert writer.returncode != 0
     if stop is signal.SIGINT:
         assert "KeyboardInterrupt" in stderr
