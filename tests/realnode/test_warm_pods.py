@@ -84,6 +84,7 @@ def _warm_campaign(tmp_path: Path, name: str, **execution: object) -> dict[str, 
         simulator={"realTimeFactor": 2.0},  # about 5 s of wall time per scenario
         isolation="Reuse",
         batchSize=3,
+        maxSimulatorsPerNode=1,  # one slot: all three in one warm queue (queues follow slots)
         resources={"requests": {"cpu": "500m"}},
         **execution,
     )

@@ -211,7 +211,11 @@ class Selection:
     """Barrier mode: explicit maxParallel (None submits the whole batch, as the paper does)."""
     in_flight: int
     chunk: int
-    """Scenarios per unit: 1 for PerScenario, the warm-worker queue length for Reuse."""
+    """Scenarios per unit at most: 1 for PerScenario, the warm-worker queue length for Reuse."""
+    spread: int = 1
+    """Simulators the work is spread over (the slots). A warm queue takes at most
+    ``ceil(remaining / spread)`` scenarios, so the last queues shrink and the slots finish
+    together instead of one long queue running on alone (guided self-scheduling)."""
     suspended: bool
 
 
@@ -236,16 +240,26 @@ def select(
         )
     else:
         budget = max(selection.free_slots, 0)
-    return tuple(_group(candidates, layout, chunk=max(selection.chunk, 1), limit=budget))
+    return tuple(
+        _group(
+            candidates,
+            layout,
+            chunk=max(selection.chunk, 1),
+            spread=max(selection.spread, 1),
+            limit=budget,
+        )
+    )
 
 
 def _group(
-    candidates: Sequence[ScenarioState], layout: Layout, *, chunk: int, limit: int
+    candidates: Sequence[ScenarioState], layout: Layout, *, chunk: int, spread: int, limit: int
 ) -> list[Unit]:
-    """Consecutive candidates of one batch and attempt, ``chunk`` at a time; at most ``limit``
-    units (the rest of a long queue is not even looked at)."""
+    """Consecutive candidates of one batch and attempt, at most ``chunk`` and at most the
+    remaining candidates over ``spread`` at a time; at most ``limit`` units (the rest of a long
+    queue is not even looked at)."""
     units: list[Unit] = []
     current: list[ScenarioState] = []
+    size = 0
 
     def flush() -> None:
         if current:
@@ -260,15 +274,17 @@ def _group(
             )
             current.clear()
 
-    for candidate in candidates:
+    for left, candidate in zip(range(len(candidates), 0, -1), candidates, strict=True):
         if len(units) >= limit:
             break
         if current and (
-            len(current) >= chunk
+            len(current) >= size
             or layout.batch_of(candidate.position) != layout.batch_of(current[0].position)
             or candidate.attempt != current[0].attempt
         ):
             flush()
+        if not current:
+            size = min(chunk, -(-left // spread))
         current.append(candidate)
     if len(units) < limit:
         flush()

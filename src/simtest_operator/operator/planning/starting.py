@@ -12,9 +12,36 @@ from collections.abc import Sequence
 
 from simtest_operator.operator import bodies, names, observed, provisioning, requests
 from simtest_operator.operator.actions import Action, Create, Kind
-from simtest_operator.operator.batches import ScenarioState, Selection, State, cluster_slots, select
+from simtest_operator.operator.batches import (
+    Capacity,
+    ScenarioState,
+    Selection,
+    State,
+    cluster_slots,
+    select,
+)
 from simtest_operator.operator.planning.inputs import Step
 from simtest_operator.operator.planning.outcomes import Outcome
+
+
+def slots(step: Step) -> int:
+    """How many simulators run at once: ``maxParallel``, else the slots the scheduler can fill,
+    else (no node access) ``batchSize``."""
+    execution = step.spec.execution
+    if execution.max_parallel is not None:
+        return execution.max_parallel
+    capacity = _capacity(step)
+    return capacity.slots if capacity.slots > 0 else execution.batch_size
+
+
+def _capacity(step: Step) -> Capacity:
+    execution = step.spec.execution
+    return cluster_slots(
+        step.inputs.nodes,
+        per_node=execution.max_simulators_per_node,
+        node_selector=execution.node_selector,
+        tolerated=requests.tolerations(step.spec),
+    )
 
 
 def window(step: Step) -> int:
@@ -22,12 +49,7 @@ def window(step: Step) -> int:
     execution = step.spec.execution
     if execution.max_parallel is not None:
         return execution.max_parallel
-    capacity = cluster_slots(
-        step.inputs.nodes,
-        per_node=execution.max_simulators_per_node,
-        node_selector=execution.node_selector,
-        tolerated=requests.tolerations(step.spec),
-    )
+    capacity = _capacity(step)
     if capacity.slots <= 0:
         return execution.batch_size
     # A few pods beyond the slots wait in Pending, so the scheduler binds the next one the
@@ -55,6 +77,7 @@ def start(step: Step, states: Sequence[ScenarioState], *, in_flight: int, window
             barrier_limit=execution.max_parallel,
             in_flight=in_flight,
             chunk=step.config.pacing.reuse_queue if reuse else 1,
+            spread=slots(step),
             suspended=spec.suspend,
         ),
     )
