@@ -1,10 +1,10 @@
 """Warm queues (``isolation: Reuse``) sized by guided self-scheduling.
 
-Covers: a queue takes at most the remaining scenarios over the slots, so the tail evens out (18
-scenarios, batch size 9, 3 slots: 6 + 3 | 3 + 2 ..., where a fixed queue of 8 gave 8 + 1 | 8 + 1
-and left two slots idle behind one long queue); a large campaign still gets full queues; queues
-never cross a batch or mix attempts; one slot keeps the fixed length (what the warm-pod tests on
-the real node rely on).
+Covers: a queue takes at most the remaining scenarios over the slots, and a batch's rest is split
+into equal parts, so the tail evens out (18 scenarios, batch size 9, 3 slots: 5 + 4 | 3 + 2 ...,
+where a fixed queue of 8 gave 8 + 1 | 8 + 1 and left two slots idle behind one long queue); a
+large campaign still gets full queues; queues never cross a batch; one slot runs a short batch as
+one queue (what the warm-pod tests on the real node rely on).
 """
 
 from __future__ import annotations
@@ -35,8 +35,10 @@ def _sizes(count: int, *, batch: int, chunk: int, spread: int, free: int) -> lis
 
 
 def test_the_last_queues_shrink_so_the_slots_finish_together() -> None:
-    assert _sizes(18, batch=9, chunk=8, spread=3, free=4) == [6, 3, 3, 2]
-    assert _sizes(18, batch=9, chunk=8, spread=1, free=4) == [8, 1, 8, 1]
+    assert _sizes(18, batch=9, chunk=8, spread=3, free=4) == [5, 4, 3, 2]
+    assert _sizes(18, batch=9, chunk=8, spread=2, free=3) == [5, 4, 5]
+    assert _sizes(18, batch=9, chunk=8, spread=1, free=4) == [5, 4, 5, 4]
+    assert _sizes(3, batch=3, chunk=8, spread=1, free=2) == [3]
 
 
 def test_a_large_campaign_still_gets_full_queues() -> None:

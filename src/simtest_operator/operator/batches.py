@@ -255,11 +255,12 @@ def _group(
     candidates: Sequence[ScenarioState], layout: Layout, *, chunk: int, spread: int, limit: int
 ) -> list[Unit]:
     """Consecutive candidates of one batch and attempt, at most ``chunk`` and at most the
-    remaining candidates over ``spread`` at a time; at most ``limit`` units (the rest of a long
-    queue is not even looked at)."""
+    remaining candidates over ``spread`` at a time, split evenly within the batch (9 as 5 + 4,
+    not 8 + 1); at most ``limit`` units (the rest of a long queue is not even looked at)."""
     units: list[Unit] = []
     current: list[ScenarioState] = []
     size = 0
+    in_run = _run_lengths(candidates, layout)
 
     def flush() -> None:
         if current:
@@ -285,10 +286,24 @@ def _group(
             flush()
         if not current:
             size = min(chunk, -(-left // spread))
+            rest = in_run[len(candidates) - left]
+            size = -(-rest // -(-rest // size))  # the batch's rest in equal parts of <= size
         current.append(candidate)
     if len(units) < limit:
         flush()
     return units
+
+
+def _run_lengths(candidates: Sequence[ScenarioState], layout: Layout) -> list[int]:
+    """For each candidate, how many candidates from it on share its batch and attempt."""
+    lengths = [0] * len(candidates)
+    for i in range(len(candidates) - 1, -1, -1):
+        same = i + 1 < len(candidates) and (
+            layout.batch_of(candidates[i + 1].position) == layout.batch_of(candidates[i].position)
+            and candidates[i + 1].attempt == candidates[i].attempt
+        )
+        lengths[i] = lengths[i + 1] + 1 if same else 1
+    return lengths
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
