@@ -138,18 +138,6 @@ def probe_view() -> observed.EnvironmentView:
         batch="c-b00000",
         attempt=1,
         scenarios=(),
-        created=None,
-        deleting=False,
-        phase="Pending",
-        pod=None,
-        node=None,
-        verdict=None,
-        reason="",
-        rendered_hash=None,
-        timings=observed.Timings(),
-        results=(),
-        provisioned_at=None,
-        status_wire={},
     )
 
 

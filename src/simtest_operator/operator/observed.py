@@ -255,19 +255,20 @@ class EnvironmentView:
     batch: str
     attempt: int
     scenarios: tuple[ScenarioRef, ...]
-    created: datetime.datetime | None
-    deleting: bool
-    phase: str
-    pod: str | None
-    node: str | None
-    verdict: str | None
-    reason: str
-    rendered_hash: str | None
-    timings: Timings
-    results: tuple[ResultRecord, ...]
-    provisioned_at: datetime.datetime | None
+    # What the cluster says; the defaults describe an environment not created yet.
+    created: datetime.datetime | None = None
+    deleting: bool = False
+    phase: str = "Pending"
+    pod: str | None = None
+    node: str | None = None
+    verdict: str | None = None
+    reason: str = ""
+    rendered_hash: str | None = None
+    timings: Timings = dataclasses.field(default_factory=Timings)
+    results: tuple[ResultRecord, ...] = ()
+    provisioned_at: datetime.datetime | None = None
     """When the operator recorded creating the pod (condition ``Provisioned``)."""
-    status_wire: Raw
+    status_wire: Raw = dataclasses.field(default_factory=dict)
     """The status as stored, for merge patches; the fields above are its typed reading."""
     provisioner: str = ""
     """``Pod`` or ``Helmfile`` once provisioned (empty before, and for older environments)."""

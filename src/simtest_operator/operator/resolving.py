@@ -139,18 +139,6 @@ def _preflight(
                 id=first.id, source=first.source, sha256=first.sha256, overrides=first.overrides
             ),
         ),
-        created=None,
-        deleting=False,
-        phase="Pending",
-        pod=None,
-        node=None,
-        verdict=None,
-        reason="",
-        rendered_hash=None,
-        timings=observed.Timings(),
-        results=(),
-        provisioned_at=None,
-        status_wire={},
     )
     request = requests.environment_request(campaign.spec, probe, config=config)
     try:
