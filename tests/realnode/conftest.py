@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
@@ -37,6 +38,45 @@ def smoke_variant(
     return path
 
 
+@contextlib.contextmanager
+def host_path_claim(
+    api: client.ApiClient, namespace: str, *, claim: str, folder: Path, access: str
+) -> Iterator[str]:
+    """A PVC named ``claim`` bound to a hostPath PersistentVolume on ``folder`` (a local-path
+    style volume on the real node); the volume is deleted afterwards."""
+    core = client.CoreV1Api(api)
+    volume = f"{claim}-{namespace}"
+    core.create_persistent_volume(
+        body={
+            "metadata": {"name": volume},
+            "spec": {
+                "capacity": {"storage": "1Gi"},
+                "accessModes": [access],
+                "persistentVolumeReclaimPolicy": "Retain",
+                "storageClassName": "",
+                "hostPath": {"path": str(folder), "type": "Directory"},
+                "claimRef": {"namespace": namespace, "name": claim},
+            },
+        }
+    )
+    core.create_namespaced_persistent_volume_claim(
+        namespace,
+        body={
+            "metadata": {"name": claim},
+            "spec": {
+                "accessModes": [access],
+                "storageClassName": "",
+                "volumeName": volume,
+                "resources": {"requests": {"storage": "1Gi"}},
+            },
+        },
+    )
+    try:
+        yield claim
+    finally:
+        core.delete_persistent_volume(volume)
+
+
 @pytest.fixture
 def scenario_claim(real_api_client: client.ApiClient, real_namespace: str) -> Iterator[str]:
     """A PVC with the repository's scenarios: a hostPath volume, bound to this namespace.
@@ -44,37 +84,10 @@ def scenario_claim(real_api_client: client.ApiClient, real_namespace: str) -> It
     The operator resolves ``path`` sources against the same folder and mounts the claim
     read-only into every simulator pod, as it would an NFS share on a real cluster.
     """
-    core = client.CoreV1Api(real_api_client)
-    name = f"scenarios-{real_namespace}"
-    core.create_persistent_volume(
-        body={
-            "metadata": {"name": name},
-            "spec": {
-                "capacity": {"storage": "1Gi"},
-                "accessModes": ["ReadOnlyMany"],
-                "persistentVolumeReclaimPolicy": "Retain",
-                "storageClassName": "",
-                "hostPath": {"path": str(SCENARIOS), "type": "Directory"},
-                "claimRef": {"namespace": real_namespace, "name": "scenarios"},
-            },
-        }
-    )
-    core.create_namespaced_persistent_volume_claim(
-        real_namespace,
-        body={
-            "metadata": {"name": "scenarios"},
-            "spec": {
-                "accessModes": ["ReadOnlyMany"],
-                "storageClassName": "",
-                "volumeName": name,
-                "resources": {"requests": {"storage": "1Gi"}},
-            },
-        },
-    )
-    try:
-        yield "scenarios"
-    finally:
-        core.delete_persistent_volume(name)
+    with host_path_claim(
+        real_api_client, real_namespace, claim="scenarios", folder=SCENARIOS, access="ReadOnlyMany"
+    ) as claim:
+        yield claim
 
 
 @pytest.fixture

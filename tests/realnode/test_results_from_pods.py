@@ -41,7 +41,7 @@ from kubernetes import client
 from simtest_operator import recording, results
 from simtest_operator.operator import observed, recording_results
 from tests.e2e import support
-from tests.realnode.conftest import smoke_variant
+from tests.realnode.conftest import host_path_claim, smoke_variant
 from tests.results.s3server import BUCKET, CREDENTIALS, S3Server, free_port, s3
 
 __all__ = ["s3"]  # the fixture, used by name
@@ -141,37 +141,10 @@ def artifacts_claim(
     folder = tmp_path / "artifacts-volume"
     folder.mkdir()
     folder.chmod(0o1777)  # the pods run as 65532; hostPath volumes get no fsGroup ownership
-    core = client.CoreV1Api(real_api_client)
-    volume = f"artifacts-{real_namespace}"
-    core.create_persistent_volume(
-        body={
-            "metadata": {"name": volume},
-            "spec": {
-                "capacity": {"storage": "1Gi"},
-                "accessModes": ["ReadWriteMany"],
-                "persistentVolumeReclaimPolicy": "Retain",
-                "storageClassName": "",
-                "hostPath": {"path": str(folder), "type": "Directory"},
-                "claimRef": {"namespace": real_namespace, "name": "artifacts"},
-            },
-        }
-    )
-    core.create_namespaced_persistent_volume_claim(
-        real_namespace,
-        body={
-            "metadata": {"name": "artifacts"},
-            "spec": {
-                "accessModes": ["ReadWriteMany"],
-                "storageClassName": "",
-                "volumeName": volume,
-                "resources": {"requests": {"storage": "1Gi"}},
-            },
-        },
-    )
-    try:
-        yield "artifacts", folder
-    finally:
-        core.delete_persistent_volume(volume)
+    with host_path_claim(
+        real_api_client, real_namespace, claim="artifacts", folder=folder, access="ReadWriteMany"
+    ) as claim:
+        yield claim, folder
 
 
 def test_artifacts_land_on_a_persistent_volume_claim(
