@@ -3,8 +3,9 @@
 Covers: defaults without variables (cache under ``$HOME/.cache/simtest``, the operator's knobs
 as the chart documents them); ``SIMTEST_*`` and ``SIMTEST_OPERATOR_*`` variables land in their
 topics; flags of ``simtest operator`` override the variables and a flag not given does not;
-``SIMTEST_SECRET_*`` values are kept for local runs but never shown in the repr; the root stays
-hashable; a malformed node selector names the variable.
+``SIMTEST_SECRET_*`` values (local runs) and ``SIMTEST_SOURCE_TOKEN_*`` values (a simulator pod)
+are kept but never shown in the repr; ``SIMTEST_RESULTS_DATABASE`` is read, an empty one as unset;
+the root stays hashable; a malformed node selector names the variable.
 """
 
 from __future__ import annotations
@@ -63,9 +64,21 @@ def test_flags_override_variables() -> None:
 
 
 def test_secrets_are_kept_but_not_shown() -> None:
-    settings = Settings.from_env({"HOME": "/h", "SIMTEST_SECRET_DB_TOKEN": "hunter2"})
+    settings = Settings.from_env(
+        {"HOME": "/h", "SIMTEST_SECRET_DB_TOKEN": "hunter2", "SIMTEST_SOURCE_TOKEN_0": "s3cret"}
+    )
     assert settings.secrets == {"SIMTEST_SECRET_DB_TOKEN": "hunter2"}
-    assert "hunter2" not in repr(settings)
+    assert settings.source_tokens == {"SIMTEST_SOURCE_TOKEN_0": "s3cret"}
+    assert "hunter2" not in repr(settings) and "s3cret" not in repr(settings)
+
+
+def test_the_results_database_of_report_and_ui() -> None:
+    assert Settings.from_env({"HOME": "/h"}).results_database is None
+    assert (
+        Settings.from_env({"HOME": "/h", "SIMTEST_RESULTS_DATABASE": ""}).results_database is None
+    )
+    env = {"HOME": "/h", "SIMTEST_RESULTS_DATABASE": "postgresql://db/results"}
+    assert Settings.from_env(env).results_database == "postgresql://db/results"
 
 
 def test_the_root_stays_hashable() -> None:

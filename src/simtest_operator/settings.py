@@ -19,6 +19,11 @@ OPERATOR_PREFIX = "SIMTEST_OPERATOR_"
 """Prefix of the operator's installation knobs (the chart sets them; flags override them)."""
 SECRET_PREFIX = f"{ENV_PREFIX}SECRET_"
 """Prefix of the variables that stand in for Secret keys in local runs."""
+SOURCE_TOKEN_PREFIX = f"{ENV_PREFIX}SOURCE_TOKEN_"
+"""Prefix of the variables a simulator pod's template maps Secret keys into (numbered, from the
+run spec: :func:`simtest_operator.render.runspecs.secret_variables`)."""
+RESULTS_DATABASE = f"{ENV_PREFIX}RESULTS_DATABASE"
+"""The variable naming the results database ``simtest report`` and ``simtest ui`` read."""
 
 
 def _default_cache_dir(env: Mapping[str, str]) -> Path:
@@ -196,6 +201,15 @@ class Settings:
     """``SIMTEST_SECRET_<NAME>_<KEY>`` variables by name: Secret values for local runs
     (``simtest run``, ``simtest render``), which have no cluster to read Secrets from. Left out
     of the repr so they never reach a log."""
+    source_tokens: Mapping[str, str] = dataclasses.field(
+        default_factory=dict, repr=False, hash=False
+    )
+    """``SIMTEST_SOURCE_TOKEN_<n>`` variables by name: the Secret keys a simulator pod's scenario
+    databases need, mapped in by its template (the pod has no API access). Left out of the repr."""
+    results_database: str | None = None
+    """The results database (a PostgreSQL DSN, an output folder or a SQLite file) ``simtest
+    report`` and ``simtest ui`` read when ``--database`` is not given
+    (``SIMTEST_RESULTS_DATABASE``; unset or empty: none)."""
 
     @classmethod
     def from_env(
@@ -224,8 +238,14 @@ class Settings:
                 Path(p) for p in env.get(f"{ENV_PREFIX}MAP_PATH", "").split(os.pathsep) if p
             ),
             operator=operator,
-            secrets={k: v for k, v in env.items() if k.startswith(SECRET_PREFIX)},
+            secrets=_prefixed(env, SECRET_PREFIX),
+            source_tokens=_prefixed(env, SOURCE_TOKEN_PREFIX),
+            results_database=env.get(RESULTS_DATABASE) or None,
         )
+
+
+def _prefixed(env: Mapping[str, str], prefix: str) -> dict[str, str]:
+    return {k: v for k, v in env.items() if k.startswith(prefix)}
 
 
 _VARIABLES: tuple[tuple[str, str, Callable[[str], object]], ...] = (

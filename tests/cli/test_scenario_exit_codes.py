@@ -13,8 +13,8 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
+from simtest_operator import runner
 from simtest_operator.cli.main import cli
-from simtest_operator.runner import scenario_execution
 from simtest_operator.verdicts import ScenarioOutcome, Verdict
 
 pytestmark = pytest.mark.timeout(60)
@@ -42,11 +42,11 @@ def invoke(tmp_path: Path, *args: str) -> tuple[int, str]:
 def test_each_verdict_exits_as_simtest_run_does(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, verdict: Verdict, code: int
 ) -> None:
-    def canned(request: scenario_execution.RunRequest) -> scenario_execution.RunReport:
+    def canned(request: runner.RunRequest) -> runner.RunReport:
         outcome = ScenarioOutcome(scenario_id=request.scenario.name, verdict=verdict, reason="why")
-        return scenario_execution.RunReport(outcome=outcome, storyboard_complete=False)
+        return runner.RunReport(outcome=outcome, storyboard_complete=False)
 
-    monkeypatch.setattr(scenario_execution, "run_scenario", canned)
+    monkeypatch.setattr(runner, "run_scenario", canned)
     exit_code, output = invoke(tmp_path, str(SMOKE / "cut-in_highway_v25_gap30_dv5.xosc"))
     assert exit_code == code, output
     assert output.splitlines()[:2] == [f"verdict: {verdict.value}", "reason: why"]

@@ -21,6 +21,7 @@ from simtest_operator.errors import SourceError
 from simtest_operator.render import ScenarioRef, runspecs
 from simtest_operator.runner import entrypoint
 from simtest_operator.scenarios import GraphqlSource, RestSource, SecretRef, sha256_hex
+from simtest_operator.settings import Settings
 from simtest_operator.verdicts import Verdict
 from tests.runner.podsupport import fake_run_one, job
 from tests.runner.support import fake_xosc
@@ -86,10 +87,8 @@ def run(
     if not root.exists():
         kubelet_volume(root, "suite", {"a.xosc": fake_xosc("pass"), "notes.txt": fake_xosc("fail")})
     monkeypatch.setattr(entrypoint, "CONFIG_MAP_ROOT", root)
-    for name in [n for n in list(entrypoint.os.environ) if n.startswith("SIMTEST_SOURCE_")]:
-        monkeypatch.delenv(name)
-    for name, value in env.items():
-        monkeypatch.setenv(name, value)
+    settings = Settings.from_env({**env, "SIMTEST_CACHE_DIR": str(the_job.settings.cache.root)})
+    the_job = dataclasses.replace(the_job, settings=settings)
     attempts = entrypoint.run_job(the_job, run_one=fake_run_one, fork=False)
     return {a.outcome.scenario_id: (a.outcome.verdict, a.outcome.reason) for a in attempts}
 

@@ -1,6 +1,6 @@
 """``simtest evaluate``: score recorded runs again with another criteria set, without simulating.
 
-Parses options, loads the criteria file and prints what :func:`runner.reevaluation.reevaluate`
+Parses options, loads the criteria file and prints what :func:`runner.reevaluate`
 returns. Exit codes follow ``simtest run``: 0 every scenario passed, 1 some did not (a verdict
 on the system under test, or evidence that cannot back a pass), 2 bad input.
 """
@@ -71,8 +71,8 @@ def evaluate(
     per type; the result is stored as a new evaluation of the same run (the original verdicts
     stay). Exit code: 0 all passed, 1 some failed or lack complete evidence, 2 bad input.
     """
+    from simtest_operator import runner
     from simtest_operator.results import dsn, records
-    from simtest_operator.runner import reevaluation
 
     local = Path(source)
     is_folder = local.is_dir()
@@ -89,8 +89,8 @@ def evaluate(
                 )
                 click.echo(f"{run.verdict.value:<8} {run.scenario_id}  [{kinds}]  {run.reason}")
 
-        summary = reevaluation.reevaluate(
-            reevaluation.EvaluateRequest(
+        summary = runner.reevaluate(
+            runner.EvaluateRequest(
                 target=source,
                 base_dir=artifacts or (local if is_folder else None),
                 criteria=criteria,

@@ -21,10 +21,10 @@ import yaml
 
 from simtest_operator import operator as operating
 from simtest_operator import render as rendering
+from simtest_operator import runner
 from simtest_operator.api import converting, v1alpha1
 from simtest_operator.cli.run import env_secrets
 from simtest_operator.errors import ScenarioError, SimtestError
-from simtest_operator.runner import preparing, resolving
 from simtest_operator.scenarios.pinned import PinnedScenario
 from simtest_operator.scenarios.resolving import FetchContext
 from simtest_operator.settings import Settings
@@ -43,10 +43,7 @@ CLOSE_MATCHES = 3
 @click.option(
     "--templates",
     type=click.Path(path_type=Path, file_okay=False),
-    default=Path("helm-templates"),
-    envvar="SIMTEST_OPERATOR_TEMPLATES",
-    show_default=True,
-    help="Environment templates root ($SIMTEST_OPERATOR_TEMPLATES).",
+    help="Environment templates root (default: ./helm-templates or $SIMTEST_OPERATOR_TEMPLATES).",
 )
 @click.option(
     "--charts-dir",
@@ -57,7 +54,7 @@ def render(
     manifest: Path,
     scenario_id: str,
     out: Path | None,
-    templates: Path,
+    templates: Path | None,
     charts_dir: str | None,
     namespace: str | None,
 ) -> None:
@@ -66,9 +63,10 @@ def render(
     Prints the environment's name, releases and content hash; --out writes the files.
     Same inputs, byte-identical files.
     """
-    settings = Settings.from_env()
+    settings = Settings.from_env(operator_flags={"inputs.templates_dir": templates})
+    templates_dir = settings.operator.inputs.templates_dir
     try:
-        _, campaign = preparing.read_manifest(manifest)
+        _, campaign = runner.read_manifest(manifest)
         frozen = _frozen_list(manifest, campaign, settings)
         position = _position(frozen, scenario_id, campaign.name)
         request = operating.environment_request(
@@ -76,11 +74,11 @@ def render(
             frozen,
             position,
             namespace=namespace or campaign.namespace or "default",
-            templates=templates,
+            templates=templates_dir,
         )
         if charts_dir is not None:
             request = dataclasses.replace(request, charts_dir=charts_dir)
-        rendered = rendering.render_environment(request, rendering.TemplateLibrary(templates))
+        rendered = rendering.render_environment(request, rendering.TemplateLibrary(templates_dir))
     except SimtestError as exc:
         _fail(str(exc))
     files = rendered.files()
@@ -101,7 +99,7 @@ def _frozen_list(
         cache_dir=settings.cache.sources,
         secrets=env_secrets(settings.secrets),
     )
-    frozen = resolving.freeze(
+    frozen = runner.freeze(
         converting.selection(spec.scenarios),
         fetch,
         campaign=campaign.name,

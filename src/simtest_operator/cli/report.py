@@ -13,8 +13,9 @@ from pathlib import Path
 
 import click
 
+from simtest_operator import runner
 from simtest_operator.errors import SimtestError
-from simtest_operator.runner.campaigns import read_recording
+from simtest_operator.settings import Settings
 
 
 @click.command()
@@ -40,7 +41,6 @@ from simtest_operator.runner.campaigns import read_recording
 @click.option(
     "--database",
     metavar="DSN",
-    envvar="SIMTEST_RESULTS_DATABASE",
     help="Read the run from this PostgreSQL database instead of OUTDIR/results.sqlite "
     "(env SIMTEST_RESULTS_DATABASE).",
 )
@@ -59,7 +59,7 @@ def report(
     detail with trajectories, and a comparison with another run)."""
     from simtest_operator.results import dsn, publishing, records
 
-    target: str | Path = database or outdir
+    target: str | Path = database or Settings.from_env().results_database or outdir
     other = None
     if compare is not None or compare_run is not None:
         compare_target: str | Path = compare if compare is not None else target
@@ -78,7 +78,7 @@ def report(
             report_path=out or outdir / publishing.REPORT_FILENAME,
             junit_path=junit,
             compare_with=other,
-            read_trajectories=read_recording,
+            read_trajectories=runner.read_recording,
             hostname=socket.gethostname(),
         )
     except SimtestError as exc:

@@ -1,6 +1,6 @@
 """``simtest run MANIFEST``: a whole TestCampaign on this machine, with the operator's artifacts.
 
-Wiring only: options become a :class:`~simtest_operator.runner.preparing.LocalRunRequest`, the
+Wiring only: options become a :class:`~simtest_operator.runner.LocalRunRequest`, the
 runner does the work, and this module shows progress (a rich progress bar on a terminal, one plain
 line per scenario otherwise), prints the summary and exits 0 (all passed), 1 (some failed) or
 2 (errors, invalid input, interrupted) with a one-line reason.
@@ -25,7 +25,7 @@ from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from pathlib import Path
 from types import FrameType
-from typing import NoReturn
+from typing import Literal, NoReturn
 
 import click
 from rich.console import Console
@@ -33,9 +33,8 @@ from rich.markup import escape
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 from rich.table import Table
 
+from simtest_operator import runner
 from simtest_operator.errors import ScenarioError, SimtestError, SourceError
-from simtest_operator.runner import campaigns, preparing, scheduling, summaries
-from simtest_operator.runner.tasks import ExecuteFn
 from simtest_operator.scenarios.specs import SecretRef
 from simtest_operator.settings import SECRET_PREFIX, Settings
 from simtest_operator.verdicts import Verdict
@@ -69,16 +68,6 @@ def env_secrets(env: Mapping[str, str]) -> Callable[[SecretRef], str]:
         return value
 
     return provide
-
-
-def _engine(name: str) -> ExecuteFn:
-    if name == "fake":
-        from simtest_operator.runner import fakes
-
-        return fakes.execute
-    from simtest_operator.runner import engines
-
-    return engines.execute
 
 
 @click.command("run")
@@ -127,7 +116,7 @@ def run(
     rerun_failed: Path | None,
     database: str | None,
     plain: bool,
-    engine: str,
+    engine: Literal["sumo", "fake"],
 ) -> None:
     """Run a TestCampaign MANIFEST on this machine, in parallel worker processes.
 
@@ -142,11 +131,11 @@ def run(
     if frozen is not None and rerun_failed is not None:
         _fail(errors, "--frozen and --rerun-failed exclude each other")
     settings = Settings.from_env()
-    request = preparing.LocalRunRequest(
+    request = runner.LocalRunRequest(
         manifest=manifest,
         output=output or _default_output(manifest, rerun_failed),
         settings=settings,
-        execute=_engine(engine),
+        execute=runner.engine(engine),
         parallel=parallel,
         frozen=frozen,
         rerun_failed=rerun_failed,
@@ -159,7 +148,7 @@ def run(
     stop = threading.Event()
     try:
         with _graceful_interrupt(stop, errors), view:
-            result = campaigns.run(request, on_event=view.event, stop=stop)
+            result = runner.run_campaign(request, on_event=view.event, stop=stop)
     except ScenarioError as exc:
         _fail(errors, str(exc))
     except SimtestError as exc:
@@ -176,7 +165,7 @@ def _default_output(manifest: Path | None, rerun_failed: Path | None) -> Path:
 
 def _fail(errors: Console, reason: str) -> NoReturn:
     errors.print(f"[bold red]error:[/] {escape(reason)}", soft_wrap=True)
-    raise SystemExit(summaries.EXIT_ERROR)
+    raise SystemExit(runner.EXIT_ERROR)
 
 
 _STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
@@ -238,19 +227,19 @@ class _Plain:
     def __exit__(self, *exc: object) -> None:
         return None
 
-    def event(self, event: campaigns.Event) -> None:
-        if isinstance(event, campaigns.Prepared):
+    def event(self, event: runner.CampaignEvent) -> None:
+        if isinstance(event, runner.Prepared):
             _print_prepared(self.console, event)
             self.total = event.total
             self.counts.done = event.finished
-        elif isinstance(event, scheduling.Retrying):
+        elif isinstance(event, runner.Retrying):
             o = event.outcome
             self.console.print(
                 f"retry   {o.scenario_id} after attempt {o.attempts}: {o.reason}",
                 markup=False,
                 soft_wrap=True,
             )
-        elif isinstance(event, scheduling.Finished):
+        elif isinstance(event, runner.Finished):
             o = event.outcome
             self.counts.add(o.verdict)
             width = len(str(self.total))
@@ -287,8 +276,8 @@ class _Live(_Plain):
     def __exit__(self, *exc: object) -> None:
         self.progress.stop()
 
-    def event(self, event: campaigns.Event) -> None:
-        if isinstance(event, campaigns.Prepared):
+    def event(self, event: runner.CampaignEvent) -> None:
+        if isinstance(event, runner.Prepared):
             _print_prepared(self.console, event)
             self.total = event.total
             self.progress.update(
@@ -298,14 +287,14 @@ class _Live(_Plain):
                 description=escape(event.campaign),
                 counts=self.counts.line(),
             )
-        elif isinstance(event, scheduling.Retrying):
+        elif isinstance(event, runner.Retrying):
             o = event.outcome
             self.console.print(
                 f"[yellow]retry[/] {escape(o.scenario_id)} after attempt {o.attempts}: "
                 f"{escape(o.reason)}",
                 soft_wrap=True,
             )
-        elif isinstance(event, scheduling.Finished):
+        elif isinstance(event, runner.Finished):
             o = event.outcome
             self.counts.add(o.verdict)
             if o.verdict is not Verdict.PASSED:
@@ -318,7 +307,7 @@ class _Live(_Plain):
             self.progress.update(self.task, advance=1, counts=self.counts.line())
 
 
-def _print_prepared(console: Console, event: campaigns.Prepared) -> None:
+def _print_prepared(console: Console, event: runner.Prepared) -> None:
     verb = "resuming" if event.resumed else "running"
     todo = event.total - event.finished
     console.print(
@@ -331,7 +320,7 @@ def _print_prepared(console: Console, event: campaigns.Prepared) -> None:
         console.print(f"  note    {note}", markup=False, soft_wrap=True)
 
 
-def _print_summary(console: Console, result: campaigns.LocalRunResult) -> None:
+def _print_summary(console: Console, result: runner.LocalRunResult) -> None:
     summary = result.summary
     table = Table(title=f"{summary.total} scenarios", show_edge=False)
     for verdict in Verdict:

@@ -1,9 +1,9 @@
 """``simtest scenario run|check``: run one scenario, or every scenario under a directory.
 
-Thin wiring: options -> :mod:`simtest_operator.runner.scenario_execution` -> formatted output.
+Thin wiring: options -> :func:`simtest_operator.runner.run_scenario` -> formatted output.
 ``check`` expands ParameterValueDistribution files into their concrete runs and skips catalogs.
 ``run`` exits like ``simtest run`` over a one-scenario list
-(:mod:`simtest_operator.runner.summaries`), so a script or CI step can use either command with
+(:func:`simtest_operator.runner.summarise`), so a script or CI step can use either command with
 the same meaning of 0, 1 and 2.
 """
 
@@ -16,6 +16,7 @@ from typing import Any
 
 import click
 
+from simtest_operator import runner
 from simtest_operator.cli import options
 from simtest_operator.errors import ScenarioError
 from simtest_operator.evaluation import reference as references
@@ -28,7 +29,6 @@ from simtest_operator.openscenario import (
 )
 from simtest_operator.openscenario.confinement import default_root
 from simtest_operator.openscenario.loading import MAX_SCENARIO_BYTES
-from simtest_operator.runner import scenario_execution, summaries
 from simtest_operator.settings import Settings
 from simtest_operator.sim import SutConfig, Takeover
 from simtest_operator.verdicts import Verdict
@@ -131,8 +131,8 @@ def run(
     the exit code unless --strict makes them Invalid.
     """
     settings = Settings.from_env()
-    report = scenario_execution.run_scenario(
-        scenario_execution.RunRequest(
+    report = runner.run_scenario(
+        runner.RunRequest(
             scenario=file,
             nets_dir=settings.cache.nets,
             sut=SutConfig(takeover=Takeover(takeover)),
@@ -156,13 +156,13 @@ def run(
     for name, uri in sorted(outcome.artifacts.items()):
         click.echo(f"{name}: {uri}")
     raise SystemExit(
-        summaries.summarise([outcome.scenario_id], {outcome.scenario_id: outcome}).exit_code
+        runner.summarise([outcome.scenario_id], {outcome.scenario_id: outcome}).exit_code
     )
 
 
 def _requests(
     directory: Path, settings: Settings, sut: SutConfig, loading: LoadOptions
-) -> list[scenario_execution.RunRequest]:
+) -> list[runner.RunRequest]:
     requests = []
     for path in sorted(directory.rglob("*.xosc")):
         overrides_list: list[tuple[str, Path, Mapping[str, str]]]
@@ -187,7 +187,7 @@ def _requests(
             overrides_list = [(scenario_id, path, {})]
         for run_id, scenario_path, overrides in overrides_list:
             requests.append(
-                scenario_execution.RunRequest(
+                runner.RunRequest(
                     scenario=scenario_path,
                     scenario_id=run_id,
                     overrides=dict(overrides),
@@ -203,8 +203,8 @@ def _requests(
 
 def _comparison(
     reference: Mapping[str, Any],
-    request: scenario_execution.RunRequest,
-    report: scenario_execution.RunReport,
+    request: runner.RunRequest,
+    report: runner.RunReport,
 ) -> references.Comparison | None:
     if request.overrides or not report.outcome.verdict.counts_as_ran:
         return None
@@ -267,8 +267,8 @@ def check(
     loading = _loading(settings, strict, root or directory, maps, max_mb)
     requests = _requests(directory, settings, SutConfig(takeover=Takeover(takeover)), loading)
     ref = references.load(reference) if reference is not None else None
-    reports: dict[int, scenario_execution.RunReport] = {}
-    for index, report in scenario_execution.run_many(requests, jobs=jobs or os.cpu_count() or 1):
+    reports: dict[int, runner.RunReport] = {}
+    for index, report in runner.run_many(requests, jobs=jobs or os.cpu_count() or 1):
         reports[index] = report
     table = Table(title=f"scenarios under {directory}")
     columns = ["file", "verdict", "reason", "warnings", "simulated s", "wall s"]

@@ -24,20 +24,20 @@ from simtest_operator.errors import RenderError
 from simtest_operator.render.inputs import ScenarioRef
 from simtest_operator.scenarios.locating import Needs
 from simtest_operator.scenarios.specs import DatabaseSource, GraphqlSource, RestSource, SecretRef
+from simtest_operator.settings import SOURCE_TOKEN_PREFIX
 
 ENV_VAR = "SIMTEST_RUN_SPEC"
 """Environment variable of the simulator container that carries the run spec."""
 FORMAT_VERSION = 1
 CONFIG_MAP_DIR = "/var/run/simtest/configmaps"
 """Where the simulator container finds ConfigMap ``<name>`` (one folder per name)."""
-SECRET_VARIABLE_PREFIX = "SIMTEST_SOURCE_TOKEN_"
 
 
 def secret_variables(databases: Iterable[DatabaseSource]) -> dict[SecretRef, str]:
     """The container variable of each distinct Secret key the databases need, in order: computed
     from the run spec alone, so the pod template and the runner agree without naming them twice."""
     refs = dict.fromkeys(d.secret for d in databases if d.secret is not None)
-    return {ref: f"{SECRET_VARIABLE_PREFIX}{index}" for index, ref in enumerate(refs)}
+    return {ref: f"{SOURCE_TOKEN_PREFIX}{index}" for index, ref in enumerate(refs)}
 
 
 def config_map_volumes(names: Iterable[str]) -> list[dict[str, str]]:

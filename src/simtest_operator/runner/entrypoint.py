@@ -161,7 +161,10 @@ def run_job(
     """
     spec = job.spec
     locator = locator_for(
-        spec, cache=job.settings.cache.sources, env=os.environ, config_maps=CONFIG_MAP_ROOT
+        spec,
+        cache=job.settings.cache.sources,
+        tokens=job.settings.source_tokens,
+        config_maps=CONFIG_MAP_ROOT,
     )
     isolated = spec.isolation == "Reuse" and len(spec.scenarios) > 1 if fork is None else fork
     if isolated and run_one is _run_one:
@@ -235,30 +238,31 @@ def run_job(
 
 
 def locator_for(
-    spec: RunSpec, *, cache: Path, env: Mapping[str, str], config_maps: Path
+    spec: RunSpec, *, cache: Path, tokens: Mapping[str, str], config_maps: Path
 ) -> Locator:
     """The pod's Locator: ConfigMaps from the folders the operator mounts, the run spec's
-    databases, their tokens from the ``secretKeyRef`` variables the template sets
-    (:func:`runspecs.secret_variables`). The pod has no API access: nothing is read from the
-    cluster here."""
+    databases, their ``tokens`` from the ``secretKeyRef`` variables the template sets
+    (:func:`runspecs.secret_variables`, read into ``Settings.source_tokens``). The pod has no API
+    access: nothing is read from the cluster here."""
     ctx = FetchContext(
         base_dir=Path("/"),
         cache_dir=cache,
         config_maps=MountedConfigMaps(config_maps),
-        secrets=pod_secrets(spec, env),
+        secrets=pod_secrets(spec, tokens),
     )
     return Locator(ctx, graphql_sources=spec.databases)
 
 
-def pod_secrets(spec: RunSpec, env: Mapping[str, str]) -> SecretProvider:
-    """Secret values from the container's variables; a missing one is a SourceError (Error)."""
+def pod_secrets(spec: RunSpec, tokens: Mapping[str, str]) -> SecretProvider:
+    """Secret values from the container's token variables (by name); a missing one is a
+    SourceError (Error)."""
     variables = runspecs.secret_variables(spec.databases)
 
     def provide(ref: SecretRef) -> str:
         variable = variables.get(ref)
         if variable is None:
             raise SourceError(f"Secret {ref.name}/{ref.key} is not one the run spec lists")
-        value = env.get(variable, "").strip()
+        value = tokens.get(variable, "").strip()
         if not value:
             raise SourceError(
                 f"Secret {ref.name}/{ref.key} is not available in the pod ({variable} is unset: "
