@@ -95,6 +95,9 @@ class ExternalSut:
     """Port a sidecar listens on."""
     image: str | None = None
     """Sidecar image (identity for the results)."""
+    image_id: str = ""
+    """``repo@sha256:…`` of ``image`` where the runner can tell (a digest-pinned reference, the
+    local build index); empty: unknown here (in a pod the operator adds what the kubelet ran)."""
     env: Mapping[str, str] = dataclasses.field(default_factory=dict)
     step_deadline: float = 0.1
     """Seconds the SUT may take to answer one step before the run ends Error."""

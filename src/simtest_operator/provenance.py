@@ -15,6 +15,7 @@ from __future__ import annotations
 import functools
 import hashlib
 import importlib.metadata
+import json
 import platform
 import re
 import sys
@@ -86,3 +87,58 @@ def versions() -> Mapping[str, str]:
         "lock": _sha256(lock.read_bytes()) if lock else "unknown (no uv.lock beside the env)",
         "installed": installed_digest(),
     }
+
+
+# --- which container image ran -----------------------------------------------------------------
+
+SUT_IMAGE_ID = "sut.imageID"
+"""The versions entry naming the SUT image that ran: ``repo@sha256:…``, ``sha256:…`` or
+:data:`UNKNOWN_IMAGE`."""
+UNKNOWN_IMAGE = "unknown"
+"""What a result says about an image nobody could name by digest (never a guess)."""
+_RUNTIME_SCHEMES = ("docker-pullable://", "docker://", "containerd://", "cri-o://")
+_DIGEST = re.compile(r"^(?:(?P<repo>[^@\s]+)@)?(?P<digest>sha256:[0-9a-f]{64})$")
+
+
+def reported_image_id(image_id: str) -> str:
+    """A container's ``status.*ContainerStatuses[].imageID`` as a result records it, or "".
+
+    The kubelet reports what the runtime resolved: ``docker.io/library/x@sha256:…`` (the registry
+    manifest digest, containerd and CRI-O when the image has one) or bare ``sha256:…`` (the image
+    id, i.e. the config digest, for an image the runtime knows no registry digest of); cri-dockerd
+    prefixes a scheme (``docker-pullable://``), which says nothing about the image and is dropped.
+    Anything else (empty while the image is pulled, a malformed value) is "", not a guess.
+    """
+    text = image_id.strip()
+    for scheme in _RUNTIME_SCHEMES:
+        text = text.removeprefix(scheme)
+    return text if _DIGEST.match(text) else ""
+
+
+def pinned_image_id(image: str) -> str:
+    """``repo@sha256:…`` of a reference pinned by digest (``repo:tag@sha256:…`` too), else ""."""
+    name, at, digest = image.partition("@")
+    if not at or _DIGEST.match(digest) is None:
+        return ""
+    return f"{_repository(name)}@{digest}"
+
+
+def built_image_id(image: str, index: Path) -> str:
+    """``repo@sha256:…`` of ``image`` from the build script's index (``images.json``: the
+    manifest digest, which a containerd node that imported the archive reports the same way),
+    else "" (no index, image not built here, or an entry without a digest)."""
+    try:
+        data = json.loads(index.read_text())
+    except (OSError, ValueError):
+        return ""
+    images = data.get("images") if isinstance(data, Mapping) else None
+    entry = images.get(image) if isinstance(images, Mapping) else None
+    digest = str(entry.get("digest", "")) if isinstance(entry, Mapping) else ""
+    return f"{_repository(image)}@{digest}" if _DIGEST.match(digest) else ""
+
+
+def _repository(name: str) -> str:
+    """The reference without its tag (a ``:`` after the last ``/`` starts the tag)."""
+    slash = name.rfind("/")
+    colon = name.rfind(":")
+    return name[:colon] if colon > slash else name

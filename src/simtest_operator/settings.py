@@ -50,6 +50,13 @@ class CacheSettings:
         return self.root / "sources"
 
     @property
+    def image_index(self) -> Path:
+        """``images.json``, the index of the container images ``deploy/docker/build.sh`` built
+        (name, OCI archive, manifest digest): what a real node imports, and how ``simtest run``
+        names the digest of a SUT image."""
+        return self.root / "images" / "images.json"
+
+    @property
     def toolchain(self) -> Path:
         """Control-plane, kwok, helm and helmfile binaries plus Go module and build caches."""
         return self.root / "toolchain"

@@ -15,9 +15,9 @@ from pathlib import Path
 from simtest_operator.devcluster import addons
 from simtest_operator.devcluster.realnodes import RealNodeSetup
 from simtest_operator.errors import ClusterError
+from simtest_operator.settings import CacheSettings
 
 BUILD_SCRIPT = Path("deploy/docker/build.sh")
-INDEX = "images.json"
 RUNNER_IMAGE = "ghcr.io/simtest-dev/simtest-runner:0.1.0"
 DEVICE_PLUGIN_IMAGE = "ghcr.io/simtest-dev/simtest-device-plugin:0.1.0"
 SUT_GO_IMAGE = "ghcr.io/simtest-dev/simtest-sut-go:0.1.0"
@@ -35,7 +35,7 @@ class BuiltImage:
 
 
 def index_path(cache_root: Path) -> Path:
-    return cache_root / "images" / INDEX
+    return CacheSettings(root=cache_root).image_index
 
 
 def load_index(path: Path) -> dict[str, BuiltImage]:

@@ -135,7 +135,7 @@ def assess(
             phase=Phase.FINISHED,
             node=node,
             timings=finished_timings,
-            results=results,
+            results=_naming_the_sut(results, pod),
             reason=reason,
             delete_pod=False,
         )
@@ -146,7 +146,9 @@ def assess(
             phase=Phase.FINISHED,
             node=node,
             timings=dataclasses.replace(timings, finished=now),
-            results=failed_records(env, verdict, reason, started=timings.started, end=now),
+            results=_naming_the_sut(
+                failed_records(env, verdict, reason, started=timings.started, end=now), pod
+            ),
             reason=reason,
             delete_pod=not pod.deleting or force,
             force_delete=force,
@@ -287,6 +289,17 @@ def _next_check(
     if begin is None:
         return None
     return begin + datetime.timedelta(seconds=limits.deadline_seconds + limits.backstop_grace)
+
+
+def _naming_the_sut(records: tuple[ResultRecord, ...], pod: PodView) -> tuple[ResultRecord, ...]:
+    """The pod's records with the SUT image its kubelet ran: only the pod status knows it (the
+    runner inside sees a TCP peer), and a tag can move between attempts."""
+    if not pod.sut_image_id:
+        return records
+    return tuple(
+        r if r.sut_image_id else dataclasses.replace(r, sut_image_id=pod.sut_image_id)
+        for r in records
+    )
 
 
 def _terminated(

@@ -152,7 +152,7 @@ class CampaignLoop:
         if applied.campaign_written:
             self.last_status_write = now
         self._observe(plan)
-        self.recorder.observe(campaign, self.stored)  # results DB: start/finish, in background
+        self.recorder.observe(campaign, self.stored, inputs.batches)  # results DB, in background
         shared.metrics.reconcile.observe(time.perf_counter() - started)
         self.wake_at = plan.wake_at
         if applied.failures or applied.conflict:

@@ -12,6 +12,7 @@ import datetime
 from collections.abc import Mapping
 from typing import Any
 
+from simtest_operator import provenance
 from simtest_operator.api.v1alpha1 import (
     ManifestError,
     ScenarioBatchStatus,
@@ -25,6 +26,8 @@ from simtest_operator.operator.status.records import ResultRecord
 from simtest_operator.render.inputs import SIMULATOR_RESOURCE, ScenarioRef
 
 Raw = Mapping[str, Any]
+SUT_CONTAINER = "sut"
+"""The container an external SUT image runs in (``default/pod.yaml.j2``: a native sidecar)."""
 
 
 def _meta(body: Raw) -> Raw:
@@ -104,6 +107,9 @@ class PodView:
     """``DisruptionTarget`` reason and message (eviction, preemption, pod GC), if any."""
     job: str = ""
     """The Job that owns the pod (helmfile Jobs' pods carry the campaign label too)."""
+    sut_image_id: str = ""
+    """The image of the SUT container as the kubelet reports it (``repo@sha256:…`` or
+    ``sha256:…``), empty without a SUT container or before its image is resolved."""
 
     @property
     def terminated(self) -> bool:
@@ -146,6 +152,7 @@ def pod_view(body: Raw) -> PodView:
         unschedulable=unschedulable,
         start_time=reading.timestamp(status.get("startTime")),
         container=_container(status),
+        sut_image_id=_sut_image_id(status),
         disruption=disruption_text,
         job=next(
             (
@@ -180,6 +187,16 @@ def _container(status: Raw) -> ContainerView:
                 finished_at=reading.timestamp(detail.get("finishedAt")),
             )
     return ContainerView()
+
+
+def _sut_image_id(status: Raw) -> str:
+    """The SUT container's ``imageID``: a native sidecar reports it among the init containers,
+    a template that runs the SUT as a plain container among the containers."""
+    for key in ("initContainerStatuses", "containerStatuses"):
+        for entry in status.get(key) or ():
+            if isinstance(entry, Mapping) and entry.get("name") == SUT_CONTAINER:
+                return provenance.reported_image_id(str(entry.get("imageID") or ""))
+    return ""
 
 
 # --- nodes -------------------------------------------------------------------------------------

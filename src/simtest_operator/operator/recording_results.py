@@ -18,12 +18,12 @@ import asyncio
 import base64
 import datetime
 import logging
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from typing import Any, Protocol
 
-from simtest_operator import results
+from simtest_operator import provenance, results
 from simtest_operator.errors import ResultsError, SimtestError
-from simtest_operator.operator.observed import CampaignView
+from simtest_operator.operator.observed import BatchView, CampaignView
 from simtest_operator.operator.scenariolists import StoredList
 from simtest_operator.operator.status import reading
 from simtest_operator.render import documents
@@ -96,6 +96,17 @@ def scenario_infos(stored: StoredList | None) -> list[results.ScenarioInfo]:
     ]
 
 
+def sut_images(batches: Iterable[BatchView]) -> dict[tuple[str, int], dict[str, str]]:
+    """(scenario id, attempt) -> the versions entry naming the SUT image the kubelet ran, for
+    every final result that has one (the pod's own row could only say ``unknown``)."""
+    return {
+        (r.id, r.attempts): {provenance.SUT_IMAGE_ID: r.sut_image_id}
+        for batch in batches
+        for r in batch.results
+        if r.sut_image_id
+    }
+
+
 class CampaignRecorder:
     """Records one campaign's run; owned by its campaign loop."""
 
@@ -120,8 +131,14 @@ class CampaignRecorder:
         """Whether the campaign's end is recorded."""
         return self._finished
 
-    def observe(self, campaign: CampaignView, stored: StoredList | None) -> None:
-        """After a reconcile step: start recording what is due; never blocks, never raises."""
+    def observe(
+        self,
+        campaign: CampaignView,
+        stored: StoredList | None,
+        batches: Iterable[BatchView] = (),
+    ) -> None:
+        """After a reconcile step: start recording what is due; never blocks, never raises.
+        ``batches`` give the final results whose SUT image goes into the pods' rows at the end."""
         spec = campaign.spec
         if spec is None or spec.results.database_secret_ref is None or self._finished:
             return
@@ -132,8 +149,9 @@ class CampaignRecorder:
         finish = finish_of(campaign)
         if finish is None and (self._started or stored is None):
             return
+        versions = sut_images(batches) if finish is not None else {}
         self._task = asyncio.get_running_loop().create_task(
-            self._record(campaign, stored, finish),
+            self._record(campaign, stored, finish, versions),
             name=f"results record {campaign.namespace}/{campaign.name}",
         )
 
@@ -143,7 +161,11 @@ class CampaignRecorder:
             await asyncio.shield(self._task)
 
     async def _record(
-        self, campaign: CampaignView, stored: StoredList | None, finish: results.Finish | None
+        self,
+        campaign: CampaignView,
+        stored: StoredList | None,
+        finish: results.Finish | None,
+        versions: Mapping[tuple[str, int], Mapping[str, str]],
     ) -> None:
         where = f"{campaign.namespace}/{campaign.name}"
         try:
@@ -151,7 +173,7 @@ class CampaignRecorder:
             info = campaign_info(campaign, now=self._clock())
             key = run_key(campaign)
             infos = scenario_infos(stored)
-            await asyncio.to_thread(self._write, dsn, key, info, infos, finish)
+            await asyncio.to_thread(self._write, dsn, key, info, infos, finish, versions)
         except Exception as exc:  # a record is never worth a crashed task
             if not isinstance(exc, SimtestError | OSError):
                 log.exception("%s: unexpected error while recording the run", where)
@@ -185,12 +207,15 @@ class CampaignRecorder:
         info: results.CampaignInfo,
         infos: list[results.ScenarioInfo],
         finish: results.Finish | None,
+        versions: Mapping[tuple[str, int], Mapping[str, str]],
     ) -> None:
         with self._open_store(dsn) as store:
             if finish is None:
                 results.start_campaign_run(store, key, info=info, scenarios=infos)
             else:
-                results.finish_campaign_run(store, key, info=info, finish=finish, scenarios=infos)
+                results.finish_campaign_run(
+                    store, key, info=info, finish=finish, scenarios=infos, versions=versions
+                )
 
 
 def decode_secret(body: Mapping[str, Any], *, name: str, key: str) -> str:

@@ -111,14 +111,19 @@ def finish_campaign_run(
     info: records.CampaignInfo,
     finish: Finish,
     scenarios: Sequence[records.ScenarioInfo] = (),
+    versions: Mapping[tuple[str, int], Mapping[str, str]] | None = None,
 ) -> records.CampaignRecord:
     """Create the run record if needed, complete its description and mark it finished.
 
     ``scenarios`` (the frozen list) are appended to the run's list where missing, so a report
-    names scenarios that never got a row. Idempotent: calling it again with the same values
-    leaves the same record. Returns the stored record.
+    names scenarios that never got a row. ``versions`` ((scenario id, attempt) -> entries) are
+    merged into the attempts' rows the pods wrote: what only the operator saw (the SUT image the
+    kubelet ran). Idempotent: calling it again with the same values leaves the same record.
+    Returns the stored record.
     """
     store.begin_campaign(info, scenarios=scenarios, run_key=key)
+    if versions:
+        store.add_versions(key, versions)
     store.finish_campaign(
         key,
         finished_at=finish.finished_at,

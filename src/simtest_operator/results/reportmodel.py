@@ -203,7 +203,19 @@ def _short_digest(value: str) -> str:
     return f"{algorithm}:{digest[:12]}" if digest and algorithm.isalnum() else value
 
 
+_LABELS = {
+    "sut.reported": "SUT as it reported itself",
+    "sut.configHash": "SUT config hash",
+    "sut.image": "SUT image",
+    "sut.imageID": "SUT image digest",
+    "sut.launch": "SUT launched as",
+}
+"""Labels of the entries that name the SUT (:mod:`simtest_operator.sut.runs`)."""
+
+
 def _version_label(name: str) -> str:
+    if name in _LABELS:
+        return _LABELS[name]
     return f"{name} digest" if name in ("lock", "installed") else f"{name} version"
 
 

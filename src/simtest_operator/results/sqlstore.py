@@ -221,6 +221,22 @@ class SqlStore(abc.ABC, EvaluationQueries):
                 ],
             )
 
+    def add_versions(
+        self,
+        run_key: records.RunKey,
+        additions: Mapping[tuple[str, int], Mapping[str, str]],
+    ) -> None:
+        codec = self._codec
+        where = "WHERE run_key = ? AND scenario_id = ? AND attempt = ?"
+        with self._transaction(write=True) as tx:
+            for (scenario_id, attempt), entries in sorted(additions.items()):
+                key = (run_key, scenario_id, attempt)
+                found = tx.query(f"SELECT versions FROM runs {where}", key)
+                if not found or not entries:
+                    continue
+                merged = {**(codec.json_out(found[0][0]) or {}), **entries}
+                tx.query(f"UPDATE runs SET versions = ? {where}", (codec.json_in(merged), *key))
+
     def finish_campaign(
         self,
         run_key: records.RunKey,

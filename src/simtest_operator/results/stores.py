@@ -62,6 +62,17 @@ class ResultSink(Protocol):
         """
         ...
 
+    def add_versions(
+        self,
+        run_key: records.RunKey,
+        additions: Mapping[tuple[str, int], Mapping[str, str]],
+    ) -> None:
+        """Merge entries into the ``versions`` of stored attempts, keyed (scenario id, attempt):
+        what a writer other than the attempt's own learned about it (the operator: the SUT image
+        the kubelet ran). Attempts without a row are skipped; merging twice is harmless.
+        """
+        ...
+
     def finish_campaign(
         self,
         run_key: records.RunKey,

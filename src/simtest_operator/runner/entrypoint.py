@@ -58,7 +58,7 @@ from simtest_operator.errors import (
 from simtest_operator.openscenario import LoadOptions
 from simtest_operator.render import RunSpec, ScenarioRef, messages, runspecs
 from simtest_operator.render.inputs import STARTUP_ALLOWANCE_SECONDS
-from simtest_operator.runner import scenario_execution
+from simtest_operator.runner import scenario_execution, suts
 from simtest_operator.scenarios import (
     FetchContext,
     Locator,
@@ -129,7 +129,7 @@ def requests_for(job: Job, scenario: ScenarioRef, path: Path) -> scenario_execut
         nets_dir=job.settings.cache.nets,
         scenario_id=scenario.id,
         overrides=dict(scenario.overrides),
-        sut=converting.sut(sut),
+        sut=suts.with_image_id(converting.sut(sut), job.settings.cache.image_index),
         criteria=converting.criteria(evaluation, scenario.id),
         simulation=converting.simulation(simulator),
         output_dir=job.artifacts / safe_name(scenario.id),

@@ -18,7 +18,7 @@ from simtest_operator.api import converting, manifestfiles, v1alpha1
 from simtest_operator.drivermodel import SutConfig
 from simtest_operator.errors import ScenarioError
 from simtest_operator.openscenario import headers
-from simtest_operator.runner import outputs, resolving, scheduling, tasks
+from simtest_operator.runner import outputs, resolving, scheduling, suts, tasks
 from simtest_operator.scenarios import selecting, uris
 from simtest_operator.scenarios.batching import ExecutionPolicy
 from simtest_operator.scenarios.pinned import FrozenList, PinnedScenario, sha256_hex
@@ -154,7 +154,9 @@ def prepare(request: LocalRunRequest, *, now: datetime.datetime) -> Plan:
         fetch=fetch,
         graphql_sources=graphql,
         settings=dataclasses.replace(request.settings, simulation=converting.simulation(simulator)),
-        sut=converting.sut(spec.environment.sut),
+        sut=suts.with_image_id(
+            converting.sut(spec.environment.sut), request.settings.cache.image_index
+        ),
         record=simulator.record and spec.artifacts.keep_recordings,
         notes=tuple(notes),
     )

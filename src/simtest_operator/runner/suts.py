@@ -9,15 +9,31 @@ does nothing, so default runs keep their speed and results.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import time
 from collections.abc import Mapping, MutableMapping
+from pathlib import Path
 
+from simtest_operator import provenance
 from simtest_operator.settings import SimulationSettings
 from simtest_operator.sim import Simulation, SutConfig
 from simtest_operator.sut import client, launching, runs
 
 KEEP_UP_TOLERANCE = 0.95
 """A paced run that achieves less than this share of its real-time factor fell behind."""
+
+
+def with_image_id(sut: SutConfig, index: Path) -> SutConfig:
+    """``sut`` naming the digest of its image where this machine can tell: from a reference
+    pinned by digest, else from the build script's ``index``; else it stays unknown (in a pod
+    the operator records the digest the kubelet reports)."""
+    external = sut.external
+    if external is None or not external.image or external.image_id:
+        return sut
+    found = provenance.pinned_image_id(external.image) or provenance.built_image_id(
+        external.image, index
+    )
+    return dataclasses.replace(sut, external=dataclasses.replace(external, image_id=found))
 
 
 class SutLink:

@@ -11,6 +11,7 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from simtest_operator.drivermodel import SutConfig
+from simtest_operator.provenance import SUT_IMAGE_ID, UNKNOWN_IMAGE
 from simtest_operator.sut.client import Identity
 from simtest_operator.sut.messages import OSI_VERSION
 
@@ -67,6 +68,7 @@ def provenance(sut: SutConfig, identity: Identity) -> dict[str, str]:
         out["sut.launch"] = str(external.launch)
         if external.image:
             out["sut.image"] = external.image
+            out[SUT_IMAGE_ID] = external.image_id or UNKNOWN_IMAGE
     if identity.digest:
         out["sut.digest"] = identity.digest
     return out

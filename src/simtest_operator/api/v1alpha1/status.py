@@ -78,6 +78,10 @@ class ScenarioResult(ApiModel):
     results_stored: bool | None = None
     """``false`` when the pod could not store this attempt in the results database (down,
     misconfigured, no time left); absent otherwise. The verdict stands either way."""
+    sut_image_id: Annotated[str, StringConstraints(max_length=512)] | None = None
+    """The external SUT's image as the kubelet ran it for this attempt: its ``imageID``, e.g.
+    ``ghcr.io/acme/planner@sha256:…`` (registry digest) or ``sha256:…`` (the runtime's image id);
+    absent without a SUT container."""
 
 
 class CommonStatus(Counters):

@@ -35,6 +35,8 @@ class ResultRecord:
     artifacts: tuple[tuple[str, str], ...] = ()
     results_stored: bool = True
     """False when the pod could not store the attempt in the results database."""
+    sut_image_id: str = ""
+    """The SUT image the kubelet ran for this attempt (``repo@sha256:…`` or ``sha256:…``)."""
 
     def to_wire(self) -> dict[str, Any]:
         """``ScenarioResult`` wire form."""
@@ -51,6 +53,8 @@ class ResultRecord:
             wire["artifacts"] = dict(self.artifacts)
         if not self.results_stored:
             wire["resultsStored"] = False
+        if self.sut_image_id:
+            wire["sutImageId"] = self.sut_image_id
         return wire
 
     @classmethod
@@ -69,6 +73,7 @@ class ResultRecord:
                 sorted((str(k), str(v)) for k, v in (data.get("artifacts") or {}).items())
             ),
             results_stored=data.get("resultsStored") is not False,
+            sut_image_id=str(data.get("sutImageId") or ""),
         )
 
     @classmethod
