@@ -75,3 +75,52 @@ def test_a_scenario_result_carries_the_record(tmp_path: Path) -> None:
     assert result["versions"]["sumo"] == importlib.metadata.version("eclipse-sumo")
     assert result["versions"]["lock"] == provenance.versions()["lock"]
     assert result["versions"]["sut"].startswith("idm-driver ")
+
+
+DIGEST = "sha256:" + "5e" * 32
+
+
+def _index(tmp_path: Path, images: object) -> Path:
+    path = tmp_path / "images.json"
+    path.write_text(json.dumps({"format": 1, "images": images}))
+    return path
+
+
+def test_an_image_is_named_by_digest_only_where_someone_knows_it(tmp_path: Path) -> None:
+    index = _index(
+        tmp_path,
+        {
+            "registry.local:5000/acme/planner:2.1.0": {"digest": DIGEST, "id": "sha256:" + "1" * 6},
+            "acme/no-digest:1": {"archive": "x.tar"},
+        },
+    )  # fmt: skip
+    # The build index gives the manifest digest, in the form a containerd kubelet reports it.
+    built = provenance.built_image_id("registry.local:5000/acme/planner:2.1.0", index)
+    assert built == f"registry.local:5000/acme/planner@{DIGEST}"
+    assert provenance.built_image_id("acme/no-digest:1", index) == ""
+    assert provenance.built_image_id("acme/other:1", index) == ""
+    assert provenance.built_image_id("acme/other:1", tmp_path / "missing.json") == ""
+    (tmp_path / "broken.json").write_text("{")
+    assert provenance.built_image_id("acme/other:1", tmp_path / "broken.json") == ""
+    # A reference pinned by digest names itself (with or without its tag).
+    assert provenance.pinned_image_id(f"ghcr.io/acme/planner:2.1@{DIGEST}") == (
+        f"ghcr.io/acme/planner@{DIGEST}"
+    )
+    assert provenance.pinned_image_id("ghcr.io/acme/planner:2.1") == ""
+    assert provenance.pinned_image_id("ghcr.io/acme/planner@sha256:short") == ""
+
+
+@pytest.mark.parametrize(
+    ("reported", "recorded"),
+    [
+        (f"docker.io/library/planner@{DIGEST}", f"docker.io/library/planner@{DIGEST}"),
+        (DIGEST, DIGEST),
+        (f"docker-pullable://planner@{DIGEST}", f"planner@{DIGEST}"),
+        (f"docker://{DIGEST}", DIGEST),
+        ("", ""),
+        ("planner:latest", ""),
+        ("sha256:ABC", ""),
+    ],
+)
+def test_the_kubelets_image_id_is_kept_or_left_empty(reported: str, recorded: str) -> None:
+    assert provenance.reported_image_id(reported) == recorded

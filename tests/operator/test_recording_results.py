@@ -6,7 +6,9 @@ after that; the DSN read from the Secret the spec names; no database configured 
 a database that is down -> no exception, a retry after the backoff that then succeeds; a Secret
 without the key -> a clear error in the log and a retry; the same against a real PostgreSQL, with
 the Secret's DSN in every form libpq accepts (issue 12: a key/value DSN was taken for a SQLite
-path); a Secret DSN that is down or ambiguous leaves no file and no password in the log.
+path); a Secret DSN that is down or ambiguous leaves no file and no password in the log; at the
+end the SUT image the kubelet ran (the final results' ``sutImageId``) is merged into the rows the
+pods wrote, the final attempt's only.
 """
 
 from __future__ import annotations
@@ -25,7 +27,9 @@ from simtest_operator import results
 from simtest_operator.operator import observed, recording_results
 from simtest_operator.operator.client import NotFoundError
 from simtest_operator.operator.scenariolists import StoredList
+from simtest_operator.operator.status.records import ResultRecord
 from simtest_operator.scenarios import FrozenList, PinnedScenario
+from simtest_operator.verdicts import ScenarioOutcome, Verdict
 from tests.results import dsnforms
 
 T0 = datetime.datetime(2025, 3, 1, 12, 0, tzinfo=datetime.UTC)
@@ -234,3 +238,62 @@ def test_finish_into_postgresql(postgres_dsn: str, form: str) -> None:
         listed = _scenario_ids(store, recording_results.run_key(final))
     assert record is not None and record.finished and record.counts["total"] == 2
     assert listed == ["s2.xosc", "s1.xosc"]
+
+
+SUT_IMAGE = "ghcr.io/simtest-dev/simtest-sut-go@sha256:" + "5e" * 32
+BARE_IMAGE = "sha256:" + "c0" * 32
+
+
+def _batch(*records: ResultRecord) -> observed.BatchView:
+    return observed.batch_view(
+        {
+            "metadata": {"name": "nightly-b00000", "namespace": "team-a"},
+            "spec": {"campaign": "nightly", "index": 0, "scenarios": []},
+            "status": {"results": [r.to_wire() for r in records]},
+        }
+    )
+
+
+def test_the_finished_campaign_merges_the_image_into_the_pods_rows(tmp_path: Path) -> None:
+    target = str(tmp_path / "results.sqlite")
+    final = campaign(status=FINAL)
+    key = recording_results.run_key(final)
+    now = datetime.datetime(2025, 3, 1, 12, 5, tzinfo=datetime.UTC)
+    (second, first) = recording_results.scenario_infos(stored())
+    pod_versions = {"sut.reported": "simtest-sut-go 1.0.0", "sut.imageID": "unknown"}
+    with results.open_store(target) as store:  # what the pods wrote (s1 took two attempts)
+        for info, attempt in ((first, 1), (first, 2), (second, 1)):
+            outcome = ScenarioOutcome(
+                scenario_id=info.scenario_id,
+                verdict=Verdict.ERROR if attempt == 1 and info is first else Verdict.PASSED,
+                attempts=attempt,
+                versions=pod_versions,
+            )
+            results.record_pod_attempt(
+                store, key, campaign="nightly", scenario=info, outcome=outcome, now=now
+            )
+    batch = _batch(
+        ResultRecord(id="s1.xosc", verdict=Verdict.PASSED, attempts=2, sut_image_id=BARE_IMAGE),
+        ResultRecord(id="s2.xosc", verdict=Verdict.PASSED, sut_image_id=SUT_IMAGE),
+    )
+    recorder = recording_results.CampaignRecorder(FakeSecrets({"dsn": target}), clock=Clock())
+
+    async def finish() -> None:
+        recorder.observe(final, stored(), [batch])
+        await recorder.wait()
+
+    asyncio.run(finish())
+    assert recorder.finished
+    with results.open_store(target) as store:
+        rows = {
+            (s.scenario.scenario_id, s.outcome.attempts): s.outcome.versions
+            for s in store.outcomes(key, final_only=False)
+        }
+    assert rows[("s1.xosc", 2)] == {**pod_versions, "sut.imageID": BARE_IMAGE}
+    assert rows[("s2.xosc", 1)] == {**pod_versions, "sut.imageID": SUT_IMAGE}
+    assert rows[("s1.xosc", 1)] == pod_versions  # an earlier attempt's pod is not the final one's
+
+
+def test_batches_without_images_add_nothing() -> None:
+    batch = _batch(ResultRecord(id="s1.xosc", verdict=Verdict.PASSED))
+    assert recording_results.sut_images([batch]) == {}

@@ -4,8 +4,10 @@ Covers: a campaign whose ``spec.environment.sut.external.image`` is the Go SUT
 (``deploy/sut-go``, OSI protobuf over the SUT protocol) runs on the real node — each simulator pod
 starts the SUT as a native sidecar (init container ``sut``, ``restartPolicy: Always``, TCP startup
 probe) before the simulator, and the verdicts equal the built-in model's local ones (the cut-in at
-8 m fails); the SUT killed mid-run (SIGKILL from the node) makes that run ``Error`` naming the SUT
-— whose fault it was — and the retry passes.
+8 m fails) and each result names the SUT image by the ``imageID`` the kubelet reported for the
+sidecar (the same name ``simtest run`` gives it from the build index); the SUT killed mid-run
+(SIGKILL from the node) makes that run ``Error`` naming the SUT — whose fault it was — and the
+retry passes.
 """
 
 from __future__ import annotations
@@ -20,8 +22,10 @@ import pytest
 import yaml
 from kubernetes import client
 
+from simtest_operator import provenance
 from simtest_operator.devcluster import images
 from simtest_operator.devcluster.state import ClusterInfo
+from simtest_operator.settings import Settings
 from tests.e2e import support
 
 EXAMPLE = support.REPO / "scenarios" / "external-sut-go-campaign.yaml"
@@ -64,16 +68,26 @@ def test_the_go_sut_as_a_sidecar_gives_the_local_verdicts(
     cluster = support.Cluster(real_api_client, real_namespace)
     cluster.create(_campaign(tmp_path, "sut-go", sorted(CUT_INS)))
     seen: dict[str, Any] = {}
+    reported: dict[str, str] = {}  # pod -> the SUT container's imageID, as the kubelet says
     deadline = time.monotonic() + 300
-    while not seen:
-        assert time.monotonic() < deadline, "no simulator pod appeared"
+    while not reported:
+        assert time.monotonic() < deadline, "no simulator pod with a started SUT appeared"
         for pod in cluster.pods():
             seen[pod.metadata.name] = pod.spec
+            for status in (pod.status and pod.status.init_container_statuses) or ():
+                if status.name == "sut" and status.image_id:
+                    reported[pod.metadata.name] = status.image_id
         time.sleep(0.2)
     cluster.wait_complete("sut-go", timeout=300, alive=real_operator.alive)
     results = cluster.results("sut-go")
     assert {k: v["verdict"] for k, v in results.items()} == CUT_INS, results
     assert all(r["attempts"] == 1 for r in results.values()), results
+    # Which SUT produced each result: the image the kubelet ran, verbatim (one image, all pods).
+    (image_id,) = set(reported.values())
+    assert {r.get("sutImageId") for r in results.values()} == {image_id}, (results, reported)
+    # ... and `simtest run` names the same image the same way from the build index.
+    index = Settings.from_env().cache.image_index
+    assert image_id == provenance.built_image_id(images.SUT_GO_IMAGE, index), (image_id, index)
     (spec,) = list(seen.values())[:1]
     (sidecar,) = spec.init_containers
     assert (sidecar.name, sidecar.image, sidecar.restart_policy) == (

@@ -99,3 +99,24 @@ def test_the_developer_view_labels_versions_and_digests() -> None:
         "simulator version": SUMO,
         "sumo version": "1.28.0",
     }
+
+
+def test_the_developer_view_names_the_sut_that_produced_the_result() -> None:
+    digest = "ghcr.io/acme/planner@sha256:" + "5e" * 32
+    record = {
+        "sut": "acme-planner 2.1.0",
+        "sut.reported": "acme-planner 2.1.0-rc1",
+        "sut.configHash": "sha256:0123456789abcdef",
+        "sut.image": "ghcr.io/acme/planner:2.1.0",
+        "sut.imageID": digest,
+        "sut.launch": "sidecar",
+    }
+    report = reportmodel.build(_run(simulator=SUMO, settings={}, versions=record), generated_at=T0)
+    assert dict(report.scenarios[0].versions) == {
+        "sut version": "acme-planner 2.1.0",
+        "SUT as it reported itself": "acme-planner 2.1.0-rc1",
+        "SUT config hash": "sha256:0123456789abcdef",
+        "SUT image": "ghcr.io/acme/planner:2.1.0",
+        "SUT image digest": digest,
+        "SUT launched as": "sidecar",
+    }

@@ -1,6 +1,7 @@
 """``simtest run`` with an external SUT: the example campaign's sidecar SUT is started as a local
 process per scenario (there is no pod); the verdicts equal the in-process smoke campaign's and
-every result names the SUT that produced it."""
+every result names the SUT that produced it, its image by digest where this machine knows it (a
+pinned reference, the build script's index) and ``unknown`` otherwise."""
 
 from __future__ import annotations
 
@@ -9,7 +10,13 @@ from pathlib import Path
 
 from click.testing import CliRunner
 
+from simtest_operator import provenance
 from simtest_operator.cli.main import cli
+from simtest_operator.drivermodel import ExternalSut, Launch, SutConfig
+from simtest_operator.runner import suts
+from simtest_operator.settings import Settings
+from simtest_operator.sut import runs
+from simtest_operator.sut.client import Identity
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -23,18 +30,44 @@ def verdicts(out: Path) -> dict[str, tuple[str, dict[str, str]]]:
 
 
 def test_the_external_sut_campaign_runs_locally_like_the_in_process_one(tmp_path: Path) -> None:
-    runs = {}
+    found = {}
     for name in ("smoke", "external-sut"):
         manifest = REPO / "scenarios" / f"{name}-campaign.yaml"
         arguments = ["run", str(manifest), "-o", str(tmp_path / name), "-j", "1", "--plain"]
         result = CliRunner().invoke(cli, arguments)
         assert result.exit_code == 1, result.output  # one scenario fails, in both
-        runs[name] = verdicts(tmp_path / name)
-    inside, outside = runs["smoke"], runs["external-sut"]
+        found[name] = verdicts(tmp_path / name)
+    inside, outside = found["smoke"], found["external-sut"]
+    index = Settings.from_env().cache.image_index  # built here or not: the result says which
+    known_here = provenance.built_image_id("ghcr.io/simtest-dev/simtest-runner:0.1.0", index)
+    known_here = known_here or "unknown"
     assert len(inside) == 6
     assert {k: v[0] for k, v in outside.items()} == {k: v[0] for k, v in inside.items()}
     for _, versions in outside.values():
         assert versions["sut.reported"] == "simtest-reference-sut 1.0.0"
         assert versions["sut.launch"] == "sidecar"
         assert versions["sut.image"] == "ghcr.io/simtest-dev/simtest-runner:0.1.0"
+        assert versions["sut.imageID"] == known_here
     assert all("sut.reported" not in versions for _, versions in inside.values())
+
+
+DIGEST = "sha256:" + "5e" * 32
+
+
+def test_the_image_digest_is_named_only_where_it_is_known(tmp_path: Path) -> None:
+    index = tmp_path / "images.json"
+    index.write_text(json.dumps({"images": {"acme/planner:2": {"digest": DIGEST}}}))
+
+    def recorded(image: str | None, launch: Launch = Launch.SIDECAR) -> dict[str, str]:
+        external = ExternalSut(launch=launch, image=image, command=("planner",))
+        sut = suts.with_image_id(SutConfig(name="planner", external=external), index)
+        return runs.provenance(sut, Identity(name="planner", version="2"))
+
+    assert recorded("acme/planner:2")["sut.imageID"] == f"acme/planner@{DIGEST}"
+    assert recorded(f"ghcr.io/acme/planner@{DIGEST}")["sut.imageID"] == (
+        f"ghcr.io/acme/planner@{DIGEST}"
+    )
+    assert recorded("acme/planner:3")["sut.imageID"] == "unknown"
+    assert "sut.imageID" not in recorded(None, Launch.LOCAL)  # no image, nothing to name
+    plain = SutConfig(name="model")
+    assert suts.with_image_id(plain, index) is plain

@@ -23,7 +23,7 @@ from simtest_operator.results import evaluations as ev
 from simtest_operator.results.querying import ReadOnlyDatabase
 from simtest_operator.runner.campaigns import read_recording
 from simtest_operator.ui import server, views
-from simtest_operator.verdicts import Verdict
+from simtest_operator.verdicts import ScenarioOutcome, Verdict
 from tests.results.historydata import fill
 from tests.results.resultdata import T0
 from tests.results.sampleoutdir import make_outdir
@@ -206,3 +206,24 @@ def test_static_probe_and_methods(call: Call) -> None:
     assert call("/static/nope.js")[0] == "404 Not Found"
     assert call("/healthz")[:2] == ("200 OK", "text/plain")
     assert call("/", method="POST")[0] == "405 Method Not Allowed"
+
+
+def test_the_developer_view_names_the_sut_image(tmp_path: Path) -> None:
+    digest = "ghcr.io/acme/planner@sha256:" + "5e" * 32
+    versions = {"sut.reported": "acme-planner 2.1.0", "sut.configHash": "sha256:0123456789abcdef",
+                "sut.image": "ghcr.io/acme/planner:2.1.0", "sut.imageID": digest}  # fmt: skip
+    scenario = results.ScenarioInfo(scenario_id="a.xosc", sha256="0" * 64)
+    with results.open_store(tmp_path) as store:
+        key = store.begin_campaign(results.CampaignInfo(name="byo", started_at=T0),
+                                   scenarios=[scenario])  # fmt: skip
+        outcome = ScenarioOutcome(scenario_id="a.xosc", verdict=Verdict.PASSED, versions=versions)
+        store.add_outcome(key, scenario, outcome, recorded_at=T0)
+    with ReadOnlyDatabase(tmp_path) as db:
+        app = server.App(db, views.Context(base_dir=tmp_path))
+        environ: dict[str, Any] = {"PATH_INFO": "/scenario",
+                                   "QUERY_STRING": f"run={key}&id=a.xosc"}  # fmt: skip
+        setup_testing_defaults(environ)
+        body = b"".join(app(environ, lambda status, headers: None)).decode()
+    row = body[body.index('id="sut-identity"') :].split("</tr>")[0]
+    assert "acme-planner 2.1.0" in row and "sha256:0123456789abcdef" in row
+    assert f'<code id="sut-image-id">{digest}</code>' in row
