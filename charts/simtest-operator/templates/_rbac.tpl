@@ -46,12 +46,14 @@
   resources: ["secrets"]
   verbs: ["get"]
 {{- end }}
-{{- if .Values.helmfileProvisioner.enabled }}
-# provisioner: Helmfile — a Job runs helmfile under a per-campaign ServiceAccount that a
-# RoleBinding ties to the provisioner ClusterRole (see "simtest-operator.bindRule").
+# Jobs: the evaluation step (spec.evaluation.offline) and, with provisioner: Helmfile, the
+# helmfile sync/destroy Jobs.
 - apiGroups: ["batch"]
   resources: ["jobs"]
   verbs: ["get", "list", "watch", "create", "delete"]
+{{- if .Values.helmfileProvisioner.enabled }}
+# provisioner: Helmfile — a Job runs helmfile under a per-campaign ServiceAccount that a
+# RoleBinding ties to the provisioner ClusterRole (see "simtest-operator.bindRule").
 - apiGroups: ["rbac.authorization.k8s.io"]
   resources: ["rolebindings"]
   verbs: ["create"]

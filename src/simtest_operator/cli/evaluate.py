@@ -35,8 +35,24 @@ def _load_criteria(path: Path | None) -> CriteriaSet:
     return reevaluating.load_criteria(data, where=str(path))
 
 
+def _write_summary(
+    path: Path | None, summary: str, *, evaluation_id: str = "", run: str = ""
+) -> None:
+    """The summary for whoever started us (the operator reads the Job pod's termination
+    message); a file that cannot be written costs the message, not the evaluation."""
+    if path is None:
+        return
+    from simtest_operator.results import EvaluationMessage
+
+    message = EvaluationMessage(summary=summary, evaluation_id=evaluation_id, run_key=run)
+    try:
+        path.write_text(message.to_text(), encoding="utf-8")
+    except OSError as exc:
+        click.echo(f"simtest evaluate: cannot write the summary to {path}: {exc}", err=True)
+
+
 @click.command()
-@click.argument("source", metavar="OUTDIR|DSN")
+@click.argument("source", metavar="OUTDIR|DSN", envvar="SIMTEST_RESULTS_DSN")
 @click.option(
     "--criteria",
     "criteria_file",
@@ -56,6 +72,13 @@ def _load_criteria(path: Path | None) -> CriteriaSet:
     help="Local mount of the cluster's artifact volumes (for pvc:// artifacts).",
 )
 @click.option("--quiet", "-q", is_flag=True, help="Only the summary lines.")
+@click.option(
+    "--summary-file",
+    type=click.Path(dir_okay=False, path_type=Path),
+    envvar="SIMTEST_EVALUATE_SUMMARY_FILE",
+    help="Also write the outcome (evaluation id, summary line) there as JSON, e.g. "
+    "/dev/termination-log in a Job.",
+)
 def evaluate(
     source: str,
     criteria_file: Path | None,
@@ -63,10 +86,12 @@ def evaluate(
     artifacts: Path | None,
     pvc_root: Path | None,
     quiet: bool,
+    summary_file: Path | None,
 ) -> None:
     """Re-score recorded runs with another criteria set, from their recordings alone.
 
-    SOURCE is a run's output folder (its results.sqlite) or a PostgreSQL DSN. Each scenario's
+    SOURCE is a run's output folder (its results.sqlite) or a PostgreSQL DSN (default:
+    $SIMTEST_RESULTS_DSN, so a DSN from a Secret stays out of the command line). Each scenario's
     recording is decomposed into base scenarios (following, cut-in, crossing, ...) and checked
     per type; the result is stored as a new evaluation of the same run (the original verdicts
     stay). Exit code: 0 all passed, 1 some failed or lack complete evidence, 2 bad input.
@@ -101,6 +126,7 @@ def evaluate(
         )
     except SimtestError as exc:
         click.echo(f"simtest evaluate: {exc}", err=True)
+        _write_summary(summary_file, f"simtest evaluate: {exc}", run=run_key or "")
         raise SystemExit(2) from None
     counts = ", ".join(f"{n} {v.lower()}" for v, n in sorted(summary.totals.items()))
     incomplete = sum(1 for r in summary.runs if r.evidence != "complete")
@@ -108,17 +134,27 @@ def evaluate(
     failed_bases = sum(
         1 for r in summary.runs for b in r.base_scenarios if b.verdict.value != "Passed"
     )
-    click.echo(
+    line = (
         f"evaluation {summary.evaluation_id} of run {summary.run_key} ({dsn.describe(source)}) "
         f"with criteria {criteria.name!r}: {counts or 'no scenarios'}; "
         f"{bases} base scenarios, {failed_bases} failed; "
         f"{incomplete} without complete evidence; {summary.wall_seconds:.2f} s"
     )
+    click.echo(line)
     failing = [r for r in summary.runs if r.verdict.value not in ("Passed", "Skipped")]
+    verdict = ""
     if failing:
         first = failing[0]
-        click.echo(
+        verdict = (
             f"{len(failing)} of {len(summary.runs)} scenarios not passed "
             f"(first: {first.scenario_id}: {first.verdict.value}: {first.reason})"
         )
+        click.echo(verdict)
+    _write_summary(
+        summary_file,
+        f"{line}; {verdict}" if verdict else line,
+        evaluation_id=summary.evaluation_id,
+        run=summary.run_key,
+    )
+    if failing:
         raise SystemExit(1)

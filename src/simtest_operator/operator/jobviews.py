@@ -12,7 +12,7 @@ import datetime
 from collections.abc import Mapping
 
 from simtest_operator.operator import names, observed
-from simtest_operator.operator.observed import Raw
+from simtest_operator.operator.observed import PodView, Raw
 from simtest_operator.operator.status import reading
 
 LABEL_JOB_ENVIRONMENT = "simtest.dev/environment"
@@ -49,6 +49,14 @@ class JobView:
     def done(self) -> bool:
         """The Job ended, one way or the other."""
         return self.succeeded or self.failed
+
+
+def last_run(job: JobView, pods: Mapping[str, PodView]) -> PodView | None:
+    """The Job's pod that terminated last (its exit code and termination message tell how the
+    Job's last try ended), if the cache still has one."""
+    ran = [p for p in pods.values() if p.job == job.name and p.container.state == "terminated"]
+    earliest = datetime.datetime.min.replace(tzinfo=datetime.UTC)
+    return max(ran, key=lambda p: p.container.finished_at or p.created or earliest, default=None)
 
 
 def _mapping(value: object) -> Raw:

@@ -7,6 +7,7 @@ cache is a harmless ``409 AlreadyExistsError``) and let a restarted operator fin
 
     <campaign>-scenarios            ConfigMap with the frozen list
     <campaign>-simulator            ServiceAccount of the simulator pods (no RBAC bindings)
+    <campaign>-evaluate             Job of the evaluation step (spec.evaluation.offline)
     <campaign>-b00042               ScenarioBatch 42
     <campaign>-b00042-e007-a2       SimEnvironment (and its pod): scenario 7 of batch 42, attempt 2
 """
@@ -34,6 +35,16 @@ def scenario_list(campaign: str) -> str:
 def service_account(campaign: str) -> str:
     """ServiceAccount the campaign's simulator pods run as."""
     return f"{campaign}-simulator"
+
+
+def evaluation_job(campaign: str) -> str:
+    """Job of the campaign's evaluation step: one per campaign, so a restart finds it."""
+    return f"{campaign}-evaluate"
+
+
+def evaluation_labels(campaign: str) -> dict[str, str]:
+    """Labels of the evaluation Job and its pod."""
+    return {**campaign_labels(campaign), LABEL_COMPONENT: "evaluation"}
 
 
 def batch(campaign: str, index: int) -> str:

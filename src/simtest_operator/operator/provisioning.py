@@ -32,10 +32,9 @@ from typing import Any
 
 from simtest_operator.api.v1alpha1 import API_VERSION, Provisioner, TestCampaignSpec
 from simtest_operator.errors import RenderError
-from simtest_operator.operator import bodies, environments, names
+from simtest_operator.operator import bodies, environments, jobviews, names
 from simtest_operator.operator.actions import Action, Kind, PatchStatus, RunHelmfile
 from simtest_operator.operator.environments import Assessment, Limits, Phase
-from simtest_operator.operator.jobviews import JobView
 from simtest_operator.operator.observed import (
     EnvironmentView,
     NodeView,
@@ -77,7 +76,7 @@ def assess(
     env: EnvironmentView,
     pod: PodView | None,
     *,
-    jobs: Mapping[str, JobView],
+    jobs: Mapping[str, jobviews.JobView],
     pods: Mapping[str, PodView],
     nodes: Mapping[str, NodeView] | None,
     now: datetime.datetime,
@@ -137,20 +136,13 @@ def assess(
     )
 
 
-def job_failure(job: JobView, pods: Mapping[str, PodView]) -> str:
+def job_failure(job: jobviews.JobView, pods: Mapping[str, PodView]) -> str:
     """Why a Job failed: its condition and the termination message of its last pod (helmfile's
     output tail, through ``FallbackToLogsOnError``)."""
-    ran = sorted(
-        (p for p in pods.values() if p.job == job.name and p.container.state == "terminated"),
-        key=lambda p: (
-            p.container.finished_at
-            or p.created
-            or datetime.datetime.min.replace(tzinfo=datetime.UTC)
-        ),
-    )
+    last = jobviews.last_run(job, pods)
     detail = ""
-    if ran:
-        container = ran[-1].container
+    if last is not None:
+        container = last.container
         lines = [line.strip() for line in container.message.strip().splitlines() if line.strip()]
         tail = " | ".join(lines[-3:])
         exit_text = f"exit code {container.exit_code}" if container.exit_code is not None else ""

@@ -56,7 +56,7 @@ def environment_request(
         timeout_seconds=execution.timeout_seconds,
         node_selector=dict(execution.node_selector),
         tolerations=tuple(t.to_wire() for t in execution.tolerations),
-        artifacts=_artifacts(spec, env.campaign),
+        artifacts=artifacts(spec, env.campaign),
         scenario_volume=PvcVolume(claim_name=config.inputs.scenario_claim, read_only=True)
         if config.inputs.scenario_claim
         else None,
@@ -71,12 +71,14 @@ def environment_request(
         results_run_key=run_key if database else "",
         sut=environment.sut.to_wire(),
         simulator=environment.simulator.to_wire(),
-        evaluation=spec.evaluation.to_wire(),
+        # The evaluation step is the operator's business: pods (and their hashes) stay as before.
+        evaluation={k: v for k, v in spec.evaluation.to_wire().items() if k != "offline"},
         values=dict(environment.values),
     )
 
 
-def _artifacts(spec: TestCampaignSpec, campaign: str) -> ArtifactTarget:
+def artifacts(spec: TestCampaignSpec, campaign: str) -> ArtifactTarget:
+    """Where the campaign's runs keep their artifacts, and the URIs they report."""
     pvc, s3 = spec.artifacts.pvc, spec.artifacts.s3
     keep = spec.artifacts.keep_recordings
     if s3 is not None:

@@ -66,13 +66,15 @@ def _problems(pod: Mapping[str, Any], request: EnvironmentRequest) -> list[str]:
         problems.append("spec.serviceAccountName must be the simulator ServiceAccount")
     if spec.get("hostNetwork") or spec.get("hostPID") or spec.get("hostIPC"):
         problems.append("host namespaces are not allowed")
-    problems.extend(_security_problems(spec))
+    problems.extend(security_problems(spec))
     problems.extend(_slot_problems(spec))
     problems.extend(_source_problems(spec, request))
     return problems
 
 
-def _security_problems(spec: Mapping[str, Any]) -> list[str]:
+def security_problems(spec: Mapping[str, Any]) -> list[str]:
+    """What in a pod spec the Pod Security ``restricted`` profile refuses (also held against the
+    evaluation Job's pod, :mod:`.evaluationjobs`)."""
     problems: list[str] = []
     pod_sc = spec.get("securityContext") or {}
     pod_seccomp = (pod_sc.get("seccompProfile") or {}).get("type")

@@ -25,6 +25,7 @@ from simtest_operator.results.clusterruns import (
 )
 from simtest_operator.results.comparing import Change, Comparison, ScenarioChange, compare
 from simtest_operator.results.dsn import describe
+from simtest_operator.results.evaluations import EvaluationMessage
 from simtest_operator.results.migrating import LATEST_VERSION
 from simtest_operator.results.opening import open_store
 from simtest_operator.results.postgres import PostgresStore
@@ -49,6 +50,7 @@ __all__ = [
     "CampaignRecord",
     "Change",
     "Comparison",
+    "EvaluationMessage",
     "Finish",
     "PostgresStore",
     "ResultSink",

@@ -97,3 +97,45 @@ def derive_evaluation_id(info: EvaluationInfo) -> EvaluationId:
     digest = hashlib.sha256(identity.encode()).hexdigest()[:8]
     name = "".join(c if c.isalnum() or c in "-_." else "-" for c in info.criteria_name)[:40]
     return EvaluationId(f"{name}-{created:%Y%m%dT%H%M%SZ}-{digest}")
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class EvaluationMessage:
+    """What ``simtest evaluate --summary-file`` writes and the operator's evaluation step reads
+    back from the Job pod's termination message: which evaluation of which run, and the summary
+    line. JSON, because the kubelet keeps at most 4 KiB of it; anything else (a crash's log tail)
+    reads back as the summary alone."""
+
+    summary: str
+    evaluation_id: str = ""
+    run_key: str = ""
+
+    MAX_BYTES = 4096
+
+    def to_text(self) -> str:
+        """The message, shortened to fit the kubelet's limit."""
+        summary = self.summary
+        while True:
+            text = json.dumps(
+                {"evaluation": self.evaluation_id, "run": self.run_key, "summary": summary},
+                ensure_ascii=False,
+            )
+            if len(text.encode()) <= self.MAX_BYTES or not summary:
+                return text
+            summary = summary[: len(summary) * 3 // 4] + "…"
+
+    @classmethod
+    def from_text(cls, text: str) -> EvaluationMessage:
+        """Read a termination message (ours, or any text)."""
+        try:
+            data = json.loads(text)
+        except ValueError:
+            data = None
+        if isinstance(data, dict) and isinstance(data.get("summary"), str):
+            return cls(
+                summary=data["summary"],
+                evaluation_id=str(data.get("evaluation") or ""),
+                run_key=str(data.get("run") or ""),
+            )
+        lines = [line.strip() for line in text.strip().splitlines() if line.strip()]
+        return cls(summary=" | ".join(lines[-3:]))

@@ -1,4 +1,5 @@
-"""Pass/fail criteria, evaluated online while each scenario runs."""
+"""Pass/fail criteria, evaluated online while each scenario runs, and the offline evaluation step
+that re-scores the recorded runs once the campaign is over."""
 
 from __future__ import annotations
 
@@ -7,7 +8,7 @@ from typing import Annotated
 
 from pydantic import Field, StringConstraints
 
-from simtest_operator.api.v1alpha1.common import ApiModel
+from simtest_operator.api.v1alpha1.common import ApiModel, DnsLabel
 
 Seconds = Annotated[float, Field(ge=0, le=3600)]
 
@@ -64,10 +65,41 @@ class CriteriaOverride(ApiModel):
     """The fields to replace for those scenarios."""
 
 
+class ConfigMapKeyRef(ApiModel):
+    """A key of a ConfigMap in the campaign's namespace."""
+
+    name: DnsLabel
+    """Name of the ConfigMap."""
+    key: Annotated[str, StringConstraints(pattern=r"^[-._a-zA-Z0-9]+$", max_length=253)]
+    """Key within the ConfigMap's data."""
+
+
+class CriteriaSetSource(ApiModel):
+    """Where the offline evaluation's criteria set (``simtest evaluate --criteria``) comes from."""
+
+    config_map_ref: ConfigMapKeyRef
+    """A ConfigMap key holding the criteria set as YAML or JSON (docs/evaluation.md)."""
+
+
+class OfflineEvaluationSpec(ApiModel):
+    """An evaluation step after the runs: one Job re-scores the campaign's recordings from the
+    results database (``simtest evaluate``) and stores a new evaluation of the run."""
+
+    criteria: CriteriaSetSource | None = None
+    """The criteria set; unset: the built-in set ``default``."""
+    backoff_limit: Annotated[int, Field(ge=0, le=10)] = 1
+    """Retries of the evaluation Job after a crash (each try is a new evaluation); a verdict
+    (exit 1) or bad input (exit 2) is final and not retried."""
+
+
 class EvaluationSpec(ApiModel):
-    """Criteria for the whole campaign, with per-scenario overrides (last match wins)."""
+    """Criteria for the whole campaign, with per-scenario overrides (last match wins), and an
+    optional offline evaluation step."""
 
     criteria: Criteria = Field(default_factory=Criteria)
     """Campaign-wide criteria."""
     overrides: list[CriteriaOverride] = Field(default_factory=list)
     """Per-scenario replacements, applied in order."""
+    offline: OfflineEvaluationSpec | None = None
+    """Re-score the recordings once every scenario has its verdict (needs
+    ``results.databaseSecretRef``); the outcome is the condition ``Evaluated``."""

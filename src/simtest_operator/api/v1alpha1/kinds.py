@@ -9,9 +9,9 @@ from __future__ import annotations
 import dataclasses
 import datetime
 import enum
-from typing import Annotated, Any, Generic, Literal, TypeVar
+from typing import Annotated, Any, ClassVar, Generic, Literal, TypeVar
 
-from pydantic import Field, StringConstraints
+from pydantic import Field, StringConstraints, model_validator
 
 from simtest_operator.api.v1alpha1 import common
 from simtest_operator.api.v1alpha1.common import ApiModel, DnsLabel
@@ -32,11 +32,25 @@ ScenarioId = Annotated[str, StringConstraints(min_length=1, max_length=1024)]
 
 # --- TestCampaign ------------------------------------------------------------------------------
 
+_OFFLINE_NEEDS_DATABASE = (
+    "spec.evaluation.offline needs spec.results.databaseSecretRef (the evaluation step re-scores "
+    "the run stored in the results database)"
+)
+
 
 class TestCampaignSpec(ApiModel):
     """What to test and how: scenarios, environment, execution, evaluation, storage."""
 
     __test__ = False  # not a pytest test class, despite the name
+
+    cel_rules: ClassVar[tuple[dict[str, str], ...]] = (
+        common.cel(
+            "!has(self.evaluation) || !has(self.evaluation.offline) || "
+            "(has(self.results) && has(self.results.databaseSecretRef))",
+            _OFFLINE_NEEDS_DATABASE,
+            field_path=".evaluation.offline",
+        ),
+    )
 
     scenarios: ScenarioSelection
     """Scenario sources and selection; frozen (id + sha256) when the campaign starts."""
@@ -63,6 +77,22 @@ class TestCampaignSpec(ApiModel):
     first scenario start; suspended time counts too), like a Job's. When exceeded the campaign is
     cancelled as by ``cancel`` with reason ``DeadlineExceeded``. Unset: no limit."""
 
+    @model_validator(mode="after")
+    def _offline_needs_database(self) -> TestCampaignSpec:
+        if self.evaluation.offline is not None and self.results.database_secret_ref is None:
+            raise ValueError(_OFFLINE_NEEDS_DATABASE)
+        return self
+
+
+class OfflineEvaluationStatus(ApiModel):
+    """The campaign's evaluation step (``spec.evaluation.offline``); its outcome is the condition
+    ``Evaluated``."""
+
+    job: DnsLabel
+    """The evaluation Job (``<campaign>-evaluate``), created once."""
+    id: Annotated[str, StringConstraints(max_length=253)] | None = None
+    """The evaluation's id in the results database (``simtest compare --evaluation ID``)."""
+
 
 class TestCampaignStatus(CommonStatus):
     """Counters and conditions only: per-scenario results live in ScenarioBatch status, so the
@@ -76,6 +106,8 @@ class TestCampaignStatus(CommonStatus):
     """ScenarioBatch objects created so far."""
     throughput: Annotated[float, Field(ge=0)] | None = None
     """Finished scenarios per minute since the start."""
+    evaluation: OfflineEvaluationStatus | None = None
+    """The evaluation step, once started (``spec.evaluation.offline``)."""
 
 
 # --- ScenarioBatch -----------------------------------------------------------------------------
@@ -249,7 +281,19 @@ TEST_CAMPAIGN: ResourceKind[TestCampaignSpec] = ResourceKind(
     short_names=("tc", "campaign"),
     spec=TestCampaignSpec,
     status=TestCampaignStatus,
-    printer_columns=(_PHASE, *_counter_columns(), _PROGRESS, _AGE),
+    printer_columns=(
+        _PHASE,
+        *_counter_columns(),
+        _PROGRESS,
+        PrinterColumn(
+            name="Evaluated",
+            type="string",
+            json_path='.status.conditions[?(@.type=="Evaluated")].reason',
+            description="Outcome of the evaluation step (spec.evaluation.offline)",
+            priority=1,
+        ),
+        _AGE,
+    ),
     description="A scenario-based test campaign: which OpenSCENARIO scenarios to run against which "
     "system under test, how, and with which pass/fail criteria.",
 )

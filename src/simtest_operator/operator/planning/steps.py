@@ -15,6 +15,7 @@ from simtest_operator.operator.actions import Observation, Plan
 from simtest_operator.operator.planning import (
     assessing,
     cleaning,
+    evaluating,
     folding,
     inputs,
     starting,
@@ -22,6 +23,7 @@ from simtest_operator.operator.planning import (
 )
 from simtest_operator.operator.planning.outcomes import Outcome
 from simtest_operator.operator.status import campaignstatus, counting
+from simtest_operator.operator.status.evaluationstatus import EvaluationState
 from simtest_operator.settings import OperatorSettings
 
 
@@ -66,7 +68,12 @@ def _run(step: inputs.Step) -> Plan:
     if not complete and cancellation is None:
         outcome += starting.start(step, states, in_flight=in_flight, window=window)
         outcome += _deadline(step)
-    outcome += _campaign(step, counts, complete=complete, cancellation=cancellation)
+    due = complete and cancellation is None and counts["total"] > 0
+    evaluated, evaluation = evaluating.evaluate(step, due=due)
+    outcome += evaluated
+    outcome += _campaign(
+        step, counts, complete=complete, cancellation=cancellation, evaluation=evaluation
+    )
     return Plan(
         actions=outcome.actions,
         wake_at=min(outcome.wakes) if outcome.wakes else None,
@@ -77,7 +84,7 @@ def _run(step: inputs.Step) -> Plan:
             start_latencies=outcome.start_latencies,
             overheads=outcome.overheads,
         ),
-        finished=complete and not step.envs,
+        finished=complete and not step.envs and (evaluation is None or evaluation.stage.final),
     )
 
 
@@ -93,6 +100,7 @@ def _campaign(
     *,
     complete: bool,
     cancellation: cancelling.Cancellation | None,
+    evaluation: EvaluationState | None,
 ) -> Outcome:
     """The campaign's own status and event (a counters-only change may wait: a wake-up)."""
     update = campaignstatus.progressed(
@@ -105,5 +113,6 @@ def _campaign(
         now=step.now,
         last_write=step.inputs.last_status_write,
         status_interval=step.config.pacing.status_interval,
+        evaluation=evaluation,
     )
     return Outcome(actions=update.actions, wakes=(update.due,) if update.due is not None else ())

@@ -18,6 +18,7 @@ from simtest_operator.operator import cancelling, names
 from simtest_operator.operator.actions import Action, Emit, Kind, PatchStatus
 from simtest_operator.operator.observed import CampaignView
 from simtest_operator.operator.status import conditions, counting, patches, reading
+from simtest_operator.operator.status.evaluationstatus import EvaluationState
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
@@ -96,8 +97,10 @@ def progressed(
     now: datetime.datetime,
     last_write: datetime.datetime | None,
     status_interval: float,
+    evaluation: EvaluationState | None = None,
 ) -> Update:
-    """Status of a resolved campaign from its scenario counters."""
+    """Status of a resolved campaign from its scenario counters (and its evaluation step, when
+    that has something to say)."""
     wire = campaign.status_wire
     total = counts["total"]
     if total == 0:
@@ -130,9 +133,12 @@ def progressed(
         desired["throughput"] = round(finished / minutes, 2)
     if complete:
         desired["completionTime"] = wire.get("completionTime") or conditions.rfc3339(now)
+    if evaluation is not None:
+        desired["evaluation"] = evaluation.wire()
     desired["conditions"] = _conditions(
         campaign, counts, phase=phase, reason=reason, message=message, complete=complete,
         cancelling_=cancellation is not None, now=now,
+        extra=(evaluation.condition(),) if evaluation is not None else (),
     )  # fmt: skip
     patch = patches.changed_fields(desired, wire)
     if not patch:
@@ -171,6 +177,7 @@ def _conditions(
     complete: bool,
     cancelling_: bool,
     now: datetime.datetime,
+    extra: Sequence[conditions.Desired] = (),
 ) -> list[dict[str, Any]]:
     total = counts["total"]
     degraded = counts["errored"] + counts["invalid"]
@@ -199,6 +206,7 @@ def _conditions(
                 reason="ScenarioErrors" if degraded else reason if total == 0 else "AsExpected",
                 message=f"{degraded} scenarios ended with Error or Invalid" if degraded else "",
             ),
+            *extra,
         ],
         now=now,
         generation=campaign.generation,

@@ -26,6 +26,7 @@ from typing import Any
 from simtest_operator.api.v1alpha1 import (
     Condition,
     Counters,
+    OfflineEvaluationStatus,
     Phase,
     ScenarioBatchStatus,
     TestCampaignStatus,
@@ -59,6 +60,12 @@ def campaign(wire: Raw) -> TestCampaignStatus:
         fields["batches"] = int(batches)
     if isinstance(throughput := wire.get("throughput"), int | float):
         fields["throughput"] = float(throughput)
+    evaluation = wire.get("evaluation")
+    if isinstance(evaluation, Mapping) and isinstance(job := evaluation.get("job"), str):
+        found = evaluation.get("id")
+        fields["evaluation"] = OfflineEvaluationStatus.model_construct(
+            job=job, id=found if isinstance(found, str) else None
+        )
     return TestCampaignStatus.model_construct(_fields_set=set(fields), **_factories(fields))
 
 
