@@ -191,3 +191,37 @@ def test_an_unknown_source_or_run_is_exit_2(run_copy: Path, tmp_path: Path) -> N
     assert code == 2 and output.strip() == (
         f"simtest evaluate: no run nope-20250101T000000Z-00000000 in {run_copy}"
     )
+
+
+def test_the_summary_file_carries_the_outcome_for_the_operator(
+    run_copy: Path, tmp_path: Path
+) -> None:
+    """What the evaluation Job's termination message holds; the source from the variable the
+    Job's DSN arrives in."""
+    summary = tmp_path / "termination-log"
+    code, output = evaluate(
+        "--summary-file", str(summary), "-q", env={"SIMTEST_RESULTS_DSN": str(run_copy)}
+    )
+    assert code == 1, output
+    said = results.EvaluationMessage.from_text(summary.read_text(encoding="utf-8"))
+    with results.open_store(run_copy) as store:
+        (record,) = store.campaigns()
+        (evaluation,) = store.evaluations(record.run_key)
+    assert said.evaluation_id == evaluation.evaluation_id
+    assert said.run_key == record.run_key
+    first, second = output.strip().splitlines()[-2:]
+    assert said.summary == f"{first}; {second}"
+    code, output = evaluate(str(run_copy), "--run", "nope", "--summary-file", str(summary))
+    assert code == 2
+    said = results.EvaluationMessage.from_text(summary.read_text(encoding="utf-8"))
+    assert said.summary == output.strip() and said.evaluation_id == ""
+
+
+def test_a_long_summary_fits_the_termination_message() -> None:
+    message = results.EvaluationMessage(summary="x" * 10_000, evaluation_id="e", run_key="k")
+    text = message.to_text()
+    assert len(text.encode()) <= 4096
+    back = results.EvaluationMessage.from_text(text)
+    assert back.evaluation_id == "e" and back.summary.startswith("xxx")
+    crash = results.EvaluationMessage.from_text("Traceback\n  File x\nMemoryError\n")
+    assert crash.summary == "Traceback | File x | MemoryError" and crash.evaluation_id == ""

@@ -18,7 +18,7 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
-from simtest_operator.operator import observed, planning, scenariolists
+from simtest_operator.operator import jobviews, observed, planning, scenariolists
 from simtest_operator.operator.actions import (
     Create,
     Delete,
@@ -166,6 +166,7 @@ class FakeCluster:
             nodes={n: self._node_view(n) for n in self.nodes},
             now=self.now,
             last_status_write=self.last_status_write,
+            jobs={j["metadata"]["name"]: jobviews.job_view(j) for j in self.of(Kind.JOB)},
         )
 
     def _node_view(self, name: str) -> observed.NodeView:
@@ -255,6 +256,8 @@ class FakeCluster:
         return self.script(spec["scenarios"][0]["id"], spec["attempt"])
 
     def _advance(self, pod: dict[str, Any], used: dict[str, int]) -> None:
+        if any(o.get("kind") == "Job" for o in pod["metadata"].get("ownerReferences", [])):
+            return  # a Job's pod: the test plays the Job controller
         status = pod["status"]
         script = self._script(pod)
         if status["phase"] == "Pending" and not pod["spec"].get("nodeName"):
