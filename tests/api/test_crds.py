@@ -52,7 +52,10 @@ def test_generation_is_deterministic() -> None:
 @pytest.mark.parametrize(
     ("kind", "columns"),
     [
-        (kinds.TEST_CAMPAIGN, ["Phase", "Passed", "Failed", "Errored", "Progress", "Age"]),
+        (
+            kinds.TEST_CAMPAIGN,
+            ["Phase", "Passed", "Failed", "Errored", "Progress", "Evaluated", "Age"],
+        ),
         (kinds.SCENARIO_BATCH, ["Campaign", "Index", "Phase", "Progress", "Age"]),
         (kinds.SIM_ENVIRONMENT, ["Scenario", "Phase", "Verdict", "Node", "Age"]),
     ],
