@@ -10,8 +10,8 @@ A step is a fixed sequence of phases (:mod:`.steps`), each a function of the fro
 :class:`~.inputs.Step` returning its own actions and wake-ups: :mod:`.assessing` (what each
 environment and scenario is doing), :mod:`.tending` (record it, provision missing pods, delete
 finished ones), :mod:`.folding` (verdicts into batch statuses), :mod:`.cleaning` (teardown and
-deletion of folded environments), :mod:`.starting` (the window and new work), then the campaign's
-own status. A rule change means reading one phase.
+deletion of folded environments), :mod:`.starting` (the window and new work), :mod:`.evaluating`
+(the evaluation step's Job once every verdict is in), then the campaign's own status. A rule change means reading one phase.
 """
 
 from simtest_operator.operator.planning.inputs import Inputs, Renderer
