@@ -11,7 +11,8 @@ A step is a fixed sequence of phases (:mod:`.steps`), each a function of the fro
 environment and scenario is doing), :mod:`.tending` (record it, provision missing pods, delete
 finished ones), :mod:`.folding` (verdicts into batch statuses), :mod:`.cleaning` (teardown and
 deletion of folded environments), :mod:`.starting` (the window and new work), :mod:`.evaluating`
-(the evaluation step's Job once every verdict is in), then the campaign's own status. A rule change means reading one phase.
+(the evaluation step's Job once every verdict is in), then the campaign's own status. A rule
+change means reading one phase.
 """
 
 from simtest_operator.operator.planning.inputs import Inputs, Renderer
