@@ -15,11 +15,11 @@ import datetime
 import random
 from typing import Any
 
-from simtest_operator.api.v1alpha1 import TestCampaignSpec
+from simtest_operator.api.v1alpha1 import EnvironmentPhase, TestCampaignSpec, Timings
 from simtest_operator.operator import cancelling
 from simtest_operator.operator.actions import Kind
-from simtest_operator.operator.environments import Assessment, Phase
-from simtest_operator.operator.observed import Timings, environment_view
+from simtest_operator.operator.environments import Assessment
+from simtest_operator.operator.observed import environment_view
 from simtest_operator.operator.status import reading
 from simtest_operator.operator.status.records import ResultRecord
 from simtest_operator.verdicts import Verdict
@@ -194,14 +194,14 @@ def test_assessment_under_cancellation() -> None:
     cancel = cancelling.Cancellation(reason=cancelling.Reason.CANCELLED, message="spec.cancel")
     now = T0 + datetime.timedelta(seconds=30)
     running = Assessment(
-        phase=Phase.RUNNING,
+        phase=EnvironmentPhase.RUNNING,
         node="n0",
         timings=Timings(started=T0),
         results=None,
         wake_at=now,
     )
     ended = cancelling.assessment(_env_body(), running, cancel, now=now)
-    assert ended.ended and ended.phase is Phase.FINISHED and ended.wake_at is None
+    assert ended.ended and ended.phase is EnvironmentPhase.FINISHED and ended.wake_at is None
     assert ended.results is not None
     assert [(r.verdict, r.reason, r.attempts) for r in ended.results] == [
         (Verdict.SKIPPED, "cancelled", 2)
@@ -209,7 +209,7 @@ def test_assessment_under_cancellation() -> None:
     assert ended.results[0].duration_seconds == 30.0 and ended.timings.finished == now
     # the pod deletion a cancellation causes reads as Error: never kept as one
     deleted = Assessment(
-        phase=Phase.FINISHED,
+        phase=EnvironmentPhase.FINISHED,
         node="n0",
         timings=Timings(started=T0, finished=now),
         results=(
@@ -222,7 +222,7 @@ def test_assessment_under_cancellation() -> None:
     assert [r.verdict for r in mixed.results] == [Verdict.PASSED, Verdict.SKIPPED]
     # a delivered verdict stands; recorded verdicts are never touched
     passed = Assessment(
-        phase=Phase.FINISHED,
+        phase=EnvironmentPhase.FINISHED,
         node=None,
         timings=Timings(),
         results=(ResultRecord(id="a", verdict=Verdict.PASSED),),

@@ -16,8 +16,9 @@ from typing import Any
 
 import pytest
 
+from simtest_operator.api.v1alpha1 import EnvironmentPhase
 from simtest_operator.operator import environments, observed
-from simtest_operator.operator.environments import Limits, Phase
+from simtest_operator.operator.environments import Limits
 from simtest_operator.operator.status import environmentstatus
 from simtest_operator.verdicts import Verdict
 
@@ -142,7 +143,7 @@ def test_termination_message_gives_the_runner_verdict() -> None:
         }
     )
     result = assess(env(), pod(phase="Succeeded", state=terminated(message)))
-    assert result.phase is Phase.FINISHED
+    assert result.phase is EnvironmentPhase.FINISHED
     assert result.results is not None
     (record,) = result.results
     assert (record.verdict, record.reason, record.duration_seconds) == (
@@ -334,7 +335,7 @@ def test_pending_past_its_deadline_is_an_error_naming_the_scheduler_message() ->
         }
     ]
     waiting = assess(env(), pod(phase="Pending", node=None, conditions=unschedulable), now=100)
-    assert waiting.results is None and waiting.phase is Phase.PROVISIONING
+    assert waiting.results is None and waiting.phase is EnvironmentPhase.PROVISIONING
     assert waiting.wake_at == at(300)
     late = assess(env(), pod(phase="Pending", node=None, conditions=unschedulable), now=301)
     assert late.results is not None and late.results[0].verdict is Verdict.ERROR
@@ -363,9 +364,9 @@ def test_deleted_environment_is_an_error() -> None:
 
 
 def test_running_phases() -> None:
-    assert assess(env(), pod(phase="Pending", node="n0")).phase is Phase.SCHEDULED
+    assert assess(env(), pod(phase="Pending", node="n0")).phase is EnvironmentPhase.SCHEDULED
     started = assess(env(), pod(state={"running": {"startedAt": iso(2)}}))
-    assert started.phase is Phase.RUNNING and started.timings.started == at(2)
+    assert started.phase is EnvironmentPhase.RUNNING and started.timings.started == at(2)
     status = environmentstatus.desired_status(env(), started)
     assert status["phase"] == "Running" and status["node"] == "n0"
     assert status["timings"]["started"] == "2030-01-01T00:00:02.000Z"

@@ -22,9 +22,10 @@ from typing import Any
 
 import pytest
 
+from simtest_operator.api.v1alpha1 import EnvironmentPhase
 from simtest_operator.operator import helmfileteardown, jobviews, observed, provisioning, requests
 from simtest_operator.operator.actions import Delete, Emit, Kind, PatchStatus, RunHelmfile
-from simtest_operator.operator.environments import Limits, Phase
+from simtest_operator.operator.environments import Limits
 from simtest_operator.render import EnvironmentRequest, RenderedEnvironment
 from simtest_operator.render.rendering import run_spec_for
 from simtest_operator.settings import HelmfileSettings, OperatorSettings
@@ -315,7 +316,7 @@ def test_not_provisioned_needs_provisioning() -> None:
 
 def test_running_sync_job_is_provisioning_with_backstop() -> None:
     judged = assess(env(PROVISIONED), jobs=(job(),))
-    assert judged.phase is Phase.PROVISIONING and not judged.ended
+    assert judged.phase is EnvironmentPhase.PROVISIONING and not judged.ended
     assert judged.wake_at == at(1 + 300 + 30)
     late = assess(env(PROVISIONED), jobs=(job(),), now=400)
     assert late.ended and "still running" in late.reason

@@ -1,14 +1,17 @@
 """Reading watched statuses as the api's typed models: what the operator writes reads back
 typed; an absent, unknown or malformed field reads as the model's default and is not marked set;
-a condition keeps its reason and message even without a time; batch results are left out."""
+a condition keeps its reason and message even without a time; batch and environment results (and
+an environment's conditions) are left out; an environment's phase, verdict, provisioner, Jobs and
+timings read back typed, and its empty or unknown fields as absent."""
 
 from __future__ import annotations
 
 import datetime
 
-from simtest_operator.api.v1alpha1 import Phase
+from simtest_operator.api.v1alpha1 import EnvironmentPhase, Phase, Provisioner
 from simtest_operator.api.v1alpha1.common import ConditionStatus
 from simtest_operator.operator.status import reading
+from simtest_operator.verdicts import Verdict
 
 T0 = datetime.datetime(2030, 1, 1, tzinfo=datetime.UTC)
 WRITTEN = {
@@ -77,3 +80,43 @@ def test_batch_results_are_left_to_the_view() -> None:
     )
     assert status.phase is Phase.SUCCEEDED and status.results == []
     assert "results" not in status.model_fields_set
+
+
+def test_an_environment_status_reads_back_typed() -> None:
+    status = reading.environment(
+        {
+            "phase": "Finished",
+            "scenario": "b.xosc",
+            "pod": "env-pod",
+            "node": "n0",
+            "verdict": "Failed",
+            "reason": "collision",
+            "renderedHash": "ab" * 32,
+            "provisioner": "Helmfile",
+            "jobs": {"sync": "env-sync"},
+            "timings": {"queued": "2030-01-01T00:00:00Z", "finished": "soon"},
+            "results": [{"id": "b.xosc", "verdict": "Failed"}],
+            "conditions": [{"type": "Provisioned", "status": "True"}],
+        }
+    )
+    assert status.phase is EnvironmentPhase.FINISHED and status.verdict is Verdict.FAILED
+    assert (status.scenario, status.pod, status.node, status.reason) == (
+        "b.xosc",
+        "env-pod",
+        "n0",
+        "collision",
+    )
+    assert status.provisioner is Provisioner.HELMFILE and status.rendered_hash == "ab" * 32
+    assert status.jobs is not None and (status.jobs.sync, status.jobs.destroy) == ("env-sync", None)
+    assert status.timings.queued == T0 and status.timings.finished is None
+    assert status.results == [] and status.conditions == []
+    assert not {"results", "conditions"} & status.model_fields_set
+
+
+def test_an_environment_status_reads_empty_and_unknown_fields_as_absent() -> None:
+    status = reading.environment(
+        {"phase": "Bogus", "pod": "", "verdict": "Maybe", "provisioner": "Ansible", "jobs": "x"}
+    )
+    assert status.phase is EnvironmentPhase.PENDING and status.pod is None
+    assert status.verdict is None and status.provisioner is None and status.jobs is None
+    assert status.model_fields_set == set()

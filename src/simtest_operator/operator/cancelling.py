@@ -23,9 +23,9 @@ import datetime
 import enum
 from collections.abc import Collection, Sequence
 
-from simtest_operator.api.v1alpha1 import TestCampaignSpec, TestCampaignStatus
+from simtest_operator.api.v1alpha1 import EnvironmentPhase, TestCampaignSpec, TestCampaignStatus
 from simtest_operator.operator.batches import Layout, ScenarioState, State
-from simtest_operator.operator.environments import Assessment, Phase
+from simtest_operator.operator.environments import Assessment
 from simtest_operator.operator.observed import EnvironmentView
 from simtest_operator.operator.status import conditions, reading
 from simtest_operator.operator.status.records import ResultRecord, clip
@@ -144,8 +144,8 @@ def assessment(
         return judged
     return dataclasses.replace(
         judged,
-        phase=Phase.FINISHED,
-        timings=dataclasses.replace(judged.timings, finished=judged.timings.finished or now),
+        phase=EnvironmentPhase.FINISHED,
+        timings=judged.timings.model_copy(update={"finished": judged.timings.finished or now}),
         results=results,
         reason=reason,
         needs_pod=False,

@@ -14,10 +14,10 @@ from __future__ import annotations
 
 import dataclasses
 import datetime
-import enum
 from collections.abc import Mapping
 
-from simtest_operator.operator.observed import EnvironmentView, NodeView, PodView, Timings
+from simtest_operator.api.v1alpha1 import EnvironmentPhase, Timings
+from simtest_operator.operator.observed import EnvironmentView, NodeView, PodView
 from simtest_operator.operator.status.records import ResultRecord, clip
 from simtest_operator.render import messages
 from simtest_operator.verdicts import ScenarioOutcome, Verdict
@@ -34,16 +34,6 @@ IMAGE_ERRORS = frozenset(
     }
 )
 """Waiting reasons that mean the container will not start without someone fixing something."""
-
-
-class Phase(enum.StrEnum):
-    """SimEnvironment phases (the API's ``EnvironmentPhase`` values)."""
-
-    PENDING = "Pending"
-    PROVISIONING = "Provisioning"
-    SCHEDULED = "Scheduled"
-    RUNNING = "Running"
-    FINISHED = "Finished"
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
@@ -71,7 +61,7 @@ class Limits:
 class Assessment:
     """What an environment is doing, and what the operator should do."""
 
-    phase: Phase
+    phase: EnvironmentPhase
     node: str | None
     timings: Timings
     results: tuple[ResultRecord, ...] | None
@@ -99,22 +89,23 @@ def assess(
     limits: Limits,
 ) -> Assessment:
     """Judge one environment from its pod."""
-    queued = env.timings.queued or env.created
+    queued = env.status.timings.queued or env.created
     if env.finished:
         return Assessment(
-            phase=Phase.FINISHED,
-            node=env.node,
-            timings=env.timings,
-            results=env.results or failed_records(env, Verdict.ERROR, env.reason or "no result"),
-            reason=env.reason,
+            phase=EnvironmentPhase.FINISHED,
+            node=env.status.node,
+            timings=env.status.timings,
+            results=env.results
+            or failed_records(env, Verdict.ERROR, env.status.reason or "no result"),
+            reason=env.status.reason,
             delete_pod=pod is not None and not pod.deleting,
         )
     if env.deleting:
         reason = f"SimEnvironment {env.name} was deleted before it finished"
         return Assessment(
-            phase=Phase.FINISHED,
-            node=env.node,
-            timings=dataclasses.replace(env.timings, finished=now),
+            phase=EnvironmentPhase.FINISHED,
+            node=env.status.node,
+            timings=env.status.timings.model_copy(update={"finished": now}),
             results=failed_records(env, Verdict.ERROR, reason),
             reason=reason,
         )
@@ -130,9 +121,9 @@ def assess(
     if pod.terminated:
         end = timings.finished or now
         results, reason = _terminated(env, pod, timings=timings, end=end)
-        finished_timings = dataclasses.replace(timings, finished=end)
+        finished_timings = timings.model_copy(update={"finished": end})
         return Assessment(
-            phase=Phase.FINISHED,
+            phase=EnvironmentPhase.FINISHED,
             node=node,
             timings=finished_timings,
             results=_naming_the_sut(results, pod),
@@ -143,9 +134,9 @@ def assess(
     if failure is not None:
         verdict, reason, force = failure
         return Assessment(
-            phase=Phase.FINISHED,
+            phase=EnvironmentPhase.FINISHED,
             node=node,
-            timings=dataclasses.replace(timings, finished=now),
+            timings=timings.model_copy(update={"finished": now}),
             results=_naming_the_sut(
                 failed_records(env, verdict, reason, started=timings.started, end=now), pod
             ),
@@ -154,7 +145,13 @@ def assess(
             force_delete=force,
         )
     running = pod.container.state == "running"
-    phase = Phase.RUNNING if running else Phase.SCHEDULED if node else Phase.PROVISIONING
+    phase = (
+        EnvironmentPhase.RUNNING
+        if running
+        else EnvironmentPhase.SCHEDULED
+        if node
+        else EnvironmentPhase.PROVISIONING
+    )
     return Assessment(
         phase=phase,
         node=node,
@@ -171,23 +168,26 @@ def _without_pod(
     limits: Limits,
     queued: datetime.datetime | None,
 ) -> Assessment:
-    timings = dataclasses.replace(env.timings, queued=queued)
-    if env.provisioned_at is None and env.pod is None:
+    timings = env.status.timings.model_copy(update={"queued": queued})
+    if env.provisioned_at is None and env.status.pod is None:
         return Assessment(
-            phase=Phase.PENDING, node=None, timings=timings, results=None, needs_pod=True
+            phase=EnvironmentPhase.PENDING, node=None, timings=timings, results=None, needs_pod=True
         )
     since = env.provisioned_at or queued or now
     grace_end = since + datetime.timedelta(seconds=limits.missing_grace)
     if now < grace_end:
-        phase = Phase(env.phase) if env.phase in Phase.__members__.values() else Phase.PROVISIONING
         return Assessment(
-            phase=phase, node=env.node, timings=timings, results=None, wake_at=grace_end
+            phase=env.status.phase,
+            node=env.status.node,
+            timings=timings,
+            results=None,
+            wake_at=grace_end,
         )
-    reason = f"simulator pod {env.pod or env.name} disappeared before it finished (deleted)"
+    reason = f"simulator pod {env.status.pod or env.name} disappeared before it finished (deleted)"
     return Assessment(
-        phase=Phase.FINISHED,
-        node=env.node,
-        timings=dataclasses.replace(timings, finished=now),
+        phase=EnvironmentPhase.FINISHED,
+        node=env.status.node,
+        timings=timings.model_copy(update={"finished": now}),
         results=failed_records(env, Verdict.ERROR, reason, started=timings.started, end=now),
         reason=reason,
     )

@@ -25,13 +25,13 @@ from simtest_operator.settings import OperatorSettings
 
 def _applied(env: EnvironmentView, jobs: Mapping[str, JobView]) -> bool:
     """Whether a sync Job was (possibly) created, so there may be releases to destroy."""
-    return env.sync_job is not None or provisioning.sync_job(env) in jobs
+    return provisioning.recorded_jobs(env).sync is not None or provisioning.sync_job(env) in jobs
 
 
 def torn_down(env: EnvironmentView, jobs: Mapping[str, JobView]) -> bool:
     """Whether the environment object may go: nothing to destroy, or the destroy Job exists
     (it is owned by the batch and runs on without the environment)."""
-    return env.destroy_job is not None or not _applied(env, jobs)
+    return provisioning.recorded_jobs(env).destroy is not None or not _applied(env, jobs)
 
 
 def teardown(
@@ -46,7 +46,7 @@ def teardown(
     """Actions that destroy the releases of an ended (or deleted) Helmfile environment."""
     if not (env.finished or env.deleting) or not _applied(env, jobs):
         return ()
-    if env.destroy_job is not None or provisioning.destroy_job(env) in jobs:
+    if provisioning.recorded_jobs(env).destroy is not None or provisioning.destroy_job(env) in jobs:
         return ()
     sync = jobs.get(provisioning.sync_job(env))
     if sync is not None and not sync.done and not sync.deleting and not env.deleting:

@@ -14,8 +14,10 @@ from typing import Any
 
 from simtest_operator import provenance
 from simtest_operator.api.v1alpha1 import (
+    EnvironmentPhase,
     ManifestError,
     ScenarioBatchStatus,
+    SimEnvironmentStatus,
     TestCampaignSpec,
     TestCampaignStatus,
     parse_campaign,
@@ -251,16 +253,6 @@ def node_view(body: Raw) -> NodeView:
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
-class Timings:
-    """SimEnvironment timings."""
-
-    queued: datetime.datetime | None = None
-    scheduled: datetime.datetime | None = None
-    started: datetime.datetime | None = None
-    finished: datetime.datetime | None = None
-
-
-@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
 class EnvironmentView:
     """A SimEnvironment."""
 
@@ -275,24 +267,15 @@ class EnvironmentView:
     # What the cluster says; the defaults describe an environment not created yet.
     created: datetime.datetime | None = None
     deleting: bool = False
-    phase: str = "Pending"
-    pod: str | None = None
-    node: str | None = None
-    verdict: str | None = None
-    reason: str = ""
-    rendered_hash: str | None = None
-    timings: Timings = dataclasses.field(default_factory=Timings)
+    status: SimEnvironmentStatus = dataclasses.field(default_factory=SimEnvironmentStatus)
+    """The status, typed (:mod:`~simtest_operator.operator.status.reading`), without its
+    results."""
     results: tuple[ResultRecord, ...] = ()
+    """The recorded results (the typed ``status`` leaves them out: read once, here)."""
     provisioned_at: datetime.datetime | None = None
-    """When the operator recorded creating the pod (condition ``Provisioned``)."""
+    """When the operator recorded creating the pod (condition ``Provisioned`` with its time)."""
     status_wire: Raw = dataclasses.field(default_factory=dict)
-    """The status as stored, for merge patches; the fields above are its typed reading."""
-    provisioner: str = ""
-    """``Pod`` or ``Helmfile`` once provisioned (empty before, and for older environments)."""
-    sync_job: str | None = None
-    """Name of the recorded ``helmfile sync`` Job."""
-    destroy_job: str | None = None
-    """Name of the recorded ``helmfile destroy`` Job."""
+    """The status as stored, for merge patches."""
 
     @property
     def scenario_ids(self) -> tuple[str, ...]:
@@ -302,14 +285,15 @@ class EnvironmentView:
     @property
     def finished(self) -> bool:
         """The environment's verdicts are recorded in its status (durable)."""
-        return self.phase in ("Finished", "TornDown")
+        return self.status.phase in _RECORDED
+
+
+_RECORDED = frozenset({EnvironmentPhase.FINISHED, EnvironmentPhase.TORN_DOWN})
 
 
 def environment_view(body: Raw) -> EnvironmentView:
     """Parse a SimEnvironment body."""
     meta, status, spec = _meta(body), _status(body), _spec(body)
-    timings = status.get("timings") or {}
-    jobs = status.get("jobs")
     provisioned = _condition(status, "Provisioned")
     scenarios = tuple(
         ScenarioRef(
@@ -332,28 +316,12 @@ def environment_view(body: Raw) -> EnvironmentView:
         scenarios=scenarios,
         created=reading.timestamp(meta.get("creationTimestamp")),
         deleting=meta.get("deletionTimestamp") is not None,
-        phase=str(status.get("phase", "Pending")),
-        pod=status.get("pod") or None,
-        node=status.get("node") or None,
-        verdict=status.get("verdict") or None,
-        reason=str(status.get("reason", "")),
-        rendered_hash=status.get("renderedHash") or None,
-        timings=Timings(
-            queued=reading.timestamp(timings.get("queued")),
-            scheduled=reading.timestamp(timings.get("scheduled")),
-            started=reading.timestamp(timings.get("started")),
-            finished=reading.timestamp(timings.get("finished")),
-        ),
+        status=reading.environment(status),
         results=_results(status.get("results")),
         provisioned_at=reading.timestamp((provisioned or {}).get("lastTransitionTime"))
         if provisioned is not None and provisioned.get("status") == "True"
         else None,
         status_wire=status,
-        provisioner=str(status.get("provisioner") or ""),
-        sync_job=str(jobs.get("sync")) if isinstance(jobs, Mapping) and jobs.get("sync") else None,
-        destroy_job=str(jobs.get("destroy"))
-        if isinstance(jobs, Mapping) and jobs.get("destroy")
-        else None,
     )
 
 

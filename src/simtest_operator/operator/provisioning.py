@@ -25,21 +25,26 @@ Lifecycle of a Helmfile environment (names from ``packaging.helmfilejobs``)::
 
 from __future__ import annotations
 
-import dataclasses
 import datetime
 from collections.abc import Callable, Mapping
 from typing import Any
 
-from simtest_operator.api.v1alpha1 import API_VERSION, Provisioner, TestCampaignSpec
+from simtest_operator.api.v1alpha1 import (
+    API_VERSION,
+    EnvironmentPhase,
+    Provisioner,
+    TestCampaignSpec,
+    Timings,
+)
+from simtest_operator.api.v1alpha1.kinds import HelmfileJobs
 from simtest_operator.errors import RenderError
 from simtest_operator.operator import bodies, environments, jobviews, names
 from simtest_operator.operator.actions import Action, Kind, PatchStatus, RunHelmfile
-from simtest_operator.operator.environments import Assessment, Limits, Phase
+from simtest_operator.operator.environments import Assessment, Limits
 from simtest_operator.operator.observed import (
     EnvironmentView,
     NodeView,
     PodView,
-    Timings,
 )
 from simtest_operator.operator.status import environmentstatus
 from simtest_operator.operator.status.records import clip
@@ -59,14 +64,22 @@ def uses_helmfile(spec: TestCampaignSpec) -> bool:
     return spec.environment.provisioner is Provisioner.HELMFILE
 
 
+_NO_JOBS = HelmfileJobs()
+
+
+def recorded_jobs(env: EnvironmentView) -> HelmfileJobs:
+    """The helmfile Jobs the environment's status records (none before provisioning)."""
+    return env.status.jobs or _NO_JOBS
+
+
 def sync_job(env: EnvironmentView) -> str:
     """Name of the environment's ``helmfile sync`` Job."""
-    return env.sync_job or helmfilejobs.job_name(env.name, JobAction.SYNC)
+    return recorded_jobs(env).sync or helmfilejobs.job_name(env.name, JobAction.SYNC)
 
 
 def destroy_job(env: EnvironmentView) -> str:
     """Name of the environment's ``helmfile destroy`` Job."""
-    return env.destroy_job or helmfilejobs.job_name(env.name, JobAction.DESTROY)
+    return recorded_jobs(env).destroy or helmfilejobs.job_name(env.name, JobAction.DESTROY)
 
 
 # --- judging -----------------------------------------------------------------------------------
@@ -84,7 +97,7 @@ def assess(
 ) -> Assessment:
     """Judge one environment: its pod as :func:`environments.assess` does, and before the pod
     exists (or if provisioning breaks) its helmfile sync Job."""
-    if env.provisioner != HELMFILE or env.finished or env.deleting:
+    if env.status.provisioner != HELMFILE or env.finished or env.deleting:
         return environments.assess(env, pod, nodes=nodes, now=now, limits=limits)
     job = jobs.get(sync_job(env))
     if pod is not None:
@@ -93,8 +106,8 @@ def assess(
             return judged
         # The simulator started but the rest of the stack did not install: not a usable run.
         return _error(env, job_failure(job, pods), now=now, delete_pod=True, node=pod.node_name)
-    queued = env.timings.queued or env.created
-    timings = dataclasses.replace(env.timings, queued=queued)
+    queued = env.status.timings.queued or env.created
+    timings = env.status.timings.model_copy(update={"queued": queued})
     if job is None:
         since = env.provisioned_at or queued or now
         grace_end = since + datetime.timedelta(seconds=limits.missing_grace)
@@ -115,8 +128,8 @@ def assess(
         return _error(
             env,
             f"helmfile sync Job {job.name} succeeded but installed no simulator pod "
-            f"{env.pod or env.name} (the template's helmfile must install the rendered pod with "
-            "the simtest-simulator chart)",
+            f"{env.status.pod or env.name} (the template's helmfile must install the rendered pod "
+            "with the simtest-simulator chart)",
             now=now,
         )
     # Running: the Job's activeDeadlineSeconds (pendingTimeoutSeconds) ends it; the backstop
@@ -132,7 +145,11 @@ def assess(
             now=now,
         )
     return Assessment(
-        phase=Phase.PROVISIONING, node=None, timings=timings, results=None, wake_at=backstop
+        phase=EnvironmentPhase.PROVISIONING,
+        node=None,
+        timings=timings,
+        results=None,
+        wake_at=backstop,
     )
 
 
@@ -155,7 +172,7 @@ def job_failure(job: jobviews.JobView, pods: Mapping[str, PodView]) -> str:
 def _provisioning(timings: Timings, *, until: datetime.datetime) -> Assessment:
     """Still provisioning: look again at ``until`` (the end of a grace period)."""
     return Assessment(
-        phase=Phase.PROVISIONING, node=None, timings=timings, results=None, wake_at=until
+        phase=EnvironmentPhase.PROVISIONING, node=None, timings=timings, results=None, wake_at=until
     )
 
 
@@ -167,15 +184,15 @@ def _error(
     delete_pod: bool = False,
     node: str | None = None,
 ) -> Assessment:
-    timings = dataclasses.replace(
-        env.timings, queued=env.timings.queued or env.created, finished=now
+    timings = env.status.timings.model_copy(
+        update={"queued": env.status.timings.queued or env.created, "finished": now}
     )
     records = environments.failed_records(
         env, Verdict.ERROR, reason, started=timings.started, end=now
     )
     return Assessment(
-        phase=Phase.FINISHED,
-        node=node or env.node,
+        phase=EnvironmentPhase.FINISHED,
+        node=node or env.status.node,
         timings=timings,
         results=records,
         reason=reason,

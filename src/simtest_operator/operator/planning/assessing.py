@@ -36,7 +36,7 @@ def assessments(step: Step, cancellation: cancelling.Cancellation | None) -> dic
     judged = {
         env.name: provisioning.assess(
             env,
-            inputs.pods.get(env.pod or env.name),
+            inputs.pods.get(env.status.pod or env.name),
             jobs=inputs.jobs,
             pods=inputs.pods,
             nodes=inputs.nodes,

@@ -42,7 +42,7 @@ def _environment(step: Step, env: EnvironmentView, assessment: Assessment) -> Ou
         queued = assessment.timings.queued
         if started and queued and "started" not in (env.status_wire.get("timings") or {}):
             latencies.append(max((started - queued).total_seconds(), 0.0))
-    pod = step.inputs.pods.get(env.pod or env.name)
+    pod = step.inputs.pods.get(env.status.pod or env.name)
     if env.finished and pod is not None:
         gone = environments.node_gone(pod, step.inputs.nodes)
         if not pod.deleting or gone:  # a graceful delete on a dead node never completes

@@ -11,7 +11,8 @@ import datetime
 from collections.abc import Sequence
 from typing import Any
 
-from simtest_operator.operator.environments import Assessment, Phase
+from simtest_operator.api.v1alpha1 import EnvironmentPhase
+from simtest_operator.operator.environments import Assessment
 from simtest_operator.operator.observed import EnvironmentView
 from simtest_operator.operator.status import conditions
 from simtest_operator.operator.status.records import ResultRecord, clip
@@ -61,14 +62,14 @@ def provisioned_status(
 ) -> dict[str, Any]:
     """Status recorded right after the pod (``Pod``) or its helmfile sync Job (``Helmfile``) was
     created."""
-    queued = env.timings.queued or env.created or now
+    queued = env.status.timings.queued or env.created or now
     if sync_job is not None:
         reason, message = "HelmfileJobCreated", f"helmfile sync Job {sync_job} created"
     else:
         reason, message = "PodCreated", f"pod {pod} created"
     extra: dict[str, Any] = {"jobs": {"sync": sync_job}} if sync_job is not None else {}
     return {
-        "phase": Phase.PROVISIONING.value,
+        "phase": EnvironmentPhase.PROVISIONING.value,
         "observedGeneration": 1,
         "scenario": env.scenarios[0].id,
         "pod": pod,
@@ -101,7 +102,7 @@ def failed_status(
         for i in scenario_ids
     ]
     return {
-        "phase": Phase.FINISHED.value,
+        "phase": EnvironmentPhase.FINISHED.value,
         "observedGeneration": 1,
         "scenario": scenario_ids[-1],
         "verdict": Verdict.ERROR.value,

@@ -1,7 +1,8 @@
 """Reading watched statuses as the api's typed status models.
 
-A status read here is a :class:`~simtest_operator.api.v1alpha1.TestCampaignStatus` or
-:class:`~simtest_operator.api.v1alpha1.ScenarioBatchStatus` -- the models the CRDs are generated
+A status read here is a :class:`~simtest_operator.api.v1alpha1.TestCampaignStatus`,
+:class:`~simtest_operator.api.v1alpha1.ScenarioBatchStatus` or
+:class:`~simtest_operator.api.v1alpha1.SimEnvironmentStatus` -- the models the CRDs are generated
 from -- built with ``model_construct`` after a lenient parse of each field, not validated. One odd
 field (a hand-edited status, a newer operator's phase, a condition without a time) must not stop a
 campaign, and validation rejects a status as a whole: here a value that does not parse reads as if
@@ -9,8 +10,8 @@ absent (the model's default, and not in ``model_fields_set``), as the views alwa
 
 Cost: the views are parsed on every watch event, for thousands of objects per campaign
 (``bench/operator_scale.py``). A reading costs about 10 us (validation would be about 3 us, but
-then needs this path as its fallback); batch results are left out and read once, into domain
-records.
+then needs this path as its fallback); batch and environment results are left out and read
+once, into domain records.
 
 Decisions read these models; merge patches are computed against the wire form the views keep
 beside them (:mod:`.patches`), and fields the builders carry over (times, conditions) are copied
@@ -26,12 +27,18 @@ from typing import Any
 from simtest_operator.api.v1alpha1 import (
     Condition,
     Counters,
+    EnvironmentPhase,
     OfflineEvaluationStatus,
     Phase,
+    Provisioner,
     ScenarioBatchStatus,
+    SimEnvironmentStatus,
     TestCampaignStatus,
+    Timings,
 )
 from simtest_operator.api.v1alpha1.common import ConditionStatus
+from simtest_operator.api.v1alpha1.kinds import HelmfileJobs
+from simtest_operator.verdicts import Verdict
 
 Raw = Mapping[str, Any]
 
@@ -78,6 +85,57 @@ def batch(wire: Raw) -> ScenarioBatchStatus:
     )
 
 
+def environment(wire: Raw) -> SimEnvironmentStatus:
+    """A SimEnvironment's status without its results and conditions: the results are read once,
+    into domain records (:attr:`~simtest_operator.operator.observed.EnvironmentView.results`),
+    and of the conditions only the ``Provisioned`` time is needed (``provisioned_at``; the
+    builders carry the conditions over from the wire). Parsing them would double the cost of an
+    environment's view, which is read on every watch event. Empty strings read as absent, as the
+    operator never writes them."""
+    fields: dict[str, Any] = {}
+    if (phase := _member(EnvironmentPhase, wire.get("phase"))) is not None:
+        fields["phase"] = phase
+    if isinstance(generation := wire.get("observedGeneration"), int):
+        fields["observed_generation"] = int(generation)
+    for name, alias in _ENVIRONMENT_TEXTS:
+        if isinstance(text := wire.get(alias), str) and text:
+            fields[name] = text
+    if (verdict := _member(Verdict, wire.get("verdict"))) is not None:
+        fields["verdict"] = verdict
+    if (provisioner := _member(Provisioner, wire.get("provisioner"))) is not None:
+        fields["provisioner"] = provisioner
+    if isinstance(jobs := wire.get("jobs"), Mapping):
+        sync, destroy = jobs.get("sync"), jobs.get("destroy")
+        fields["jobs"] = HelmfileJobs.model_construct(
+            sync=str(sync) if sync else None, destroy=str(destroy) if destroy else None
+        )
+    times = wire.get("timings")
+    times = times if isinstance(times, Mapping) else {}
+    moments = {k: t for k in _TIMINGS if (t := timestamp(times.get(k))) is not None}
+    return SimEnvironmentStatus.model_construct(
+        _fields_set={*fields, "timings"} if moments else set(fields),
+        **fields,
+        timings=Timings.model_construct(_fields_set=set(moments), **moments),
+        results=[],
+        conditions=[],
+    )
+
+
+_ENVIRONMENT_TEXTS = (
+    ("scenario", "scenario"),
+    ("reason", "reason"),
+    ("node", "node"),
+    ("pod", "pod"),
+    ("rendered_hash", "renderedHash"),
+)
+_TIMINGS = tuple(Timings.model_fields)
+
+
+def _member(kind: Any, value: Any) -> Any:
+    """``value`` as a member of the string enum ``kind``; None when it is not one."""
+    return kind(value) if isinstance(value, str) and value in kind.__members__.values() else None
+
+
 def _factories(fields: dict[str, Any]) -> dict[str, Any]:
     """``fields`` plus those with a ``default_factory``: given explicitly (and left out of
     ``model_fields_set``), since ``model_construct`` inspects a factory's signature on every
@@ -90,9 +148,8 @@ def _common(wire: Raw) -> dict[str, Any]:
     for name, alias in _COUNTERS:
         if isinstance(count := wire.get(alias), int):
             fields[name] = int(count)
-    phase = wire.get("phase")
-    if isinstance(phase, str) and phase in Phase.__members__.values():
-        fields["phase"] = Phase(phase)
+    if (phase := _member(Phase, wire.get("phase"))) is not None:
+        fields["phase"] = phase
     if isinstance(generation := wire.get("observedGeneration"), int):
         fields["observed_generation"] = int(generation)
     if isinstance(progress := wire.get("progress"), str):
@@ -100,10 +157,13 @@ def _common(wire: Raw) -> dict[str, Any]:
     for name, alias in (("start_time", "startTime"), ("completion_time", "completionTime")):
         if (moment := timestamp(wire.get(alias))) is not None:
             fields[name] = moment
-    conditions = [c for c in map(_condition, wire.get("conditions") or ()) if c is not None]
-    if conditions:
+    if conditions := _conditions(wire):
         fields["conditions"] = conditions
     return fields
+
+
+def _conditions(wire: Raw) -> list[Condition]:
+    return [c for c in map(_condition, wire.get("conditions") or ()) if c is not None]
 
 
 def _condition(wire: Any) -> Condition | None:
