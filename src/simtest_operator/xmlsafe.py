@@ -118,17 +118,7 @@ def stream_children(
             f"document is larger than the {max_bytes // (1024 * 1024)} MB limit", file=source
         )
     reject_declarations(data, source, what=what)
-    events = etree.iterparse(
-        io.BytesIO(data),
-        events=("start", "end"),
-        resolve_entities=False,
-        no_network=True,
-        load_dtd=False,
-        huge_tree=False,
-        remove_comments=True,
-        remove_pis=True,
-        collect_ids=False,
-    )
+    events = iterparse(data)
     depth = 0
     root: etree._Element | None = None
     try:
@@ -151,6 +141,24 @@ def stream_children(
         last = exc.error_log.last_error
         message, line = (last.message, last.line) if last is not None else (exc.msg, exc.lineno)
         raise ScenarioError(f"malformed XML: {message}", file=source, line=line) from exc
+
+
+def iterparse(data: bytes) -> Iterator[tuple[str, etree._Element]]:
+    """lxml's start and end events over ``data``, hardened as :func:`parse_bytes` is: no entity
+    expansion, DTD loading, network or huge trees; comments and processing instructions dropped.
+    The caller checks the size and :func:`reject_declarations` first."""
+    events: Iterator[tuple[str, etree._Element]] = etree.iterparse(
+        io.BytesIO(data),
+        events=("start", "end"),
+        resolve_entities=False,
+        no_network=True,
+        load_dtd=False,
+        huge_tree=False,
+        remove_comments=True,
+        remove_pis=True,
+        collect_ids=False,
+    )
+    return events
 
 
 def parse_file(path: Path, *, max_bytes: int = MAX_BYTES, what: str = "scenario") -> Element:

@@ -10,7 +10,7 @@ the same meaning of 0, 1 and 2.
 from __future__ import annotations
 
 import os
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -18,6 +18,7 @@ import click
 
 from simtest_operator import runner
 from simtest_operator.cli import options
+from simtest_operator.cli.options import F
 from simtest_operator.errors import ScenarioError
 from simtest_operator.evaluation import reference as references
 from simtest_operator.openscenario import (
@@ -70,6 +71,17 @@ _MAX_SIZE = click.option(
 )
 
 
+def _root(default: str) -> Callable[[F], F]:
+    """``--root``: the folder the files a scenario references must be inside."""
+    return click.option(
+        "--root",
+        type=click.Path(exists=True, file_okay=False, path_type=Path),
+        default=None,
+        help="Source root: files a scenario references (road network, catalogs) must be inside "
+        f"it [default: {default}].",
+    )
+
+
 _LOADING = options.stack(_TAKEOVER, _STRICT, _MAPS, _MAX_SIZE)
 """How a scenario is loaded and driven: what ``scenario run`` and ``scenario check`` share."""
 
@@ -106,13 +118,7 @@ def scenario() -> None:
 )
 @click.option("--no-record", is_flag=True, help="Do not write the omega-prime recording.")
 @_LOADING
-@click.option(
-    "--root",
-    type=click.Path(exists=True, file_okay=False, path_type=Path),
-    default=None,
-    help="Source root: files the scenario references (road network, catalogs) must be inside it "
-    "[default: the enclosing git work tree, else FILE's folder].",
-)
+@_root("the enclosing git work tree, else FILE's folder")
 def run(
     file: Path,
     out: Path | None,
@@ -238,13 +244,7 @@ def _comparison(
     help="esmini-reference.json to compare end times and paths with.",
 )
 @_LOADING
-@click.option(
-    "--root",
-    type=click.Path(exists=True, file_okay=False, path_type=Path),
-    default=None,
-    help="Source root: files the scenarios reference (roads, catalogs) must be inside it "
-    "[default: DIRECTORY].",
-)
+@_root("DIRECTORY")
 def check(
     directory: Path,
     jobs: int | None,

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import dataclasses
 import enum
-import io
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -64,16 +63,7 @@ def parse_header(data: bytes, *, source: str, max_bytes: int = MAX_BYTES) -> Fil
     if len(data) > max_bytes:
         raise ScenarioError(f"file is larger than the {max_bytes} byte limit", file=source)
     xmlsafe.reject_declarations(data, source)
-    events = etree.iterparse(
-        io.BytesIO(data),
-        events=("start", "end"),
-        resolve_entities=False,
-        no_network=True,
-        load_dtd=False,
-        huge_tree=False,
-        remove_comments=True,
-        remove_pis=True,
-    )
+    events = xmlsafe.iterparse(data)
     header: etree._Element | None = None
     kind = FileKind.UNKNOWN
     road_file = ""

@@ -68,22 +68,9 @@ def halted(
             "completionTime"
         ) or conditions.rfc3339(now)
     patch = patches.changed_fields(desired, campaign.status_wire)
-    actions: list[Action] = []
-    if patch:
-        actions.append(PatchStatus(kind=Kind.CAMPAIGN, name=campaign.name, patch=patch))
-    if campaign.status.phase != phase:
-        actions.append(
-            Emit(
-                kind=Kind.CAMPAIGN,
-                name=campaign.name,
-                uid=campaign.uid,
-                reason=reason,
-                message=message,
-                warning=final,
-                terminal=final,
-            )
-        )
-    return tuple(actions)
+    return _written(
+        campaign, patch, phase, reason=reason, message=message, warning=final, terminal=final
+    )
 
 
 def progressed(
@@ -149,6 +136,30 @@ def progressed(
         due = last_write + datetime.timedelta(seconds=status_interval)
         if now < due:
             return Update(due=due)
+    return Update(
+        actions=_written(
+            campaign,
+            patch,
+            phase,
+            reason=reason if cancellation is not None else phase,
+            message=message,
+            warning=phase == "Error" or reason == cancelling.Reason.DEADLINE_EXCEEDED,
+            terminal=complete or cancellation is not None,
+        )
+    )
+
+
+def _written(
+    campaign: CampaignView,
+    patch: Mapping[str, Any],
+    phase: str,
+    *,
+    reason: str,
+    message: str,
+    warning: bool,
+    terminal: bool,
+) -> tuple[Action, ...]:
+    """The status patch (when anything changed) and the event of a phase change."""
     actions: list[Action] = []
     if patch:
         actions.append(PatchStatus(kind=Kind.CAMPAIGN, name=campaign.name, patch=patch))
@@ -158,13 +169,13 @@ def progressed(
                 kind=Kind.CAMPAIGN,
                 name=campaign.name,
                 uid=campaign.uid,
-                reason=reason if cancellation is not None else phase,
+                reason=reason,
                 message=message,
-                warning=phase == "Error" or reason == cancelling.Reason.DEADLINE_EXCEEDED,
-                terminal=complete or cancellation is not None,
+                warning=warning,
+                terminal=terminal,
             )
         )
-    return Update(actions=tuple(actions))
+    return tuple(actions)
 
 
 def _conditions(
