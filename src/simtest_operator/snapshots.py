@@ -159,6 +159,9 @@ class WorldSnapshot:
 
     time: float
     entities: tuple[EntityState, ...]
+    signals: tuple[tuple[str, str], ...] = ()
+    """Traffic signal states set so far, ``(name, state)`` as the scenario's
+    TrafficSignalStateActions gave them (a signal never set is absent: its state is unknown)."""
 
     def entity(self, name: str) -> EntityState | None:
         """The entity called ``name``, or None when it is not (yet) in the world."""

@@ -15,8 +15,11 @@ ScenarioRunner criterion      Judged here as
 ``OnSidewalkTest``            the ego's reference point was on a ``sidewalk`` lane
 ``DrivenDistanceTest``        the ego drove at least ``distance_success`` metres by the end
                               (``distance_acceptable``, if given, also passes)
-``RunningRedLightTest``,      not evaluated: the stand-in reads no OpenDRIVE signals, so it knows
-``RunningStopTest``           no stop lines (reported as such, never as passed)
+``RunningRedLightTest``      the ego passed a traffic light's stop line while the scenario had set
+                              that light red (not evaluated when it crossed a light whose state
+                              the scenario never set: CARLA's own cycle is not modelled)
+``RunningStopTest``           the ego passed a stop sign's stop line without standing still within
+                              the stop's reach (see :mod:`.signal_criteria`)
 ============================  ====================================================================
 
 An unknown criterion is listed as not evaluated (the reader reported it as a deviation).
@@ -30,12 +33,13 @@ import math
 from collections.abc import Sequence
 
 from simtest_operator import geometry
-from simtest_operator.opendrive import RoadCoord, RoadNetwork
+from simtest_operator.evaluation.signal_criteria import Finding, SignalWatch
+from simtest_operator.opendrive import RoadCoord, RoadNetwork, traffic_controls
 from simtest_operator.openscenario import model
 from simtest_operator.snapshots import EntityState
 
-_NO_SIGNALS = "the stand-in reads no traffic signals or stop lines from the map"
 _LANE_CHECKS = frozenset({"KeepLaneTest", "WrongLaneTest", "OnSidewalkTest"})
+_SIGNAL_CHECKS = frozenset({"RunningRedLightTest", "RunningStopTest"})
 _MOVING = 0.1
 """m/s below which the ego is not driving in any direction (WrongLaneTest)."""
 
@@ -72,7 +76,7 @@ class _Failure:
 class ScenarioCriteria:
     """The ScenarioRunner criteria of one scenario, observed on every snapshot of the ego."""
 
-    __slots__ = ("_criteria", "_distance", "_failures", "_hint", "_last", "_roads")
+    __slots__ = ("_criteria", "_distance", "_failures", "_hint", "_last", "_roads", "_signals")
 
     def __init__(self, criteria: Sequence[model.Criterion], *, roads: RoadNetwork | None) -> None:
         self._criteria = tuple(criteria)
@@ -81,6 +85,11 @@ class ScenarioCriteria:
         self._distance = 0.0
         self._last: tuple[float, float] | None = None
         self._hint: RoadCoord | None = None
+        self._signals = (
+            SignalWatch(traffic_controls(roads))
+            if roads is not None and _SIGNAL_CHECKS.intersection(self.names)
+            else None
+        )
 
     @classmethod
     def of(cls, scenario: model.Scenario, *, roads: RoadNetwork | None) -> ScenarioCriteria | None:
@@ -99,8 +108,13 @@ class ScenarioCriteria:
         """Metres the ego's reference point travelled so far."""
         return self._distance
 
-    def observe(self, time: float, ego: EntityState | None) -> None:
-        """Update with the ego as it is at ``time`` (None: the ego is not in the world)."""
+    def observe(
+        self, time: float, ego: EntityState | None, signals: Sequence[tuple[str, str]] = ()
+    ) -> None:
+        """Update with the ego as it is at ``time`` (None: the ego is not in the world) and the
+        traffic signal states set so far (``(name, state)``)."""
+        if self._signals is not None:
+            self._signals.observe(time, ego, signals)
         if ego is None:
             self._last = None
             return
@@ -189,10 +203,15 @@ class ScenarioCriteria:
             return Outcome(name=name, status=Status.PASSED)
         if name == "DrivenDistanceTest":
             return self._driven(criterion)
-        if name in ("RunningRedLightTest", "RunningStopTest"):
-            return Outcome(name=name, status=Status.NOT_EVALUATED, detail=_NO_SIGNALS)
         if self._roads is None:
             return Outcome(name=name, status=Status.NOT_EVALUATED, detail="no road network")
+        if self._signals is not None and name in _SIGNAL_CHECKS:
+            found = (
+                self._signals.red_light()
+                if name == "RunningRedLightTest"
+                else self._signals.stop_sign()
+            )
+            return _from_finding(name, found)
         failure = self._failures.get(name)
         if failure is not None:
             return Outcome(
@@ -217,6 +236,11 @@ class ScenarioCriteria:
             detail = f"{driven:.1f} m >= acceptable {acceptable:g} m"
             return Outcome(name=name, status=Status.PASSED, detail=detail)
         return Outcome(name=name, status=Status.FAILED, detail=f"{driven:.1f} m < {success:g} m")
+
+
+def _from_finding(name: str, found: Finding) -> Outcome:
+    status = {True: Status.PASSED, False: Status.FAILED, None: Status.NOT_EVALUATED}[found.passed]
+    return Outcome(name=name, status=status, detail=found.detail, time=found.time)
 
 
 def _number(text: str | None) -> float | None:

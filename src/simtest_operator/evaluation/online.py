@@ -132,7 +132,7 @@ class OnlineEvaluator:
         self._check_collisions(snapshot.time, entities, radii, centres)
         ego = snapshot.entity(self._ego) if self._ego is not None else None
         if self._scenario_criteria is not None:
-            self._scenario_criteria.observe(snapshot.time, ego)
+            self._scenario_criteria.observe(snapshot.time, ego, snapshot.signals)
         if ego is None:
             return
         ego_radius = self._radius_of(ego)

@@ -1,7 +1,8 @@
 """OpenDRIVE road networks: safe parsing and geometry evaluation.
 
 Public entry point: :class:`RoadNetwork` (``RoadNetwork.from_file(path)``), which answers
-(road, s, lane, offset) -> pose, world point -> road coordinates, lane widths and the lane graph.
+(road, s, lane, offset) -> pose, world point -> road coordinates, lane widths and the lane graph;
+:func:`traffic_controls` gives its traffic lights and stop signs with their stop lines.
 """
 
 from simtest_operator.opendrive.lanes import LaneBounds
@@ -14,11 +15,13 @@ from simtest_operator.opendrive.network import (
     RoadNetwork,
 )
 from simtest_operator.opendrive.parsing import load, parse, without_signals
+from simtest_operator.opendrive.signals import Control, StopLine, TrafficControl, traffic_controls
 from simtest_operator.opendrive.topology import LaneEntry
 
 __all__ = [
     "DRIVABLE_LANE_TYPES",
     "ContactPoint",
+    "Control",
     "LaneBounds",
     "LaneEntry",
     "LaneLocation",
@@ -27,8 +30,11 @@ __all__ = [
     "Road",
     "RoadCoord",
     "RoadNetwork",
+    "StopLine",
+    "TrafficControl",
     "TrafficRule",
     "load",
     "parse",
+    "traffic_controls",
     "without_signals",
 ]

@@ -38,6 +38,9 @@ class Limits:
     """Roads per document: each adds at least one search-index segment, whatever its length."""
     max_lanes: int = 100
     """Lanes per side of a lane section: lane queries walk them on every simulation step."""
+    max_signals: int = 50_000
+    """Signals and signal references per document (CARLA's towns: at most 180): each becomes
+    stop lines the evaluation checks on every step."""
     max_lane_width: float = 1_000.0
     """Width of one lane (or |border|, |laneOffset|) anywhere along its record, metres."""
 

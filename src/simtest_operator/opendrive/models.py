@@ -1,8 +1,9 @@
 """OpenDRIVE document model: the parsed road network as immutable values.
 
 The parser turns untrusted XML into these dataclasses once; geometry evaluation and the lane graph
-work on them and never look at XML again. Only what the simulator needs is kept (road marks,
-objects, signals and user data are dropped). Polynomials keep OpenDRIVE's ``a + b*ds + c*ds^2 +
+work on them and never look at XML again. Only what the simulator and the evaluation need is kept
+(road marks, objects and user data are dropped; signals keep their place, kind and the lanes they
+govern). Polynomials keep OpenDRIVE's ``a + b*ds + c*ds^2 +
 d*ds^3`` form with their start ``s`` (or ``sOffset`` inside a lane section).
 """
 
@@ -135,6 +136,53 @@ class LaneSection:
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Validity:
+    """The lanes ``from_lane`` to ``to_lane`` (inclusive, either order) a signal applies to."""
+
+    from_lane: int
+    to_lane: int
+
+    @property
+    def lane_ids(self) -> tuple[int, ...]:
+        """The non-centre lane ids in the range."""
+        low, high = sorted((self.from_lane, self.to_lane))
+        return tuple(lane for lane in range(low, high + 1) if lane != 0)
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Signal:
+    """A ``<signal>`` of a road: where it stands (``s``, ``t``), what it is (``country``,
+    ``type``, ``subtype``; e.g. ``OpenDRIVE``/``1000001`` a three-lamp traffic light, ``206`` a
+    stop sign), which travel direction it faces (``orientation`` ``+``, ``-`` or ``none``) and the
+    lanes it governs."""
+
+    id: str
+    name: str
+    road_id: str
+    s: float
+    t: float
+    orientation: str
+    dynamic: bool
+    country: str
+    type: str
+    subtype: str
+    validities: tuple[Validity, ...] = ()
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class SignalReference:
+    """A ``<signalReference>``: signal ``signal_id`` (placed on another road) also governs this
+    road at ``s`` (CARLA's towns put them just inside the junction, where the stop line is)."""
+
+    signal_id: str
+    road_id: str
+    s: float
+    t: float
+    orientation: str
+    validities: tuple[Validity, ...] = ()
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
 class Road:
     """An OpenDRIVE road. ``junction`` is ``"-1"`` for roads outside junctions."""
 
@@ -149,6 +197,8 @@ class Road:
     elevations: tuple[Poly3, ...] = ()
     lane_offsets: tuple[Poly3, ...] = ()
     lane_sections: tuple[LaneSection, ...] = ()
+    signals: tuple[Signal, ...] = ()
+    signal_references: tuple[SignalReference, ...] = ()
 
     @property
     def in_junction(self) -> bool:

@@ -82,12 +82,13 @@ def _child(element: etree._Element, name: str) -> etree._Element | None:
 class _Reader:
     """Converts elements, remembering the source for error messages."""
 
-    __slots__ = ("_limits", "_source", "_total_length")
+    __slots__ = ("_limits", "_signal_count", "_source", "_total_length")
 
     def __init__(self, source: str, bounds: limits.Limits) -> None:
         self._source = source
         self._limits = bounds
         self._total_length = 0.0
+        self._signal_count = 0
 
     def _error(self, element: etree._Element, message: str) -> ScenarioError:
         return ScenarioError(
@@ -223,6 +224,10 @@ class _Reader:
             self.lane_section(child, self._section_span(child, starts, length))
             for child in section_elements
         )
+        signals = _child(element, "signals")
+        signal_elements = _children(signals, "signal") if signals is not None else []
+        reference_elements = _children(signals, "signalReference") if signals is not None else []
+        self._count_signals(signals, len(signal_elements) + len(reference_elements))
         return models.Road(
             id=road_id,
             name=element.get("name") or "",
@@ -243,7 +248,74 @@ class _Reader:
                 _children(lanes, "laneOffset"), "s", length, self._limits.max_lane_width, "offset"
             ),
             lane_sections=tuple(sorted(sections, key=lambda section: section.s)),
+            signals=tuple(self.signal(child, road_id, length) for child in signal_elements),
+            signal_references=tuple(
+                self.signal_reference(child, road_id, length) for child in reference_elements
+            ),
         )
+
+    def _count_signals(self, signals: etree._Element | None, count: int) -> None:
+        self._signal_count += count
+        if signals is not None and self._signal_count > self._limits.max_signals:
+            raise self._error(
+                signals,
+                f"more than {self._limits.max_signals} signals and signal references "
+                "(the document limit)",
+            )
+
+    def signal(self, element: etree._Element, road_id: str, length: float) -> models.Signal:
+        dynamic = (element.get("dynamic") or "no").strip().lower()
+        if dynamic not in ("yes", "no", "true", "false"):
+            raise self._error(element, f"dynamic={element.get('dynamic')!r} is not yes or no")
+        return models.Signal(
+            id=self._attr(element, "id", str),
+            name=(element.get("name") or "").strip(),
+            road_id=road_id,
+            s=self._along(element, length),
+            t=self._bounded(element, "t", self._limits.max_coordinate),
+            orientation=self._orientation(element),
+            dynamic=dynamic in ("yes", "true"),
+            country=(element.get("country") or "").strip(),
+            type=(element.get("type") or "").strip(),
+            subtype=(element.get("subtype") or "").strip(),
+            validities=self._validities(element),
+        )
+
+    def signal_reference(
+        self, element: etree._Element, road_id: str, length: float
+    ) -> models.SignalReference:
+        return models.SignalReference(
+            signal_id=self._attr(element, "id", str),
+            road_id=road_id,
+            s=self._along(element, length),
+            t=self._bounded(element, "t", self._limits.max_coordinate),
+            orientation=self._orientation(element),
+            validities=self._validities(element),
+        )
+
+    def _along(self, element: etree._Element, length: float) -> float:
+        """A signal's ``s``, clamped onto its road: real exports place some past the end (Town06
+        has a reference 0.9 m beyond its 39.4 m road), and the signal still governs that end."""
+        s = self._bounded(element, "s", self._limits.max_length)
+        return min(max(s, 0.0), length)
+
+    def _orientation(self, element: etree._Element) -> str:
+        raw = (element.get("orientation") or "none").strip()
+        if raw not in ("+", "-", "none"):
+            raise self._error(element, f"orientation={raw!r} is not +, - or none")
+        return raw
+
+    def _validities(self, element: etree._Element) -> tuple[models.Validity, ...]:
+        """The ``<validity>`` lane ranges, each bounded by the lanes a section may have."""
+        result = []
+        for child in _children(element, "validity"):
+            lanes = (self._int(child, "fromLane"), self._int(child, "toLane"))
+            if max(abs(lane) for lane in lanes) > self._limits.max_lanes:
+                raise self._error(
+                    child, f"validity lanes {lanes} beyond {self._limits.max_lanes} lanes"
+                )
+            result.append(models.Validity(from_lane=lanes[0], to_lane=lanes[1]))
+        return tuple(result)
 
     def _section_span(self, element: etree._Element, starts: list[float], length: float) -> float:
         """Length of the lane section ``element`` (up to the next section or the road's end)."""

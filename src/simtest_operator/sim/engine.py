@@ -349,7 +349,11 @@ class Simulation:
                 )
             )
         self.world.traffic = tuple(traffic)
-        self._snapshot = WorldSnapshot(time=self.world.time, entities=(*entities, *traffic))
+        self._snapshot = WorldSnapshot(
+            time=self.world.time,
+            entities=(*entities, *traffic),
+            signals=tuple(self.world.signals.items()),
+        )
         return self._snapshot
 
 

@@ -1,0 +1,151 @@
+"""Traffic lights and stop signs of a road network, as the stop lines a driver must respect.
+
+A signal stands beside the road; what it governs is a line across each lane it applies to, where
+a vehicle must stop. CARLA's towns (RoadRunner exports) put the signal on its pole and a
+``<signalReference>`` for each lane of every junction road it controls, 0.6 m past the junction
+entry: that is the stop line. So a signal with references is placed at its references only; one
+without any (hand-written maps, esmini's) is placed where it stands. The lanes are the
+``<validity>`` ranges, or, without one (or with CARLA's ``0..0``), every lane whose traffic the
+signal faces (``orientation`` ``+``: traffic towards increasing s, ``-``: the other way, ``none``:
+both). As in CARLA, only ``driving`` lanes get a line, 90 % of the lane wide.
+
+Kinds (``type``, any ``country``): ``1000001`` a vehicle traffic light (OpenDRIVE's three-lamp
+light, also CARLA's ``Signal_3Light_Post01``), ``206`` a stop sign (StVO 206, CARLA's
+``Sign_Stop``). Other signals (yield, speed limits, pedestrian lights) are not stop lines.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import enum
+import math
+from collections.abc import Iterator
+
+from simtest_operator.opendrive import models
+from simtest_operator.opendrive.network import Pose, RoadNetwork
+
+_LINE_SHARE = 0.9
+"""Share of the lane width a stop line spans (CARLA's trigger boxes: 90 %, so that they do not
+reach into the next lane)."""
+
+
+class Control(enum.StrEnum):
+    """What a signal asks of the traffic it faces."""
+
+    TRAFFIC_LIGHT = "traffic light"
+    STOP_SIGN = "stop sign"
+
+
+_KINDS = {"1000001": Control.TRAFFIC_LIGHT, "206": Control.STOP_SIGN}
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class StopLine:
+    """A line across one lane, ``start`` to ``end`` (world x, y), crossed by traffic heading
+    ``heading`` (radians, the lane's travel direction there)."""
+
+    road_id: str
+    lane_id: int
+    s: float
+    start: tuple[float, float]
+    end: tuple[float, float]
+    heading: float
+    lane_width: float
+
+    def crossed_by(self, before: tuple[float, float], after: tuple[float, float]) -> bool:
+        """Whether a point moving from ``before`` to ``after`` passed the line in the travel
+        direction (from behind it to on or beyond it, within its span)."""
+        mid_x, mid_y = (self.start[0] + self.end[0]) / 2.0, (self.start[1] + self.end[1]) / 2.0
+        cos_h, sin_h = math.cos(self.heading), math.sin(self.heading)
+        a0 = (before[0] - mid_x) * cos_h + (before[1] - mid_y) * sin_h
+        a1 = (after[0] - mid_x) * cos_h + (after[1] - mid_y) * sin_h
+        if not a0 < 0.0 <= a1:
+            return False
+        share = a0 / (a0 - a1)
+        x = before[0] + share * (after[0] - before[0]) - mid_x
+        y = before[1] + share * (after[1] - before[1]) - mid_y
+        span_x, span_y = self.end[0] - self.start[0], self.end[1] - self.start[1]
+        half = math.hypot(span_x, span_y) / 2.0
+        return half > 0.0 and abs(x * span_x + y * span_y) / (2.0 * half) <= half
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class TrafficControl:
+    """One traffic light or stop sign: where it stands and the stop lines it governs."""
+
+    signal_id: str
+    name: str
+    control: Control
+    position: Pose
+    lines: tuple[StopLine, ...]
+
+
+def kind_of(signal: models.Signal) -> Control | None:
+    """The control a signal exerts, or None when it is no traffic light or stop sign."""
+    return _KINDS.get(signal.type)
+
+
+def traffic_controls(network: RoadNetwork) -> tuple[TrafficControl, ...]:
+    """Every traffic light and stop sign of ``network`` with its stop lines (a signal whose lanes
+    are all missing or not ``driving`` has none), in document order."""
+    references: dict[str, list[models.SignalReference]] = {}
+    for road in network.document.roads:
+        for reference in road.signal_references:
+            references.setdefault(reference.signal_id, []).append(reference)
+    result = []
+    for road in network.document.roads:
+        for signal in road.signals:
+            control = kind_of(signal)
+            if control is None:
+                continue
+            placements: list[models.Signal | models.SignalReference] = [
+                *references.get(signal.id, ())
+            ] or [signal]
+            lines = tuple(line for place in placements for line in _lines(network, place))
+            result.append(
+                TrafficControl(
+                    signal_id=signal.id,
+                    name=signal.name,
+                    control=control,
+                    position=network.road_pose(signal.road_id, signal.s, signal.t),
+                    lines=lines,
+                )
+            )
+    return tuple(result)
+
+
+def _lines(
+    network: RoadNetwork, place: models.Signal | models.SignalReference
+) -> Iterator[StopLine]:
+    road_id, s = place.road_id, place.s
+    existing = network.lane_ids(road_id, s)
+    named = {lane for validity in place.validities for lane in validity.lane_ids}
+    if named:
+        lanes = [lane for lane in existing if lane in named]
+    else:
+        lanes = [lane for lane in existing if _faces(network, road_id, lane, place.orientation)]
+    reference = network.reference_pose(road_id, s)
+    for lane_id in lanes:
+        bounds = network.lane_bounds(road_id, s, lane_id)
+        if bounds is None or bounds.type != "driving" or bounds.width <= 0.0:
+            continue
+        half = bounds.width * _LINE_SHARE / 2.0
+        start = network.road_pose(road_id, s, bounds.t_center - half)
+        end = network.road_pose(road_id, s, bounds.t_center + half)
+        forward = network.driving_direction(road_id, lane_id) > 0
+        yield StopLine(
+            road_id=road_id,
+            lane_id=lane_id,
+            s=s,
+            start=(start.x, start.y),
+            end=(end.x, end.y),
+            heading=math.remainder(reference.heading + (0.0 if forward else math.pi), math.tau),
+            lane_width=bounds.width,
+        )
+
+
+def _faces(network: RoadNetwork, road_id: str, lane_id: int, orientation: str) -> bool:
+    if orientation == "none":
+        return True
+    direction = network.driving_direction(road_id, lane_id)
+    return direction > 0 if orientation == "+" else direction < 0
