@@ -1,6 +1,6 @@
 """ScenarioRunner criteria in the evaluator and the verdict: DrivenDistanceTest with success and
-acceptable distances and without a usable argument, lane criteria without a road network, red
-light/stop never reported as passed, a failed criterion outranking a timeout, outcomes in the
+acceptable distances and without a usable argument, lane, red light and stop criteria without a
+road network not evaluated, a failed criterion outranking a timeout, outcomes in the
 reason and as ``criteria.*`` metrics, no criteria -> unchanged reason."""
 
 from __future__ import annotations

@@ -49,13 +49,14 @@ def light(orientation: str = "+", validity: str = "") -> str:
 def test_signal_fields_are_read() -> None:
     document = parse(road_with(light(validity='<validity fromLane="-1" toLane="1"/>')))
     (signal,) = document.roads[0].signals
-    assert (signal.id, signal.name, signal.s, signal.t, signal.orientation) == (
-        "7", "L", 50.0, -6.0, "+"
+    place = signal.placement
+    assert (signal.id, signal.name, place.road_id, place.s, place.t, place.orientation) == (
+        "7", "L", "r", 50.0, -6.0, "+"
     )  # fmt: skip
     assert (signal.dynamic, signal.country, signal.type, signal.subtype) == (
         True, "OpenDRIVE", "1000001", "-1"
     )  # fmt: skip
-    assert [v.lane_ids for v in signal.validities] == [(-1, 1)]
+    assert [v.lane_ids for v in place.validities] == [(-1, 1)]
 
 
 @pytest.mark.parametrize(
@@ -90,7 +91,7 @@ def test_too_many_signals_are_refused() -> None:
 def test_signal_s_past_the_road_end_is_clamped() -> None:
     # Town06 has a reference 0.9 m beyond its road: it still governs that end.
     document = parse(road_with(light().replace('s="50"', 's="100.9"')))
-    assert document.roads[0].signals[0].s == 100.0
+    assert document.roads[0].signals[0].placement.s == 100.0
 
 
 def test_lanes_from_validity_orientation_and_type() -> None:

@@ -12,6 +12,11 @@ from __future__ import annotations
 import shutil
 from pathlib import Path
 
+from simtest_operator import evaluation
+from simtest_operator.drivermodel import SutConfig
+from simtest_operator.runner import scenario_execution
+from simtest_operator.sim.session import BackendChoice
+
 HERE = Path(__file__).parent / "carla"
 
 ALL_CRITERIA = (
@@ -232,3 +237,26 @@ def write(tmp_path: Path, text: str, name: str = "scenario.xosc") -> Path:
     path = tmp_path / name
     path.write_text(text, encoding="utf-8")
     return path
+
+
+def run(
+    path: Path,
+    *,
+    sut: SutConfig | None = None,
+    time_limit: float = 60.0,
+    out: Path | None = None,
+    overrides: dict[str, str] | None = None,
+) -> scenario_execution.RunReport:
+    """Run the scenario at ``path`` in-process on the in-memory backend."""
+    return scenario_execution.run_scenario(
+        scenario_execution.RunRequest(
+            scenario=path,
+            nets_dir=path.parent / "nets",
+            sut=sut or SutConfig(),
+            criteria=evaluation.Criteria(time_limit=time_limit),
+            output_dir=out,
+            record=out is not None,
+            backend=BackendChoice.MEMORY,
+            overrides=overrides or {},
+        )
+    )

@@ -86,9 +86,7 @@ class SignalWatch:
     )
 
     def __init__(self, controls: Sequence[TrafficControl]) -> None:
-        self._lights = tuple(
-            c for c in controls if c.control is Control.TRAFFIC_LIGHT and c.lines
-        )
+        self._lights = tuple(c for c in controls if c.control is Control.TRAFFIC_LIGHT and c.lines)
         self._stops = tuple(c for c in controls if c.control is Control.STOP_SIGN and c.lines)
         self._names: dict[str, str | None] = {}
         """TrafficSignalStateAction names and the light each means (None: no light)."""
@@ -195,22 +193,20 @@ class SignalWatch:
         if self._unknown:
             first = self._unknown[0]
             unmatched = sorted(name for name, light in self._names.items() if light is None)
-            hint = (
-                f"; TrafficSignalStateAction names matching no traffic light: {', '.join(unmatched)}"
-                if unmatched
-                else ""
-            )
+            names = ", ".join(unmatched)
+            hint = f"; TrafficSignalStateAction names matching no traffic light: {names}"
             return Finding(
                 passed=None,
                 detail=f"no light states known: {self._ego} crossed the stop line of traffic "
                 f"light {first.signal_id} at t={first.time:.2f} s, whose state the scenario "
-                f"never set{hint}",
+                f"never set{hint if unmatched else ''}",
             )
         if not self._lights:
             return Finding(passed=True, detail="the map has no traffic lights")
         if not self._judged:
             return Finding(passed=True, detail="crossed no traffic light's stop line")
-        return Finding(passed=True, detail=f"crossed {self._judged} light stop lines, none on red")
+        times = "1 time" if self._judged == 1 else f"{self._judged} times"
+        return Finding(passed=True, detail=f"passed traffic lights {times}, never on red")
 
     def stop_sign(self) -> Finding:
         """RunningStopTest's result so far."""
@@ -225,4 +221,6 @@ class SignalWatch:
             return Finding(passed=True, detail="the map has no stop signs")
         if not self._stopped:
             return Finding(passed=True, detail="crossed no stop sign's stop line")
-        return Finding(passed=True, detail=f"stood still before all {self._stopped} stop lines crossed")
+        return Finding(
+            passed=True, detail=f"stood still before every stop line crossed ({self._stopped})"
+        )

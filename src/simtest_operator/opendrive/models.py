@@ -150,36 +150,39 @@ class Validity:
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
-class Signal:
-    """A ``<signal>`` of a road: where it stands (``s``, ``t``), what it is (``country``,
-    ``type``, ``subtype``; e.g. ``OpenDRIVE``/``1000001`` a three-lamp traffic light, ``206`` a
-    stop sign), which travel direction it faces (``orientation`` ``+``, ``-`` or ``none``) and the
-    lanes it governs."""
+class Placement:
+    """Where a signal, or a reference to one, applies: at ``s`` (``t`` beside the reference line)
+    of ``road_id``, to the traffic it faces (``orientation`` ``+``: towards increasing s, ``-``:
+    the other way, ``none``: both) in the lanes of its ``validities``."""
 
-    id: str
-    name: str
     road_id: str
     s: float
     t: float
     orientation: str
-    dynamic: bool
-    country: str
-    type: str
-    subtype: str
     validities: tuple[Validity, ...] = ()
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Signal:
+    """A ``<signal>`` of a road: what it is (``country``, ``type``, ``subtype``; e.g.
+    ``OpenDRIVE``/``1000001`` a three-lamp traffic light, ``206`` a stop sign) and where."""
+
+    id: str
+    name: str
+    dynamic: bool
+    country: str
+    type: str
+    subtype: str
+    placement: Placement
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
 class SignalReference:
-    """A ``<signalReference>``: signal ``signal_id`` (placed on another road) also governs this
-    road at ``s`` (CARLA's towns put them just inside the junction, where the stop line is)."""
+    """A ``<signalReference>``: signal ``signal_id`` (placed on another road) also applies here
+    (CARLA's towns put them just inside the junction, where the stop line is)."""
 
     signal_id: str
-    road_id: str
-    s: float
-    t: float
-    orientation: str
-    validities: tuple[Validity, ...] = ()
+    placement: Placement
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)

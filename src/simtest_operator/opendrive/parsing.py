@@ -270,15 +270,11 @@ class _Reader:
         return models.Signal(
             id=self._attr(element, "id", str),
             name=(element.get("name") or "").strip(),
-            road_id=road_id,
-            s=self._along(element, length),
-            t=self._bounded(element, "t", self._limits.max_coordinate),
-            orientation=self._orientation(element),
             dynamic=dynamic in ("yes", "true"),
             country=(element.get("country") or "").strip(),
             type=(element.get("type") or "").strip(),
             subtype=(element.get("subtype") or "").strip(),
-            validities=self._validities(element),
+            placement=self._placement(element, road_id, length),
         )
 
     def signal_reference(
@@ -286,6 +282,11 @@ class _Reader:
     ) -> models.SignalReference:
         return models.SignalReference(
             signal_id=self._attr(element, "id", str),
+            placement=self._placement(element, road_id, length),
+        )
+
+    def _placement(self, element: etree._Element, road_id: str, length: float) -> models.Placement:
+        return models.Placement(
             road_id=road_id,
             s=self._along(element, length),
             t=self._bounded(element, "t", self._limits.max_coordinate),

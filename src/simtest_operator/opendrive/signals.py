@@ -88,35 +88,33 @@ def kind_of(signal: models.Signal) -> Control | None:
 def traffic_controls(network: RoadNetwork) -> tuple[TrafficControl, ...]:
     """Every traffic light and stop sign of ``network`` with its stop lines (a signal whose lanes
     are all missing or not ``driving`` has none), in document order."""
-    references: dict[str, list[models.SignalReference]] = {}
+    references: dict[str, list[models.Placement]] = {}
     for road in network.document.roads:
         for reference in road.signal_references:
-            references.setdefault(reference.signal_id, []).append(reference)
+            references.setdefault(reference.signal_id, []).append(reference.placement)
     result = []
     for road in network.document.roads:
         for signal in road.signals:
             control = kind_of(signal)
             if control is None:
                 continue
-            placements: list[models.Signal | models.SignalReference] = [
-                *references.get(signal.id, ())
-            ] or [signal]
+            placements = references.get(signal.id) or [signal.placement]
             lines = tuple(line for place in placements for line in _lines(network, place))
             result.append(
                 TrafficControl(
                     signal_id=signal.id,
                     name=signal.name,
                     control=control,
-                    position=network.road_pose(signal.road_id, signal.s, signal.t),
+                    position=network.road_pose(
+                        signal.placement.road_id, signal.placement.s, signal.placement.t
+                    ),
                     lines=lines,
                 )
             )
     return tuple(result)
 
 
-def _lines(
-    network: RoadNetwork, place: models.Signal | models.SignalReference
-) -> Iterator[StopLine]:
+def _lines(network: RoadNetwork, place: models.Placement) -> Iterator[StopLine]:
     road_id, s = place.road_id, place.s
     existing = network.lane_ids(road_id, s)
     named = {lane for validity in place.validities for lane in validity.lane_ids}
