@@ -5,8 +5,9 @@ A template folder holds ``values.yaml.j2`` (the per-scenario Helm values of ever
 (the run-specific helmfile). Templates are trusted (they ship with the operator); everything that
 comes from a custom resource enters them as data through the ``json``/``toyaml`` filters, never
 as template source, so a manifest cannot inject markup. Filters: ``json``, ``toyaml``, ``merge``
-(Helm-style deep merge) and ``release`` (``env.name | release("sut")``: a Helm release name of at
-most 53 characters). A folder may include files of another (``{% include "default/..." %}``).
+(Helm-style deep merge), ``release`` (``env.name | release("sut")``: a Helm release name of at
+most 53 characters) and ``required`` (``x | required("what to set")``: a RenderError saying so
+when ``x`` is missing or empty). A folder may include files of another (``{% include "default/..." %}``).
 """
 
 from __future__ import annotations
@@ -42,6 +43,14 @@ def _yaml_filter(value: Any) -> str:
     return documents.to_yaml(_defined(value)).rstrip("\n")
 
 
+def _required(value: Any, message: str) -> Any:
+    """Helm's ``required``: the value, or a RenderError with ``message`` when it is missing or
+    empty, so a template states what a campaign must set instead of failing on an attribute."""
+    if isinstance(value, jinja2.Undefined) or value is None or value in ("", [], {}):
+        raise RenderError(message)
+    return value
+
+
 @dataclasses.dataclass(frozen=True, slots=True)
 class TemplateSet:
     """The compiled files of one template folder."""
@@ -71,6 +80,7 @@ class TemplateLibrary:
         self._env.filters["toyaml"] = _yaml_filter
         self._env.filters["merge"] = documents.deep_merge
         self._env.filters["release"] = naming.release_name
+        self._env.filters["required"] = _required
         self._cache: dict[str, TemplateSet] = {}
 
     def names(self) -> tuple[str, ...]:

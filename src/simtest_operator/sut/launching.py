@@ -23,7 +23,8 @@ from simtest_operator.sut import client
 from simtest_operator.sut.errors import SutError
 
 ENDPOINT_ENV = "SIMTEST_SUT_ENDPOINT"
-"""Set in the simulator container of a pod with a SUT sidecar: where the sidecar listens."""
+"""Set in the simulator container by the environment template: where the sidecar listens, or
+the Service of a composed SUT stack (template ``composed-sut``); wins over ``endpoint``."""
 _STDERR_TAIL = 400
 
 
@@ -91,8 +92,10 @@ def open_pilot(
     """A connected, handshaken pilot for one run (SutError when the SUT cannot be reached)."""
     process: _Process | None = None
     endpoint = external.endpoint
-    if external.launch is Launch.SIDECAR:
-        endpoint = os.environ.get(ENDPOINT_ENV) or None
+    if external.launch in (Launch.SIDECAR, Launch.ENDPOINT):
+        # The pod's template knows where the SUT is: the sidecar on loopback, or the Service of
+        # a stack the Helmfile provisioner composed; the campaign's endpoint serves elsewhere.
+        endpoint = os.environ.get(ENDPOINT_ENV) or endpoint
     try:
         if endpoint is None:
             if not external.command:
