@@ -1,5 +1,5 @@
-"""Render requests used by the golden tests (one per interesting combination of both shipped
-templates, ``default`` and ``ros2``)."""
+"""Render requests used by the golden tests (one per interesting combination of the shipped
+templates, ``default``, ``composed-sut`` and ``ros2``)."""
 
 from __future__ import annotations
 
@@ -115,6 +115,22 @@ CASES = {
                 ),
             ),
         ),
+    ),
+    "composed-sut": request(
+        template="composed-sut",
+        sut={
+            "name": "simtest-sut-go",
+            "version": "1.0.0",
+            "image": "ghcr.io/simtest-dev/simtest-sut-go:0.1.0",
+            "config": {"profile": "urban"},
+            "external": {
+                "endpoint": "127.0.0.1:7460",
+                "port": 7461,
+                "startupTimeoutSeconds": 30,
+                "env": {"SUT_LOG": "info"},
+            },
+        },
+        values={"stack": {"resources": {"requests": {"cpu": "250m"}}}},
     ),
     "ros2-minimal": request(template="ros2"),
     "ros2-overrides": request(

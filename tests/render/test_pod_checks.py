@@ -63,7 +63,7 @@ spec:
 
 
 def test_unknown_template_lists_the_available_ones() -> None:
-    with pytest.raises(RenderError, match="available: default"):
+    with pytest.raises(RenderError, match="available: composed-sut, default, ros2"):
         render.render_environment(
             request(template="nope"), render.TemplateLibrary(REPO / "helm-templates")
         )

@@ -2,12 +2,15 @@
 SUT as a separate process gives the in-process model's verdicts and the same recording; two SUT
 configurations give different verdicts and the result names the SUT; a SUT that does not start,
 crashes, is too slow, answers garbage or gives up ends the run ``Error`` with a reason saying
-so (retried per spec, never ``Failed``)."""
+so (retried per spec, never ``Failed``); in a pod, the endpoint the template names (a composed
+stack's Service) wins over the campaign's."""
 
 from __future__ import annotations
 
 import dataclasses
+import os
 import re
+import subprocess
 import sys
 from pathlib import Path
 
@@ -18,7 +21,7 @@ from simtest_operator.drivermodel import ExternalSut, Launch
 from simtest_operator.runner import scenario_execution
 from simtest_operator.settings import SimulationSettings
 from simtest_operator.sim import BackendChoice, SutConfig
-from simtest_operator.sut.launching import reference_command
+from simtest_operator.sut.launching import ENDPOINT_ENV, free_port, reference_command
 from simtest_operator.verdicts import Verdict
 
 SCENARIO = Path(__file__).parents[1] / "sim" / "data" / "hard_braking_lead.xosc"
@@ -127,3 +130,36 @@ def test_a_paced_run_records_the_achieved_factor_and_flags_falling_behind() -> N
     behind = run(slow, None, real_time_factor=20.0).outcome.metrics  # a 1 s stall in 0.41 s
     assert behind["realTimeBehind"] == 1.0
     assert behind["loopRealTimeFactor"] < 19.0
+
+
+def test_in_a_pod_the_templates_endpoint_wins_over_the_campaigns(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A composed stack (template ``composed-sut``): the SUT already runs behind a Service the
+    pod is told about in SIMTEST_SUT_ENDPOINT; the campaign's endpoint is where ``simtest run``
+    would look, and nothing listens there."""
+    live, dead = free_port(), free_port()
+    stack = subprocess.Popen(
+        reference_command(),
+        env={**os.environ, "SIMTEST_SUT_HOST": "127.0.0.1", "SIMTEST_SUT_PORT": str(live)},
+        stdin=subprocess.DEVNULL,
+    )
+    try:
+        endpoint = ExternalSut(
+            launch=Launch.ENDPOINT, endpoint=f"127.0.0.1:{dead}", step_deadline=0.5,
+            startup_timeout=20.0,
+        )  # fmt: skip
+        sut = dataclasses.replace(AEB, external=endpoint)
+        monkeypatch.setenv(ENDPOINT_ENV, f"127.0.0.1:{live}")
+        inside = run(AEB, None).outcome
+        outside = run(sut, None).outcome  # the readiness wait polls until the stack accepts
+        assert (outside.verdict, outside.reason) == (inside.verdict, inside.reason)
+        assert outside.versions["sut.launch"] == "endpoint"
+        monkeypatch.delenv(ENDPOINT_ENV)
+        quick = dataclasses.replace(endpoint, startup_timeout=0.3)
+        missed = run(dataclasses.replace(AEB, external=quick), None).outcome
+        assert missed.verdict is Verdict.ERROR
+        assert f"did not become ready at 127.0.0.1:{dead}" in missed.reason
+    finally:
+        stack.terminate()
+        stack.wait(timeout=10)

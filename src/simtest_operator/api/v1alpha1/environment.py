@@ -122,9 +122,12 @@ class ExternalSut(ApiModel):
     resources: SutResources = Field(default_factory=SutResources)
     """Requests and limits of the sidecar (they count towards the pod's)."""
     port: Annotated[int, Field(ge=1024, le=65535)] = 7460
-    """Port the sidecar listens on (loopback inside the pod)."""
+    """Port the sidecar listens on, or the SUT of a composed stack and its Service (template
+    ``composed-sut``)."""
     endpoint: Annotated[str, StringConstraints(pattern=ENDPOINT, max_length=260)] | None = None
-    """``host:port`` of a SUT that is already running; nothing is started."""
+    """``host:port`` of a SUT that is already running; nothing is started. In a pod whose
+    template names the SUT's address (``composed-sut``: the Service of the stack it composes),
+    that address wins and this one serves ``simtest run``."""
     step_deadline_milliseconds: Annotated[int, Field(ge=1, le=60000)] = 100
     """Time the SUT has to answer one step; a late answer ends the run Error."""
     startup_timeout_seconds: Annotated[int, Field(ge=1, le=600)] = 60
@@ -152,7 +155,9 @@ class SutConfig(ApiModel):
     version: Annotated[str, StringConstraints(max_length=128)] = "0.0.0"
     """Version of the SUT, stored with every result so two SUT versions can be compared."""
     image: Annotated[str, StringConstraints(max_length=512)] | None = None
-    """Container image of an external SUT component, rendered into the environment's values."""
+    """Container image of the SUT's own workload, rendered into the environment's values: a
+    K8s-ROS release (``default``, ``ros2``) or the stack the simulator connects to
+    (``composed-sut``)."""
     ego: Annotated[str, StringConstraints(min_length=1, max_length=256)] | None = None
     """Scenario entity that is the system under test; unset picks ``Ego``/``ego``/``hero``,
     else the first vehicle."""
