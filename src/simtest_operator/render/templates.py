@@ -7,7 +7,8 @@ comes from a custom resource enters them as data through the ``json``/``toyaml``
 as template source, so a manifest cannot inject markup. Filters: ``json``, ``toyaml``, ``merge``
 (Helm-style deep merge), ``release`` (``env.name | release("sut")``: a Helm release name of at
 most 53 characters) and ``required`` (``x | required("what to set")``: a RenderError saying so
-when ``x`` is missing or empty). A folder may include files of another (``{% include "default/..." %}``).
+when ``x`` is missing or empty). A folder may include files of another
+(``{% include "default/..." %}``).
 """
 
 from __future__ import annotations
