@@ -1,9 +1,11 @@
 """The signal watch on its own: which states are red, how action names find a light (id, ``id=``,
-``pos=`` in CARLA's frame, nothing for junk), a light crossed twice counted twice, and no
-crossing across a gap where the ego left the world."""
+``pos=`` in CARLA's frame, nothing for junk), a light crossed on two approaches counted twice but
+two lines of one light on one approach once, and no crossing across a gap where the ego left the
+world."""
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import pytest
@@ -52,7 +54,7 @@ def test_names_of_the_light(watch_parts: RoadNetwork, name: str, judged: bool) -
 def test_every_red_crossing_counts(watch_parts: RoadNetwork) -> None:
     watch = SignalWatch(traffic_controls(watch_parts))
     states = (("10", "red"),)
-    for step, x in enumerate((97.0, 100.0, 95.0, 100.0)):  # over the line, back (teleported), over
+    for step, x in enumerate((97.0, 100.0, 80.0, 100.0)):  # over the line, back (teleported), over
         watch.observe(step * 1.0, hero(x), states)
     found = watch.red_light()
     assert (found.passed, found.time) == (False, 1.0)
@@ -65,3 +67,16 @@ def test_no_crossing_while_the_ego_is_absent(watch_parts: RoadNetwork) -> None:
     watch.observe(1.0, None, (("10", "red"),))
     watch.observe(2.0, hero(105.0), (("10", "red"),))
     assert watch.red_light().detail == "crossed no traffic light's stop line"
+
+
+def test_lines_of_one_light_on_one_approach_count_once(watch_parts: RoadNetwork) -> None:
+    (light, stop) = traffic_controls(watch_parts)
+    # A second reference 3 m further on (as CARLA puts one in each junction road of a lane).
+    later = tuple(
+        dataclasses.replace(line, start=(103.0, line.start[1]), end=(103.0, line.end[1]))
+        for line in light.lines
+    )
+    watch = SignalWatch((dataclasses.replace(light, lines=light.lines + later), stop))
+    for step, x in enumerate((97.0, 100.0, 103.0, 106.0)):
+        watch.observe(step * 1.0, hero(x), (("10", "green"),))
+    assert watch.red_light().detail == "passed traffic lights 1 time, never on red"

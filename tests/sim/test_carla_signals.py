@@ -5,7 +5,8 @@ stop sign at s=200) the hero drives lane -1 at 10 m/s, its behaviour scripted by
 it runs a light the story set red (by id, and by ScenarioRunner's ``pos=x,y``), passes it on
 green (esmini's lamp list), crosses it with no state set (not evaluated), runs the stop sign,
 stops before it and goes on (passes), and stops too far before it (fails). On the shipped Town01
-it runs a red light at a junction, the light named by its position in CARLA's frame.
+it runs a red light at a junction, the light named by its position in CARLA's frame; on Town07 it
+runs a stop sign whose lines are CARLA references in two junction roads, or stops and goes on.
 """
 
 from __future__ import annotations
@@ -207,3 +208,24 @@ def test_town01_red_light_by_position(tmp_path: Path) -> None:
         "criteria_RunningRedLightTest failed: hero crossed red light 362 at t=3."
     )
     assert "RunningStopTest passed (the map has no stop signs)" in outcome.reason
+
+
+@pytest.mark.parametrize("stops", [False, True])
+def test_town07_stop_sign(tmp_path: Path, stops: bool) -> None:
+    # Stop sign 983 governs lane -1 of junction roads 151 and 153, which road 1 leads into.
+    events = stop_and_go(16.0) if stops else ""
+    text = scenario(events, road="1", start=2.0, end=12.0, logic_file="Town07")
+    path = tmp_path / "town07.xosc"
+    path.write_text(text, encoding="utf-8")
+    outcome = cs.run(path).outcome
+    if stops:
+        assert outcome.verdict is Verdict.PASSED, outcome.reason
+        # Two lines of the one sign, 2.6 m apart on the hero's path: one stop.
+        assert "RunningStopTest passed (stood still before every stop line crossed (1))" in (
+            outcome.reason
+        )
+    else:
+        assert outcome.reason.startswith(
+            "criteria_RunningStopTest failed: hero ran stop sign 983 at t=3.10 s "
+            "(no standstill within 22.8 m before its line)"
+        )

@@ -40,6 +40,9 @@ TAIL = 1.0
 """Metres behind the ego's centre of the point that must not pass a red light's line."""
 POSITION_MATCH = 2.0
 """Metres within which ``pos=x,y`` names a light (ScenarioRunner's tolerance)."""
+SAME_APPROACH = 10.0
+"""Metres within which the lines of one signal count as one crossing: CARLA puts a reference in
+each junction road a lane continues into, up to 4 m apart along the same path."""
 
 Point = tuple[float, float]
 
@@ -76,7 +79,9 @@ class SignalWatch:
         "_judged",
         "_lights",
         "_names",
+        "_odometer",
         "_ran",
+        "_recent",
         "_red",
         "_since_standstill",
         "_stopped",
@@ -94,6 +99,10 @@ class SignalWatch:
         self._centre: Point | None = None
         self._tail: Point | None = None
         self._since_standstill = math.inf
+        self._odometer = 0.0
+        """Metres the ego's centre moved in all."""
+        self._recent: dict[str, float] = {}
+        """The odometer when the ego last crossed a line of each signal."""
         """Metres the ego's centre moved since it last stood still (inf: never)."""
         self._red: list[_Crossing] = []
         self._unknown: list[_Crossing] = []
@@ -112,10 +121,16 @@ class SignalWatch:
         x, y, _ = ego.box_center()
         centre = (x, y)
         tail = (x - TAIL * math.cos(ego.heading), y - TAIL * math.sin(ego.heading))
+        moved = (
+            math.hypot(x - self._centre[0], y - self._centre[1])
+            if self._centre is not None
+            else 0.0
+        )
+        self._odometer += moved
         if abs(ego.speed) < STANDSTILL:
             self._since_standstill = 0.0
-        elif self._centre is not None:
-            self._since_standstill += math.hypot(x - self._centre[0], y - self._centre[1])
+        else:
+            self._since_standstill += moved
         if self._tail is not None:
             self._check_lights(time, self._tail, tail, signals)
         if self._centre is not None:
@@ -127,7 +142,7 @@ class SignalWatch:
     ) -> None:
         states: dict[str, str] | None = None
         for light in self._lights:
-            if not any(line.crossed_by(before, after) for line in light.lines):
+            if not self._crossed(light, before, after):
                 continue
             if states is None:
                 states = self._states(signals)
@@ -141,14 +156,22 @@ class SignalWatch:
 
     def _check_stops(self, time: float, before: Point, after: Point) -> None:
         for stop in self._stops:
-            line = next((line for line in stop.lines if line.crossed_by(before, after)), None)
-            if line is None:
+            if not self._crossed(stop, before, after):
                 continue
-            reach = STOP_LOOKAHEAD + STOP_BOX_SHARE * line.lane_width
+            width = max(line.lane_width for line in stop.lines)
+            reach = STOP_LOOKAHEAD + STOP_BOX_SHARE * width
             if self._since_standstill > reach:
                 self._ran.append(_Crossing(stop.signal_id, time, f"{reach:.1f}"))
             else:
                 self._stopped += 1
+
+    def _crossed(self, control: TrafficControl, before: Point, after: Point) -> bool:
+        """Whether the ego just crossed a line of ``control`` on a new approach to it."""
+        if not any(line.crossed_by(before, after) for line in control.lines):
+            return False
+        last = self._recent.get(control.signal_id)
+        self._recent[control.signal_id] = self._odometer
+        return last is None or self._odometer - last > SAME_APPROACH
 
     def _states(self, signals: Sequence[tuple[str, str]]) -> dict[str, str]:
         states: dict[str, str] = {}
