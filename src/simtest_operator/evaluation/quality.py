@@ -61,6 +61,11 @@ class Quality:
     def complete(self) -> bool:
         return not self.issues
 
+    def incomplete_reason(self) -> str:
+        """Why this evidence cannot back a ``Passed`` verdict (the reason of such a run, in
+        ``simtest run`` and in ``simtest evaluate`` alike)."""
+        return f"evidence incomplete: {'; '.join(self.issues)}"
+
 
 def _temporal_completeness(objects: Mapping[int, ObjectColumns], period: float) -> list[float]:
     """Per track, the RMS of its frame periods' relative deviation from ``period``

@@ -312,7 +312,7 @@ def evaluate(
         verdict = Verdict.FAILED
     elif not quality.complete:
         verdict = Verdict.ERROR
-        reason = f"evidence incomplete: {'; '.join(quality.issues)} ({counts})"
+        reason = f"{quality.incomplete_reason()} ({counts})"
     elif original is Verdict.TIMEOUT:
         verdict, reason = Verdict.TIMEOUT, f"{original_reason} ({counts})"
     else:

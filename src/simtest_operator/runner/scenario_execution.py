@@ -21,7 +21,9 @@ from pathlib import Path
 
 from simtest_operator import evaluation, provenance, recording
 from simtest_operator.errors import ScenarioError, SimtestError
+from simtest_operator.evaluation import quality
 from simtest_operator.openscenario import Deviation, LoadOptions
+from simtest_operator.recording import objects
 from simtest_operator.runner import suts
 from simtest_operator.settings import SimulationSettings
 from simtest_operator.sim import BackendChoice, Simulation, SutConfig, open_simulation
@@ -198,6 +200,12 @@ def run_scenario(request: RunRequest) -> RunReport:
         ignored_elements=simulation.ignored,
     )
     judgement = evaluation.judge(evaluator, facts)
+    verdict, reason = judgement.verdict, judgement.reason
+    if verdict is Verdict.PASSED and recorder is not None:
+        evidence = _evidence(recorder.path, simulated_seconds=simulation.time)
+        log.append(f"evidence: {'complete' if evidence.complete else evidence.incomplete_reason()}")
+        if not evidence.complete:
+            verdict, reason = Verdict.ERROR, evidence.incomplete_reason()
     extra = link.metrics(
         simulated=simulation.time,
         loop_seconds=wall - startup,
@@ -206,8 +214,8 @@ def run_scenario(request: RunRequest) -> RunReport:
     log.extend(note for note in (suts.behind_note(extra),) if note)
     outcome = ScenarioOutcome(
         scenario_id=scenario_id,
-        verdict=judgement.verdict,
-        reason=judgement.reason,
+        verdict=verdict,
+        reason=reason,
         metrics={**judgement.metrics, **extra},
         simulated_seconds=simulation.time,
         wall_seconds=wall,
@@ -262,6 +270,16 @@ def _loop(
         if wall_check and time.perf_counter() - started > (wall_limit or 0.0):
             return True
         snapshot = simulation.step()
+
+
+def _evidence(path: Path, *, simulated_seconds: float) -> quality.Quality:
+    """The recording's evidence quality, as ``simtest evaluate`` judges it: a recording that is
+    incomplete or inconsistent cannot make a run ``Passed``."""
+    try:
+        decoded = objects.read_objects(path)
+    except SimtestError as exc:
+        return quality.Quality(metrics={}, issues=(f"recording unreadable: {_one_line(exc)}",))
+    return quality.assess(decoded, simulated_seconds=simulated_seconds)
 
 
 def _ego_id(simulation: Simulation) -> int | None:

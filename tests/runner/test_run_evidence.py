@@ -1,0 +1,65 @@
+"""``simtest run`` (and every simulator pod) holds its own recording to the evidence rule of
+``simtest evaluate``: a recording that is incomplete or inconsistent cannot make a run Passed.
+
+Covers: a sound recording leaves the pass and the log says so; a recording below omega-prime's
+10 Hz minimum turns the pass into ``Error`` with the same ``evidence incomplete: …`` reason
+``simtest evaluate`` gives (result file too); a failure stays a failure (a violation seen in
+partial evidence is still one); without a recording there is nothing to check.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from simtest_operator.runner import scenario_execution
+from simtest_operator.settings import SimulationSettings
+from simtest_operator.verdicts import Verdict
+
+SMOKE = Path(__file__).resolve().parents[2] / "scenarios" / "smoke"
+PASSING = SMOKE / "following_highway_v25_thw2_drop5_d2.xosc"
+FAILING = SMOKE / "cut-in_highway_v30_gap8_dv12.xosc"
+
+
+def _run(
+    tmp_path: Path, scenario: Path, *, record_hz: float = 10.0, record: bool = True
+) -> tuple[scenario_execution.RunReport, Path]:
+    out = tmp_path / f"{scenario.stem}-{record_hz:g}-{record}"
+    report = scenario_execution.run_scenario(
+        scenario_execution.RunRequest(
+            scenario=scenario,
+            nets_dir=tmp_path / "nets",
+            simulation=SimulationSettings(record_hz=record_hz),
+            output_dir=out,
+            record=record,
+        )
+    )
+    return report, out
+
+
+@pytest.mark.slow
+def test_a_sound_recording_keeps_the_pass(tmp_path: Path) -> None:
+    report, out = _run(tmp_path, PASSING)
+    assert report.outcome.verdict is Verdict.PASSED, report.outcome.reason
+    assert "evidence: complete" in (out / "run.log").read_text(encoding="utf-8")
+
+
+@pytest.mark.slow
+def test_an_incomplete_recording_cannot_pass(tmp_path: Path) -> None:
+    report, out = _run(tmp_path, PASSING, record_hz=5.0)
+    outcome = report.outcome
+    assert outcome.verdict is Verdict.ERROR
+    assert outcome.reason.startswith("evidence incomplete: frame rate 5"), outcome.reason
+    written = json.loads((out / "result.json").read_text(encoding="utf-8"))
+    assert (written["verdict"], written["reason"]) == ("Error", outcome.reason)
+
+
+@pytest.mark.slow
+def test_a_failure_stays_a_failure_and_no_recording_is_not_checked(tmp_path: Path) -> None:
+    failed, _ = _run(tmp_path, FAILING, record_hz=5.0)
+    assert failed.outcome.verdict is Verdict.FAILED
+    unrecorded, out = _run(tmp_path, PASSING, record=False)
+    assert unrecorded.outcome.verdict is Verdict.PASSED
+    assert "evidence:" not in (out / "run.log").read_text(encoding="utf-8")
