@@ -4,8 +4,9 @@ Covers: defaults without variables (cache under ``$HOME/.cache/simtest``, the op
 as the chart documents them); ``SIMTEST_*`` and ``SIMTEST_OPERATOR_*`` variables land in their
 topics; flags of ``simtest operator`` override the variables and a flag not given does not;
 ``SIMTEST_SECRET_*`` values (local runs) and ``SIMTEST_SOURCE_TOKEN_*`` values (a simulator pod)
-are kept but never shown in the repr; ``SIMTEST_RESULTS_DATABASE`` is read, an empty one as unset;
-the root stays hashable; a malformed node selector names the variable.
+are kept but never shown in the repr; the results topic reads ``SIMTEST_RESULTS_*`` and
+``SIMTEST_EVALUATE_SUMMARY_FILE`` (an empty variable as unset) and hides its DSNs; the root stays
+hashable; a malformed node selector names the variable.
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from simtest_operator.settings import OperatorSettings, Settings
+from simtest_operator.settings import OperatorSettings, ResultsSettings, Settings
 
 
 def test_defaults() -> None:
@@ -72,13 +73,24 @@ def test_secrets_are_kept_but_not_shown() -> None:
     assert "hunter2" not in repr(settings) and "s3cret" not in repr(settings)
 
 
-def test_the_results_database_of_report_and_ui() -> None:
-    assert Settings.from_env({"HOME": "/h"}).results_database is None
-    assert (
-        Settings.from_env({"HOME": "/h", "SIMTEST_RESULTS_DATABASE": ""}).results_database is None
+def test_the_results_topic() -> None:
+    assert Settings.from_env({"HOME": "/h"}).results == ResultsSettings()
+    env = {
+        "HOME": "/h",
+        "SIMTEST_RESULTS_DATABASE": "",
+        "SIMTEST_RESULTS_DSN": " postgresql://runner:pw@db/results\n",
+        "SIMTEST_RESULTS_RUN_KEY": "nightly-1",
+        "SIMTEST_EVALUATE_SUMMARY_FILE": "/dev/termination-log",
+    }
+    settings = Settings.from_env(env)
+    assert settings.results == ResultsSettings(
+        dsn="postgresql://runner:pw@db/results",
+        run_key="nightly-1",
+        summary_file=Path("/dev/termination-log"),
     )
-    env = {"HOME": "/h", "SIMTEST_RESULTS_DATABASE": "postgresql://db/results"}
-    assert Settings.from_env(env).results_database == "postgresql://db/results"
+    assert "pw" not in repr(settings)
+    env["SIMTEST_RESULTS_DATABASE"] = "postgresql://ui:pw@db/results"
+    assert Settings.from_env(env).results.database == "postgresql://ui:pw@db/results"
 
 
 def test_the_root_stays_hashable() -> None:

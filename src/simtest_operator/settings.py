@@ -22,8 +22,10 @@ SECRET_PREFIX = f"{ENV_PREFIX}SECRET_"
 SOURCE_TOKEN_PREFIX = f"{ENV_PREFIX}SOURCE_TOKEN_"
 """Prefix of the variables a simulator pod's template maps Secret keys into (numbered, from the
 run spec: :func:`simtest_operator.render.runspecs.secret_variables`)."""
-RESULTS_DATABASE = f"{ENV_PREFIX}RESULTS_DATABASE"
-"""The variable naming the results database ``simtest report`` and ``simtest ui`` read."""
+RESULTS_DSN = f"{ENV_PREFIX}RESULTS_DSN"
+"""The variable a simulator pod's or an evaluation Job's template fills from the DSN Secret."""
+RESULTS_RUN_KEY = f"{ENV_PREFIX}RESULTS_RUN_KEY"
+"""The variable carrying the run key a simulator pod's rows are stored under."""
 
 
 def _default_cache_dir(env: Mapping[str, str]) -> Path:
@@ -193,6 +195,26 @@ class OperatorSettings:
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class ResultsSettings:
+    """Where results are read and written when no option says so. The DSNs may hold passwords,
+    so they stay out of the repr."""
+
+    database: str | None = dataclasses.field(default=None, repr=False)
+    """The results database (a PostgreSQL DSN, an output folder or a SQLite file) ``simtest
+    report`` and ``simtest ui`` read when ``--database`` is not given
+    (``SIMTEST_RESULTS_DATABASE``; unset or empty: none)."""
+    dsn: str = dataclasses.field(default="", repr=False)
+    """The results database a simulator pod writes its rows to and ``simtest evaluate`` reads
+    when no source is given (``SIMTEST_RESULTS_DSN``, from a Secret so the DSN stays off the
+    command line; empty: none)."""
+    run_key: str = ""
+    """The run a simulator pod's rows belong to (``SIMTEST_RESULTS_RUN_KEY``)."""
+    summary_file: Path | None = None
+    """Where ``simtest evaluate`` also writes its outcome as JSON when ``--summary-file`` is not
+    given (``SIMTEST_EVALUATE_SUMMARY_FILE``)."""
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
 class Settings:
     """The root settings object."""
 
@@ -213,10 +235,9 @@ class Settings:
     )
     """``SIMTEST_SOURCE_TOKEN_<n>`` variables by name: the Secret keys a simulator pod's scenario
     databases need, mapped in by its template (the pod has no API access). Left out of the repr."""
-    results_database: str | None = None
-    """The results database (a PostgreSQL DSN, an output folder or a SQLite file) ``simtest
-    report`` and ``simtest ui`` read when ``--database`` is not given
-    (``SIMTEST_RESULTS_DATABASE``; unset or empty: none)."""
+    results: ResultsSettings = dataclasses.field(default_factory=ResultsSettings)
+    """The results database's defaults (``SIMTEST_RESULTS_*``,
+    ``SIMTEST_EVALUATE_SUMMARY_FILE``)."""
 
     @classmethod
     def from_env(
@@ -247,7 +268,14 @@ class Settings:
             operator=operator,
             secrets=_prefixed(env, SECRET_PREFIX),
             source_tokens=_prefixed(env, SOURCE_TOKEN_PREFIX),
-            results_database=env.get(RESULTS_DATABASE) or None,
+            results=ResultsSettings(
+                database=env.get(f"{ENV_PREFIX}RESULTS_DATABASE") or None,
+                dsn=env.get(RESULTS_DSN, "").strip(),
+                run_key=env.get(RESULTS_RUN_KEY, "").strip(),
+                summary_file=Path(summary)
+                if (summary := env.get(f"{ENV_PREFIX}EVALUATE_SUMMARY_FILE"))
+                else None,
+            ),
         )
 
 

@@ -8,11 +8,12 @@ delivery path sees exactly what a pod produces without starting SUMO.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from pathlib import Path
 
 from simtest_operator.render import RunSpec, ScenarioRef
-from simtest_operator.runner import entrypoint, scenario_execution
+from simtest_operator.runner import delivering, entrypoint, scenario_execution
 from simtest_operator.scenarios import sha256_hex
 from simtest_operator.settings import Settings
 from simtest_operator.verdicts import ScenarioOutcome, Verdict
@@ -59,6 +60,14 @@ def job(
     root.mkdir(parents=True, exist_ok=True)
     settings = Settings.from_env({"SIMTEST_CACHE_DIR": str(tmp_path / "cache")})
     return entrypoint.Job(spec=spec, artifacts=root, settings=settings)
+
+
+def deliverer(job: entrypoint.Job, env: dict[str, str]) -> delivering.Deliverer:
+    """The deliverer the pod's entry point builds for ``job`` in a container environment ``env``
+    (its settings read from ``env``, as the entry point reads them)."""
+    settings = Settings.from_env({**env, "SIMTEST_CACHE_DIR": str(job.settings.cache.root)})
+    job = dataclasses.replace(job, settings=settings)
+    return entrypoint.deliverer_for(job, env, run_key=None, deadline=None)
 
 
 def fake_run_one(request: scenario_execution.RunRequest) -> ScenarioOutcome:

@@ -19,6 +19,7 @@ from simtest_operator import results
 from simtest_operator.operator.actions import Kind
 from simtest_operator.render import RunSpec
 from simtest_operator.runner import entrypoint
+from simtest_operator.settings import RESULTS_DSN, RESULTS_RUN_KEY
 from tests.operator.fakecluster import FakeCluster, campaign_body, frozen_list
 from tests.results.s3server import BUCKET, CREDENTIALS, S3Server, s3
 from tests.runner import podsupport
@@ -57,8 +58,8 @@ def test_recordings_are_deleted_after_the_run_and_never_reported(tmp_path: Path)
     recordings = {a.outcome.scenario_id: a.folder / "recording.mcap" for a in attempts}
     digests = {k: hashlib.sha256(p.read_bytes()).hexdigest() for k, p in recordings.items()}
     database = tmp_path / "results.sqlite"
-    env = {entrypoint.DSN_VAR: str(database), entrypoint.RUN_KEY_VAR: KEY}
-    delivered = entrypoint.deliverer_for(job, env, run_key=None, deadline=None).deliver(attempts)
+    env = {RESULTS_DSN: str(database), RESULTS_RUN_KEY: KEY}
+    delivered = podsupport.deliverer(job, env).deliver(attempts)
 
     assert delivered.notes == () and delivered.unstored == frozenset()
     assert not any(p.exists() for p in recordings.values())
@@ -88,7 +89,7 @@ def test_with_s3_the_recording_is_not_uploaded(tmp_path: Path, s3: S3Server) -> 
         "AWS_ACCESS_KEY_ID": CREDENTIALS["access_key_id"],
         "AWS_SECRET_ACCESS_KEY": CREDENTIALS["secret_access_key"],
     }
-    delivered = entrypoint.deliverer_for(job, env, run_key=None, deadline=None).deliver(attempts)
+    delivered = podsupport.deliverer(job, env).deliver(attempts)
     base = "team-a/nightly/nightly-b0-s0-a1"
     assert s3.keys() == sorted(
         f"{base}/{s}.xosc/{f}" for s in "ab" for f in ("run.log", "result.json")
@@ -105,6 +106,6 @@ def test_with_s3_the_recording_is_not_uploaded(tmp_path: Path, s3: S3Server) -> 
 def test_by_default_recordings_are_kept(tmp_path: Path) -> None:
     job = _job(tmp_path, keep=True)
     attempts = entrypoint.run_job(job, run_one=podsupport.fake_run_one, fork=False)
-    delivered = entrypoint.deliverer_for(job, {}, run_key=None, deadline=None).deliver(attempts)
+    delivered = podsupport.deliverer(job, {}).deliver(attempts)
     for outcome in delivered.outcomes:
         assert Path(outcome.artifacts["recording"]).is_file()

@@ -15,6 +15,7 @@ from pathlib import Path
 from simtest_operator import results
 from simtest_operator.results import uploading
 from simtest_operator.runner import delivering, entrypoint
+from simtest_operator.settings import RESULTS_DSN, RESULTS_RUN_KEY
 from simtest_operator.verdicts import Verdict
 from tests.results.s3server import BUCKET, CREDENTIALS, S3Server, free_port, s3
 from tests.runner import podsupport
@@ -39,10 +40,10 @@ def test_artifacts_are_uploaded_and_reported_as_s3_uris(tmp_path: Path, s3: S3Se
     database = tmp_path / "results.sqlite"
     env = {
         **_aws_env(s3),
-        entrypoint.DSN_VAR: str(database),
-        entrypoint.RUN_KEY_VAR: KEY,
+        RESULTS_DSN: str(database),
+        RESULTS_RUN_KEY: KEY,
     }
-    delivered = entrypoint.deliverer_for(job, env, run_key=None, deadline=None).deliver(attempts)
+    delivered = podsupport.deliverer(job, env).deliver(attempts)
     assert delivered.notes == () and delivered.unstored == frozenset()
 
     base = "team-a/nightly/nightly-b0-s0-a1"
@@ -100,7 +101,7 @@ def test_a_failed_upload_keeps_the_local_path_and_the_verdict(tmp_path: Path) ->
 def test_a_pod_without_credentials_does_not_try(tmp_path: Path) -> None:
     job = podsupport.job(tmp_path, {"a": "fail"}, artifacts_uri=PREFIX)
     attempts = entrypoint.run_job(job, run_one=podsupport.fake_run_one, fork=False)
-    deliverer = entrypoint.deliverer_for(job, {}, run_key=None, deadline=None)
+    deliverer = podsupport.deliverer(job, {})
     assert deliverer.uploader is None
     delivered = deliverer.deliver(attempts)
     [outcome] = delivered.outcomes

@@ -30,6 +30,7 @@ import pytest
 from simtest_operator import results
 from simtest_operator.render import RunSpec, ScenarioRef, messages
 from simtest_operator.runner import delivering, entrypoint, scenario_execution
+from simtest_operator.settings import RESULTS_DSN, RESULTS_RUN_KEY
 from simtest_operator.verdicts import ScenarioOutcome, Verdict
 from tests.runner import podsupport
 
@@ -38,9 +39,9 @@ REPO = Path(__file__).resolve().parents[2]
 
 
 def _env(dsn: str, key: str | None = KEY) -> dict[str, str]:
-    env = {entrypoint.DSN_VAR: dsn}
+    env = {RESULTS_DSN: dsn}
     if key is not None:
-        env[entrypoint.RUN_KEY_VAR] = key
+        env[RESULTS_RUN_KEY] = key
     return env
 
 
@@ -67,7 +68,7 @@ def test_the_pod_writes_its_attempts_into_postgresql(tmp_path: Path, postgres_ds
         tmp_path, {"a": "pass", "b": "fail"}, attempt=2, artifacts_uri="pvc://shared/nightly/e0"
     )
     attempts = entrypoint.run_job(job, run_one=podsupport.fake_run_one, fork=False)
-    deliverer = entrypoint.deliverer_for(job, _env(postgres_dsn), run_key=None, deadline=None)
+    deliverer = podsupport.deliverer(job, _env(postgres_dsn))
     delivered = deliverer.deliver(attempts)
     assert delivered.unstored == frozenset()
     assert delivered.notes == ()
@@ -105,17 +106,13 @@ def test_a_redelivered_attempt_replaces_its_row(tmp_path: Path, postgres_dsn: st
     job = podsupport.job(tmp_path / "one", {"a": "pass"}, attempt=1)
     attempts = entrypoint.run_job(job, run_one=podsupport.fake_run_one, fork=False)
     for _ in range(2):  # the runner delivering twice, or a pod re-run with the same attempt
-        entrypoint.deliverer_for(job, _env(postgres_dsn), run_key=None, deadline=None).deliver(
-            attempts
-        )
+        podsupport.deliverer(job, _env(postgres_dsn)).deliver(attempts)
     retry = podsupport.job(tmp_path / "two", {"a": "fail"}, attempt=2)
     retried = entrypoint.run_job(retry, run_one=podsupport.fake_run_one, fork=False)
     assert retried[0].scenario.id == attempts[0].scenario.id
     # Same id, another file content: a retried pod of the same scenario would share the digest;
     # what matters here is the (run, scenario, attempt) key.
-    entrypoint.deliverer_for(retry, _env(postgres_dsn), run_key=None, deadline=None).deliver(
-        retried
-    )
+    podsupport.deliverer(retry, _env(postgres_dsn)).deliver(retried)
     with results.open_store(postgres_dsn) as store:
         every = store.outcomes(results.RunKey(KEY), final_only=False)
         final = store.outcomes(results.RunKey(KEY))
@@ -129,9 +126,7 @@ def test_a_redelivered_attempt_replaces_its_row(tmp_path: Path, postgres_dsn: st
 def test_a_database_that_is_down_keeps_every_verdict(tmp_path: Path) -> None:
     job = podsupport.job(tmp_path, {"a": "pass", "b": "fail"})
     attempts = entrypoint.run_job(job, run_one=podsupport.fake_run_one, fork=False)
-    delivered = entrypoint.deliverer_for(
-        job, _env(_dead_dsn()), run_key=None, deadline=None
-    ).deliver(attempts)
+    delivered = podsupport.deliverer(job, _env(_dead_dsn())).deliver(attempts)
     assert delivered.unstored == {"a.xosc", "b.xosc"}
     assert [o.verdict for o in delivered.outcomes] == [Verdict.PASSED, Verdict.FAILED]
     assert [o.reason for o in delivered.outcomes] == ["", "minTTC 0.9 s < 1.5 s"]
@@ -151,18 +146,18 @@ def test_a_database_that_is_down_keeps_every_verdict(tmp_path: Path) -> None:
 def test_a_dsn_without_a_run_key_stores_nothing(tmp_path: Path) -> None:
     job = podsupport.job(tmp_path, {"a": "pass"})
     attempts = entrypoint.run_job(job, run_one=podsupport.fake_run_one, fork=False)
-    delivered = entrypoint.deliverer_for(
-        job, _env("postgresql://x@127.0.0.1:1/none", key=None), run_key=None, deadline=None
+    delivered = podsupport.deliverer(
+        job, _env("postgresql://x@127.0.0.1:1/none", key=None)
     ).deliver(attempts)
     assert delivered.unstored == {"a.xosc"}
-    assert delivered.notes == (f"results not stored: no run key (set {entrypoint.RUN_KEY_VAR})",)
+    assert delivered.notes == (f"results not stored: no run key (set {RESULTS_RUN_KEY})",)
     assert delivered.outcomes[0].verdict is Verdict.PASSED
 
 
 def test_without_a_database_nothing_is_flagged(tmp_path: Path) -> None:
     job = podsupport.job(tmp_path, {"a": "pass"})
     attempts = entrypoint.run_job(job, run_one=podsupport.fake_run_one, fork=False)
-    delivered = entrypoint.deliverer_for(job, {}, run_key=None, deadline=None).deliver(attempts)
+    delivered = podsupport.deliverer(job, {}).deliver(attempts)
     assert delivered.unstored == frozenset() and delivered.notes == ()
     text = entrypoint.write_message(delivered.outcomes, tmp_path / "log")
     assert messages.RESULTS_STORED not in text
@@ -207,8 +202,8 @@ def test_main_runs_a_real_scenario_and_stores_its_row(
         artifacts_dir=str(tmp_path / "artifacts"),
     )
     monkeypatch.setenv("SIMTEST_CACHE_DIR", str(tmp_path / "cache"))
-    monkeypatch.setenv(entrypoint.DSN_VAR, postgres_dsn)
-    monkeypatch.setenv(entrypoint.RUN_KEY_VAR, KEY)
+    monkeypatch.setenv(RESULTS_DSN, postgres_dsn)
+    monkeypatch.setenv(RESULTS_RUN_KEY, KEY)
     termination = tmp_path / "termination-log"
     entrypoint.main(["--spec", spec.dumps(), "--termination-log", str(termination)])
     [outcome] = messages.decode(termination.read_text())

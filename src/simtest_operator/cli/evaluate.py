@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 import click
 
 from simtest_operator.errors import SimtestError
+from simtest_operator.settings import Settings
 
 if TYPE_CHECKING:
     from simtest_operator.evaluation.reevaluating import CriteriaSet
@@ -52,7 +53,7 @@ def _write_summary(
 
 
 @click.command()
-@click.argument("source", metavar="OUTDIR|DSN", envvar="SIMTEST_RESULTS_DSN")
+@click.argument("source", metavar="OUTDIR|DSN", required=False)
 @click.option(
     "--criteria",
     "criteria_file",
@@ -75,12 +76,11 @@ def _write_summary(
 @click.option(
     "--summary-file",
     type=click.Path(dir_okay=False, path_type=Path),
-    envvar="SIMTEST_EVALUATE_SUMMARY_FILE",
     help="Also write the outcome (evaluation id, summary line) there as JSON, e.g. "
-    "/dev/termination-log in a Job.",
+    "/dev/termination-log in a Job  [default: $SIMTEST_EVALUATE_SUMMARY_FILE].",
 )
 def evaluate(
-    source: str,
+    source: str | None,
     criteria_file: Path | None,
     run_key: str | None,
     artifacts: Path | None,
@@ -99,6 +99,11 @@ def evaluate(
     from simtest_operator import runner
     from simtest_operator.results import dsn, records
 
+    defaults = Settings.from_env().results
+    source = source or defaults.dsn
+    if not source:
+        raise click.MissingParameter(param_type="argument", param_hint="'OUTDIR|DSN'")
+    summary_file = summary_file or defaults.summary_file
     local = Path(source)
     is_folder = local.is_dir()
     try:

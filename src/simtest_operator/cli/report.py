@@ -59,7 +59,7 @@ def report(
     detail with trajectories, and a comparison with another run)."""
     from simtest_operator.results import dsn, publishing, records
 
-    target: str | Path = database or Settings.from_env().results_database or outdir
+    target: str | Path = database or Settings.from_env().results.database or outdir
     other = None
     if compare is not None or compare_run is not None:
         compare_target: str | Path = compare if compare is not None else target

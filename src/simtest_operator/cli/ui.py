@@ -23,7 +23,7 @@ from simtest_operator.settings import Settings
               "given as --database, else the current folder]")  # fmt: skip
 def ui(database: str | None, host: str, port: int, artifacts: Path | None) -> None:
     """Serve the results UI from a results database (SQLite or PostgreSQL)."""
-    database = database or Settings.from_env().results_database
+    database = database or Settings.from_env().results.database
     if database is None:
         raise click.MissingParameter(param_type="option", param_hint="'--database'")
     from simtest_operator import runner

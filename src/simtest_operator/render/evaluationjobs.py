@@ -19,6 +19,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from simtest_operator.render.inputs import ArtifactTarget, OwnerRef, SecretKey
+from simtest_operator.settings import RESULTS_DSN
 
 CONTAINER = "evaluate"
 """Name of the Job's one container."""
@@ -26,8 +27,6 @@ CRITERIA_MOUNT = "/etc/simtest/criteria"
 """Where the criteria ConfigMap key is mounted (read-only)."""
 PVC_ROOT = "/pvc"
 """Where an artifacts claim is mounted read-only, as ``<root>/<claim>`` (``--pvc-root``)."""
-DSN_VARIABLE = "SIMTEST_RESULTS_DSN"
-"""The variable ``simtest evaluate`` reads its source from when no argument names one."""
 TERMINATION_LOG = "/dev/termination-log"
 """Where ``--summary-file`` writes: the container's termination message."""
 VERDICT_EXIT_CODES = (1, 2)
@@ -189,7 +188,7 @@ def _pod_spec(request: EvaluationJobRequest) -> dict[str, Any]:
 
 def _env(request: EvaluationJobRequest) -> list[dict[str, Any]]:
     env: list[dict[str, Any]] = [
-        _from_secret(DSN_VARIABLE, request.results_dsn.name, request.results_dsn.key),
+        _from_secret(RESULTS_DSN, request.results_dsn.name, request.results_dsn.key),
         {"name": "HOME", "value": "/tmp"},
         {"name": "SIMTEST_CACHE_DIR", "value": "/tmp/simtest-cache"},
     ]

@@ -68,7 +68,7 @@ from simtest_operator.scenarios import (
     SecretRef,
     uris,
 )
-from simtest_operator.settings import Settings
+from simtest_operator.settings import RESULTS_RUN_KEY, Settings
 from simtest_operator.sim import sumo
 from simtest_operator.verdicts import ScenarioOutcome, Verdict
 
@@ -79,8 +79,6 @@ if TYPE_CHECKING:
     from simtest_operator.runner import delivering
 
 TERMINATION_LOG = "/dev/termination-log"
-DSN_VAR = "SIMTEST_RESULTS_DSN"
-RUN_KEY_VAR = "SIMTEST_RESULTS_RUN_KEY"
 CONFIG_MAP_ROOT = Path(runspecs.CONFIG_MAP_DIR)
 """Where the operator mounts the ConfigMaps the pod's scenarios name."""
 DEADLINE_MARGIN_SECONDS = 10.0
@@ -404,7 +402,8 @@ def write_message(
 def deliverer_for(
     job: Job, env: Mapping[str, str], *, run_key: str | None, deadline: float | None
 ) -> delivering.Deliverer:
-    """The pod's deliverer from the run spec and the container environment."""
+    """The pod's deliverer from the run spec, the settings (the results database and run key)
+    and the container environment (the S3 credentials)."""
     from simtest_operator import results
     from simtest_operator.results import uploading
     from simtest_operator.runner import delivering
@@ -427,12 +426,12 @@ def deliverer_for(
             )
         except ResultsError as exc:
             deliverer.upload_problem = str(exc)
-    dsn = env.get(DSN_VAR, "").strip()
-    key = (run_key or env.get(RUN_KEY_VAR, "")).strip()
+    dsn = job.settings.results.dsn
+    key = (run_key or job.settings.results.run_key).strip()
     if dsn and key:
         deliverer.results_target = delivering.ResultsTarget(dsn=dsn, run_key=results.RunKey(key))
     elif dsn:
-        deliverer.results_problem = f"no run key (set {RUN_KEY_VAR})"
+        deliverer.results_problem = f"no run key (set {RESULTS_RUN_KEY})"
     return deliverer
 
 
@@ -477,7 +476,7 @@ def _arguments(argv: Sequence[str] | None, env: Mapping[str, str]) -> argparse.N
     parser.add_argument(
         "--run-key",
         default=None,
-        help=f"results run key (default: ${RUN_KEY_VAR})",
+        help=f"results run key (default: ${RESULTS_RUN_KEY})",
     )
     parser.add_argument(
         "--artifacts",
