@@ -91,7 +91,8 @@ def _json(call: Call, url: str) -> Any:
 PAGES = ["/", "/runs", "/runs?page=1", "/run", f"/run?run={SAMPLE_RUN}", "/coverage",
          "/coverage?by=requirement", "/coverage?by=base",
          f"/scenario?run={SAMPLE_RUN}&id=cut-in%2Fclose.xosc",
-         "/compare", "/sets", "/sets?axis=simulator&by=tag", "/history", "/history?flaky=1",
+         "/compare", f"/evaluations?run={SAMPLE_RUN}", "/evaluations",
+         "/sets", "/sets?axis=simulator&by=tag", "/history", "/history?flaky=1",
          "/history/scenario?id=seedy.xosc"]  # fmt: skip
 
 
@@ -153,6 +154,32 @@ def test_comparisons(call: Call) -> None:
     assert cut_in["idm-driver 2.0"]["pass_rate"] == 0.5
 
 
+def test_evaluations_of_one_run_side_by_side(call: Call) -> None:
+    found = _json(call, f"/api/evaluations?run={SAMPLE_RUN}")
+    (listed,) = found["evaluations"]
+    assert (listed["criteria_name"], listed["counts"]) == ("strict", {"Passed": 2})
+    assert listed["finished_at"] is not None
+    # Default: the original verdicts against the newest finished evaluation.
+    assert (found["base"], found["other"]) == ("original", listed["evaluation_id"])
+    changes = {c["id"]: c for c in found["changes"]}
+    close = changes["cut-in/close.xosc"]
+    assert (close["change"], close["before"], close["after"], close["evidence"]) == (
+        "fixed", "Failed", "Passed", "complete")  # fmt: skip
+    assert changes["cut-in/far.xosc"]["change"] == "unchanged"
+    assert found["counts"]["fixed"] == 1 and found["counts"]["removed"] == 5, "not re-scored"
+    back = _json(call, f"/api/evaluations?run={SAMPLE_RUN}&base={listed['evaluation_id']}"
+                       "&other=original")  # fmt: skip
+    close = next(c for c in back["changes"] if c["id"] == "cut-in/close.xosc")
+    assert (close["change"], close["reason"]) == ("regressed", "collision with 'cutter' at t=7.2 s")
+    never = _json(call, "/api/evaluations")
+    assert never["evaluations"] == [] and "no evaluation yet" in never["note"]
+    assert set(never["counts"]) >= {"fixed", "regressed"} and never["counts"]["regressed"] == 0
+    status, _, body = call(f"/evaluations?run={SAMPLE_RUN}")
+    assert status == "200 OK" and b'<tr data-change="fixed">' in body
+    status, _, body = call(f"/run?run={SAMPLE_RUN}")
+    assert b'id="run-evaluations"' in body
+
+
 def test_history_and_flakiness(call: Call) -> None:
     found = {s["scenario_id"]: s for s in _json(call, "/api/history")["summaries"]}
     assert found["nondet.xosc"]["flakiness"] == "nondeterministic"
@@ -190,6 +217,7 @@ def test_developer_view_data(call: Call) -> None:
         ("/api/runs?page=two", "400 Bad Request", "parameter 'page' must be a whole number"),
         ("/api/sets?axis=moon", "400 Bad Request", "axis must be one of sut"),
         ("/nothing/here", "404 Not Found", "no page /nothing/here"),
+        (f"/evaluations?run={SAMPLE_RUN}&other=x", "404 Not Found", "no evaluation 'x' of run"),
     ],
 )
 def test_bad_requests_are_one_line(call: Call, url: str, status: str, message: str) -> None:

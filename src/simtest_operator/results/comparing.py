@@ -94,7 +94,7 @@ def compare(
         changes.append(
             ScenarioChange(
                 scenario_id=scenario_id,
-                change=_classify(a, b),
+                change=classify(a.verdict if a else None, b.verdict if b else None),
                 before=a.verdict if a else None,
                 after=b.verdict if b else None,
                 reason_before=a.outcome.reason if a else "",
@@ -105,13 +105,14 @@ def compare(
     return Comparison(base=base_label, other=other_label, changes=tuple(changes))
 
 
-def _classify(a: records.StoredOutcome | None, b: records.StoredOutcome | None) -> Change:
-    if a is None:
+def classify(before: Verdict | None, after: Verdict | None) -> Change:
+    """How one scenario's verdict moved (None: the scenario is not on that side)."""
+    if before is None:
         return Change.NEW
-    if b is None:
+    if after is None:
         return Change.REMOVED
-    failed_before = records.is_failing(a.verdict)
-    failed_after = records.is_failing(b.verdict)
+    failed_before = records.is_failing(before)
+    failed_after = records.is_failing(after)
     if failed_before and failed_after:
         return Change.STILL_FAILING
     if failed_before:

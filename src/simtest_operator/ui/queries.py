@@ -151,10 +151,69 @@ def _counts(db: ReadOnlyDatabase, keys: Sequence[str]) -> dict[str, dict[str, in
     return found
 
 
+def _has_evaluations(db: ReadOnlyDatabase) -> bool:
+    """Whether the schema has the evaluation tables (version 4 and later)."""
+    return int(db.query("SELECT MAX(version) FROM schema_migrations")[0][0] or 0) >= 4
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class EvaluationRow:
+    """One evaluation of a run (``simtest evaluate`` or the cluster's evaluation step)."""
+
+    evaluation_id: str
+    criteria_name: str
+    created_at: datetime.datetime | None
+    finished_at: datetime.datetime | None
+    """None: interrupted (``simtest compare`` skips it)."""
+    counts: Mapping[str, int]
+    """Verdicts of the evaluated scenarios."""
+
+
+def evaluations(db: ReadOnlyDatabase, run_key: str) -> tuple[EvaluationRow, ...]:
+    """The run's evaluations, newest first, with their verdict counts."""
+    if not _has_evaluations(db):
+        return ()
+    counts: dict[str, dict[str, int]] = {}
+    for evaluation_id, verdict, count in db.query(
+        # Through the run's evaluations (indexed by run) to their rows (keyed by evaluation).
+        "SELECT r.evaluation_id, r.verdict, COUNT(*) FROM evaluations e "
+        "JOIN evaluated_runs r ON r.evaluation_id = e.evaluation_id WHERE e.run_key = ? "
+        "GROUP BY r.evaluation_id, r.verdict",
+        (run_key,),
+    ):
+        counts.setdefault(str(evaluation_id), {})[str(verdict)] = int(count)
+    return tuple(
+        EvaluationRow(
+            evaluation_id=str(evaluation_id),
+            criteria_name=str(name),
+            created_at=db.time(created),
+            finished_at=db.time(finished),
+            counts=counts.get(str(evaluation_id), {}),
+        )
+        for evaluation_id, name, created, finished in db.query(
+            "SELECT evaluation_id, criteria_name, created_at, finished_at FROM evaluations "
+            "WHERE run_key = ? ORDER BY created_at DESC, evaluation_id DESC",
+            (run_key,),
+        )
+    )
+
+
+def evaluated(db: ReadOnlyDatabase, evaluation_id: str) -> dict[str, tuple[str, str, str]]:
+    """Scenario id -> (verdict, reason, evidence) of one evaluation (its last attempt each)."""
+    found: dict[str, tuple[str, str, str]] = {}
+    for scenario_id, verdict, reason, evidence_ in db.query(
+        "SELECT scenario_id, verdict, reason, evidence FROM evaluated_runs "
+        "WHERE evaluation_id = ? ORDER BY scenario_id, attempt",
+        (evaluation_id,),
+    ):
+        found[str(scenario_id)] = (str(verdict), str(reason), str(evidence_))
+    return found
+
+
 def base_scenarios(db: ReadOnlyDatabase, run_key: str) -> tuple[str | None, tuple[Group, ...]]:
     """(evaluation id, verdict counts per base-scenario kind) of the run's newest evaluation;
     ``(None, ())`` when the run was never evaluated or the schema predates evaluations."""
-    if int(db.query("SELECT MAX(version) FROM schema_migrations")[0][0] or 0) < 4:
+    if not _has_evaluations(db):
         return None, ()
     newest = db.query(
         "SELECT evaluation_id FROM evaluations WHERE run_key = ? "

@@ -19,6 +19,7 @@ from simtest_operator.errors import SimtestError
 from simtest_operator.results import comparing, details, evidence, history, plots
 from simtest_operator.results.querying import ReadOnlyDatabase
 from simtest_operator.ui import queries
+from simtest_operator.verdicts import Verdict
 
 PAGE_SIZE = 50
 
@@ -230,6 +231,64 @@ def compare(db: ReadOnlyDatabase, params: Mapping[str, str], context: Context) -
     }
 
 
+ORIGINAL = "original"
+"""The side of an evaluation comparison that is the run's own verdicts (judged while it ran)."""
+
+
+def evaluations(
+    db: ReadOnlyDatabase, params: Mapping[str, str], context: Context
+) -> dict[str, Any]:
+    """One run's evaluations, and two of its judgements side by side: by default its original
+    verdicts against its newest finished evaluation (``base``/``other``: ``original`` or an
+    evaluation id)."""
+    row = _run_or_newest(db, params)
+    listed = queries.evaluations(db, row.run_key)
+    known = {e.evaluation_id for e in listed}
+    finished = [e for e in listed if e.finished_at is not None]
+    base = params.get("base") or ORIGINAL
+    other = params.get("other") or (finished[0].evaluation_id if finished else ORIGINAL)
+    for side in (base, other):
+        if side != ORIGINAL and side not in known:
+            raise NotFoundError(f"no evaluation {side!r} of run {row.run_key}")
+    before, after = _judgement(db, row.run_key, base), _judgement(db, row.run_key, other)
+    changes = []
+    for scenario_id in sorted(before.keys() | after.keys()):
+        a, b = before.get(scenario_id), after.get(scenario_id)
+        change = comparing.classify(Verdict(a[0]) if a else None, Verdict(b[0]) if b else None)
+        changes.append(
+            {
+                "id": scenario_id,
+                "change": change.value,
+                "before": a[0] if a else "",
+                "after": b[0] if b else "",
+                "evidence": b[2] if b else "",
+                "reason": (b or a or ("", "", ""))[1],
+            }
+        )
+    counts = {c.value: 0 for c in comparing.Change}
+    for entry in changes:
+        counts[entry["change"]] += 1
+    return {
+        "run": row,
+        "evaluations": listed,
+        "base": base,
+        "other": other,
+        "changes": changes,
+        "counts": counts,
+        "note": ""
+        if listed
+        else "this run has no evaluation yet: `simtest evaluate` re-scores its recordings",
+    }
+
+
+def _judgement(db: ReadOnlyDatabase, run_key: str, side: str) -> dict[str, tuple[str, str, str]]:
+    """Scenario id -> (verdict, reason, evidence) of the original verdicts or an evaluation."""
+    if side != ORIGINAL:
+        return queries.evaluated(db, side)
+    final = comparing.final_outcomes(db.outcomes(run_key))
+    return {k: (o.verdict.value, o.outcome.reason, "") for k, o in final.items()}
+
+
 def sets(db: ReadOnlyDatabase, params: Mapping[str, str], context: Context) -> dict[str, Any]:
     """Pass rates per coverage label for each SUT version, simulator version or namespace."""
     axis = params.get("axis", "sut")
@@ -290,6 +349,7 @@ PAGES: dict[str, tuple[View, str]] = {
     "coverage": (coverage, "coverage.html.j2"),
     "scenario": (scenario, "scenario.html.j2"),
     "compare": (compare, "compare.html.j2"),
+    "evaluations": (evaluations, "evaluations.html.j2"),
     "sets": (sets, "sets.html.j2"),
     "history": (flakiness, "history.html.j2"),
     "history/scenario": (scenario_history, "scenario_history.html.j2"),
