@@ -170,6 +170,7 @@ def pages(db: ReadOnlyDatabase) -> dict[str, str]:
         "coverage by requirement": f"/coverage?run={newest}&by=requirement",
         "developer view": f"/scenario?run={newest}&id={scenario}",
         "compare two runs": f"/compare?base={older}&other={newest}",
+        "evaluations of a run": f"/evaluations?run={newest}",
         "SUT versions x type": "/sets?axis=sut&by=category",
         "SUT versions x requirement": "/sets?axis=sut&by=requirement",
         "history and flakiness (all)": "/history",
