@@ -7,6 +7,8 @@ green (esmini's lamp list), crosses it with no state set (not evaluated), runs t
 stops before it and goes on (passes), and stops too far before it (fails). On the shipped Town01
 it runs a red light at a junction, the light named by its position in CARLA's frame; on Town07 it
 runs a stop sign whose lines are CARLA references in two junction roads, or stops and goes on.
+A RoadNetwork TrafficSignalController sets the light red when the hero crosses (fails), unless a
+TrafficSignalControllerAction switched it back to green (passes).
 """
 
 from __future__ import annotations
@@ -88,6 +90,7 @@ def scenario(
     end: float = 20.0,
     stop: str = CRITERIA,
     logic_file: str = "crossing.xodr",
+    traffic_signals: str = "",
 ) -> str:
     return f"""<?xml version="1.0" encoding="UTF-8"?>
 <OpenSCENARIO>
@@ -96,7 +99,7 @@ def scenario(
     <ParameterDeclaration name="done" parameterType="boolean" value="false"/>
   </ParameterDeclarations>
   <CatalogLocations/>
-  <RoadNetwork><LogicFile filepath="{logic_file}"/><SceneGraphFile filepath=""/></RoadNetwork>
+  <RoadNetwork><LogicFile filepath="{logic_file}"/><SceneGraphFile filepath=""/>{traffic_signals}</RoadNetwork>
   <Entities>{cs.vehicle("hero", "ego_vehicle")}
   </Entities>
   <Storyboard>
@@ -210,22 +213,66 @@ def test_town01_red_light_by_position(tmp_path: Path) -> None:
     assert "RunningStopTest passed (the map has no stop signs)" in outcome.reason
 
 
-@pytest.mark.parametrize("stops", [False, True])
-def test_town07_stop_sign(tmp_path: Path, stops: bool) -> None:
+@pytest.mark.parametrize(
+    ("brake_after", "verdict", "expected"),
+    [
+        (
+            None,
+            Verdict.FAILED,
+            "criteria_RunningStopTest failed: hero ran stop sign 983 at t=3.10 s "
+            "(no standstill within 22.8 m before its line)",
+        ),
+        # Two lines of the one sign, 2.6 m apart on the hero's path: one stop.
+        (
+            16.0,
+            Verdict.PASSED,
+            "RunningStopTest passed (stood still before every stop line crossed (1))",
+        ),
+    ],
+)
+def test_town07_stop_sign(
+    tmp_path: Path, brake_after: float | None, verdict: Verdict, expected: str
+) -> None:
     # Stop sign 983 governs lane -1 of junction roads 151 and 153, which road 1 leads into.
-    events = stop_and_go(16.0) if stops else ""
+    events = stop_and_go(brake_after) if brake_after is not None else ""
     text = scenario(events, road="1", start=2.0, end=12.0, logic_file="Town07")
     path = tmp_path / "town07.xosc"
     path.write_text(text, encoding="utf-8")
     outcome = cs.run(path).outcome
-    if stops:
-        assert outcome.verdict is Verdict.PASSED, outcome.reason
-        # Two lines of the one sign, 2.6 m apart on the hero's path: one stop.
-        assert "RunningStopTest passed (stood still before every stop line crossed (1))" in (
-            outcome.reason
-        )
-    else:
-        assert outcome.reason.startswith(
-            "criteria_RunningStopTest failed: hero ran stop sign 983 at t=3.10 s "
-            "(no standstill within 22.8 m before its line)"
-        )
+    assert outcome.verdict is verdict, outcome.reason
+    assert expected in outcome.reason
+
+
+CONTROLLER = """
+  <TrafficSignals>
+    <TrafficSignalController name="crossing">
+      <Phase name="go" duration="5"><TrafficSignalState trafficSignalId="10" state="off;off;on"/></Phase>
+      <Phase name="stop" duration="10"><TrafficSignalState trafficSignalId="10" state="on;off;off"/></Phase>
+    </TrafficSignalController>
+  </TrafficSignals>"""  # noqa: E501
+
+SWITCH_TO_GO = f"""
+            <Event name="Extend" priority="parallel">
+              <Action name="BackToGo"><GlobalAction><InfrastructureAction><TrafficSignalAction>
+                <TrafficSignalControllerAction trafficSignalControllerRef="crossing" phase="go"/>
+              </TrafficSignalAction></InfrastructureAction></GlobalAction></Action>
+              {at_time("Red", 5).strip()}
+            </Event>"""
+
+
+@pytest.mark.parametrize(
+    ("events", "verdict", "expected"),
+    [
+        ("", Verdict.FAILED, "RunningRedLightTest failed (hero crossed red light 10 at t=7.95 s)"),
+        (SWITCH_TO_GO, Verdict.PASSED, "RunningRedLightTest passed (passed traffic lights 1 time"),
+    ],
+)
+def test_light_controlled_by_a_signal_controller(
+    tmp_path: Path, events: str, verdict: Verdict, expected: str
+) -> None:
+    # Green for 5 s, then red; the hero's tail reaches the line at t=7.95 s.
+    stop = cs.criteria("RunningRedLightTest", distance=None)
+    text = scenario(events, stop=stop, traffic_signals=CONTROLLER)
+    outcome = cs.run(write(tmp_path, text)).outcome
+    assert outcome.verdict is verdict, outcome.reason
+    assert expected in outcome.reason

@@ -22,7 +22,7 @@ from simtest_operator.openscenario.headers import FileKind
 from simtest_operator.openscenario.model import common as m
 from simtest_operator.openscenario.model import entities as e
 from simtest_operator.openscenario.model import scenarios as s
-from simtest_operator.openscenario.readers import entities, storyboards
+from simtest_operator.openscenario.readers import entities, storyboards, traffic_signals
 from simtest_operator.xmlsafe import Element
 
 
@@ -195,23 +195,22 @@ def _road_network(
     logic = reading.child(el, "LogicFile")
     if reading.child(el, "SceneGraphFile") is not None:
         ctx.ignore("SceneGraphFile")
-    if reading.child(el, "TrafficSignals") is not None:
-        ctx.ignore("TrafficSignals")
+    controllers = traffic_signals.controllers(reading.child(el, "TrafficSignals"), ctx)
     if logic is None:
-        return s.RoadNetwork(line=el.sourceline)
+        return s.RoadNetwork(controllers=controllers, line=el.sourceline)
     raw = ctx.string(logic, "filepath")
     if not raw.strip():
-        return s.RoadNetwork(line=el.sourceline)
+        return s.RoadNetwork(controllers=controllers, line=el.sourceline)
     candidates = _road_candidates(raw, base)
     outside = [c for c in candidates if not confinement.allows(c)]
     for target in candidates:
         if target not in outside and target.is_file():
-            return s.RoadNetwork(logic_file=target, line=el.sourceline)
+            return s.RoadNetwork(logic_file=target, controllers=controllers, line=el.sourceline)
     # CARLA names its towns ("Town01"); other names come from the user's map libraries.
     name = raw.replace("\\", "/").rsplit("/", 1)[-1]
     found = libraries.find(name)
     if found is not None:
-        return s.RoadNetwork(logic_file=found, line=el.sourceline)
+        return s.RoadNetwork(logic_file=found, controllers=controllers, line=el.sourceline)
     if candidates[0] in outside:
         raise ctx.error(
             logic,

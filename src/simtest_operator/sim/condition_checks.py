@@ -114,6 +114,8 @@ class Conditions:
             return _compare_typed(current, condition.rule, condition.value)
         if isinstance(condition, model.TrafficSignalCondition):
             return world.signals.get(condition.name) == condition.state
+        if isinstance(condition, model.TrafficSignalControllerCondition):
+            return world.signal_controllers.phase(condition.controller_ref) == condition.phase
         raise placements.unsupported(condition)
 
     # --- entity conditions --------------------------------------------------------------------

@@ -130,6 +130,9 @@ class Dispatcher:
         if isinstance(body, model.TrafficSignalStateAction):
             world.signals[body.name] = body.state
             return Done()
+        if isinstance(body, model.TrafficSignalControllerAction):
+            world.signal_controllers.switch(body.controller_ref, body.phase, world.time)
+            return Done()
         if isinstance(
             body,
             model.TrafficSwarmAction

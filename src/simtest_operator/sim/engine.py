@@ -94,6 +94,7 @@ class Simulation:
             seed=backend_config.seed,
             parameters={p.name: p.value for p in scenario.parameters},
             variables={v.name: v.value for v in scenario.variables},
+            controllers=scenario.road_network.controllers,
         )
         self._traffic = Traffic(seed=backend_config.seed)
         header = scenario.header
@@ -175,6 +176,7 @@ class Simulation:
     def start(self) -> WorldSnapshot:
         """Run the Init actions, start the backend and return the snapshot at t = 0."""
         world = self.world
+        world.signal_controllers.update(world.time)
         init = self._scenario.storyboard.init
         for private in init.private:
             actor = world.actor(private.entity_ref)
@@ -216,6 +218,7 @@ class Simulation:
             run.after_motion(world)
         self._steps += 1
         world.time = round(self._steps * dt, 9)
+        world.signal_controllers.update(world.time)
         world.refresh()
         self._storyboard.settle(world.time)
         world.refresh()

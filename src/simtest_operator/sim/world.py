@@ -9,13 +9,14 @@ from __future__ import annotations
 
 import math
 import random
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 
 from simtest_operator.errors import ScenarioError
 from simtest_operator.opendrive import RoadCoord, RoadNetwork
 from simtest_operator.openscenario import model
 from simtest_operator.sim.actors import Actor, Mode
 from simtest_operator.sim.lanecache import LaneCache
+from simtest_operator.sim.signal_controllers import SignalControllers
 from simtest_operator.snapshots import EntityState
 
 
@@ -32,6 +33,7 @@ class World:
         "parameters",
         "rng",
         "roads",
+        "signal_controllers",
         "signals",
         "time",
         "traffic",
@@ -47,6 +49,7 @@ class World:
         seed: int,
         parameters: dict[str, model.ParameterValue],
         variables: dict[str, model.ParameterValue],
+        controllers: Sequence[model.TrafficSignalController] = (),
     ) -> None:
         self.roads = roads
         self._lanes = LaneCache(roads) if roads is not None else None
@@ -58,7 +61,9 @@ class World:
         self.variables = variables
         self.ignored: list[str] = []
         self.signals: dict[str, str] = {}
-        """Traffic signal states by signal name (as TrafficSignalStateActions set them)."""
+        """Traffic signal states by signal name (as TrafficSignalStateActions and the
+        controllers' phases set them)."""
+        self.signal_controllers = SignalControllers(controllers, self.signals)
         self.environments: list[tuple[float, model.Environment]] = []
         """Environments set by EnvironmentActions, with the time they were set (not rendered:
         recorded for the result)."""

@@ -68,6 +68,7 @@ from simtest_operator.openscenario.model.controls import (
     ModifyRule,
     ModifyValueAction,
     SetValueAction,
+    TrafficSignalControllerAction,
     TrafficSignalStateAction,
 )
 from simtest_operator.openscenario.model.entities import (
@@ -114,12 +115,14 @@ from simtest_operator.openscenario.model.scenarios import (
     Init,
     Maneuver,
     ManeuverGroup,
+    Phase,
     Priority,
     PrivateInit,
     RoadNetwork,
     Scenario,
     Story,
     Storyboard,
+    TrafficSignalController,
 )
 from simtest_operator.openscenario.model.traffic import (
     CategoryWeight,
@@ -160,6 +163,7 @@ from simtest_operator.openscenario.model.trigger_conditions import (
     TimeHeadwayCondition,
     TimeToCollisionCondition,
     TrafficSignalCondition,
+    TrafficSignalControllerCondition,
     TraveledDistanceCondition,
     Trigger,
     TriggeringEntitiesRule,
@@ -241,6 +245,7 @@ __all__ = [
     "ParameterType",
     "ParameterValue",
     "Performance",
+    "Phase",
     "Polyline",
     "Position",
     "Priority",
@@ -294,6 +299,9 @@ __all__ = [
     "TrafficAction",
     "TrafficDefinition",
     "TrafficSignalCondition",
+    "TrafficSignalController",
+    "TrafficSignalControllerAction",
+    "TrafficSignalControllerCondition",
     "TrafficSignalStateAction",
     "TrafficSinkAction",
     "TrafficSourceAction",

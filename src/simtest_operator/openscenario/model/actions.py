@@ -25,6 +25,7 @@ from simtest_operator.openscenario.model.controls import (
     IgnoredAction,
     ModifyValueAction,
     SetValueAction,
+    TrafficSignalControllerAction,
     TrafficSignalStateAction,
 )
 from simtest_operator.openscenario.model.positions import Position, Route, Trajectory
@@ -351,6 +352,7 @@ GlobalAction = (
     SetValueAction
     | ModifyValueAction
     | TrafficSignalStateAction
+    | TrafficSignalControllerAction
     | TrafficAction
     | AddEntityAction
     | DeleteEntityAction

@@ -83,6 +83,16 @@ class TrafficSignalStateAction:
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class TrafficSignalControllerAction:
+    """Switch the RoadNetwork's controller ``controller_ref`` to its phase ``phase`` now (it
+    cycles on from there)."""
+
+    controller_ref: str
+    phase: str
+    line: int | None = None
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
 class IgnoredAction:
     """An action accepted but not simulated (environment, lights, visibility, appearance)."""
 

@@ -40,10 +40,34 @@ class FileHeader:
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Phase:
+    """One phase of a traffic signal controller: ``duration`` seconds of the signal states
+    ``states`` (``(trafficSignalId, state)``)."""
+
+    name: str
+    duration: float
+    states: tuple[tuple[str, str], ...] = ()
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class TrafficSignalController:
+    """A RoadNetwork ``TrafficSignalController``: its phases in cycle order; with a
+    ``reference``, its first phase starts ``delay`` seconds after the referenced one's."""
+
+    name: str
+    phases: tuple[Phase, ...]
+    delay: float = 0.0
+    reference: str | None = None
+    line: int | None = None
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
 class RoadNetwork:
     """The road network; ``logic_file`` is the absolute .xodr path, None for open space."""
 
     logic_file: Path | None = None
+    controllers: tuple[TrafficSignalController, ...] = ()
+    """The ``TrafficSignals`` controllers, cycling from the start of the run."""
     line: int | None = None
 
 

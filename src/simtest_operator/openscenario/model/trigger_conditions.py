@@ -291,16 +291,25 @@ class TrafficSignalCondition:
     line: int | None = None
 
 
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class TrafficSignalControllerCondition:
+    """The RoadNetwork's controller ``controller_ref`` is in its phase ``phase``."""
+
+    controller_ref: str
+    phase: str
+    line: int | None = None
+
+
 ValueCondition = (
     SimulationTimeCondition
     | StoryboardElementStateCondition
     | ParameterCondition
     | VariableCondition
     | TrafficSignalCondition
+    | TrafficSignalControllerCondition
     | Unsupported
 )
-"""TimeOfDay, UserDefinedValue and TrafficSignalController conditions arrive as
-:class:`Unsupported`."""
+"""TimeOfDay and UserDefinedValue conditions arrive as :class:`Unsupported`."""
 
 
 # --- triggers ---------------------------------------------------------------------------------

@@ -108,7 +108,13 @@ def _infrastructure(el: Element, ctx: reading.Context) -> a.GlobalAction:
             state=ctx.string(signal, "state"),
             line=signal.sourceline,
         )
-    return ctx.unsupported(signal, "traffic signal controllers are not simulated")
+    if signal.tag == "TrafficSignalControllerAction":
+        return ctl.TrafficSignalControllerAction(
+            controller_ref=ctx.string(signal, "trafficSignalControllerRef"),
+            phase=ctx.string(signal, "phase"),
+            line=signal.sourceline,
+        )
+    return ctx.unsupported(signal, "not a traffic signal action of OpenSCENARIO 1.x")
 
 
 def _dynamics(el: Element, ctx: reading.Context) -> a.TransitionDynamics:

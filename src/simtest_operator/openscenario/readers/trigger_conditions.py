@@ -22,7 +22,6 @@ _UNSUPPORTED_ENTITY = {
 _UNSUPPORTED_VALUE = {
     "TimeOfDayCondition": "time of day is not simulated",
     "UserDefinedValueCondition": "user-defined values have no source in the stand-in",
-    "TrafficSignalControllerCondition": "traffic signal controllers are not simulated",
 }
 
 
@@ -343,6 +342,16 @@ def _traffic_signal(el: Element, ctx: reading.Context) -> c.TrafficSignalConditi
     )
 
 
+def _traffic_signal_controller(
+    el: Element, ctx: reading.Context
+) -> c.TrafficSignalControllerCondition:
+    return c.TrafficSignalControllerCondition(
+        controller_ref=ctx.string(el, "trafficSignalControllerRef"),
+        phase=ctx.string(el, "phase"),
+        line=el.sourceline,
+    )
+
+
 _ENTITY_READERS: Mapping[str, _EntityReader] = {
     "EndOfRoadCondition": _duration(c.EndOfRoadCondition),
     "OffroadCondition": _duration(c.OffRoadCondition),
@@ -367,5 +376,6 @@ _VALUE_READERS: Mapping[str, _ValueReader] = {
     "ParameterCondition": _parameter,
     "VariableCondition": _variable,
     "TrafficSignalCondition": _traffic_signal,
+    "TrafficSignalControllerCondition": _traffic_signal_controller,
 }
 """Supported ``<ByValueCondition>`` children by tag (others: :data:`_UNSUPPORTED_VALUE`)."""
