@@ -54,8 +54,11 @@ class LaneChangeRun(Run):
         if isinstance(target, model.AbsoluteTargetLane):
             target_lane = target.lane_id
         else:
+            # Positive values count lanes to the reference entity's left: towards +t when it
+            # faces along the road, towards -t when it faces against it (as esmini).
             ref = world.actor(target.entity_ref)
-            target_lane = placements.add_lanes(world.current_lane(ref), target.value)
+            facing = placements.road_coordinates(world, ref)[3]
+            target_lane = placements.add_lanes(world.current_lane(ref), target.value * facing)
         self._delta = lanes_between(actor.lane_id, target_lane)
         self._target_offset = action.target_lane_offset or 0.0
         self._offset0 = actor.offset

@@ -108,10 +108,27 @@ def update_timers(world: World, actor: Actor, dt: float, *, was_stuck: bool) -> 
     actor.end_of_road_time = actor.end_of_road_time + dt if actor.stuck and was_stuck else 0.0
     if world.roads is None:
         return
-    # Lane-following actors are on the road by construction (also when stuck at a road's end);
-    # only free and path-following actors need the (costlier) projection.
-    on_road = actor.mode is Mode.ROAD or world.roads.is_on_road(actor.x, actor.y)
+    # Lane-following actors are on the road unless an offset pushes them past its edge (also
+    # when stuck at a road's end); only free and path-following actors need the (costlier)
+    # projection.
+    if actor.mode is Mode.ROAD:
+        on_road = actor.offset == 0.0 or _within_road_edges(world, actor)
+    else:
+        on_road = world.roads.is_on_road(actor.x, actor.y)
     actor.offroad_time = 0.0 if on_road else actor.offroad_time + dt
+
+
+def _within_road_edges(world: World, actor: Actor) -> bool:
+    """Whether a lane-bound actor's reference point lies within the road's edges on its side:
+    the outer border of the lanes of any type but ``none`` (esmini's off-road rule)."""
+    roads = world.roads
+    assert roads is not None and actor.road_id is not None
+    t = world.lane_t(actor.road_id, actor.s, actor.lane_id) + actor.offset
+    edge = 0.0
+    for bounds in roads.lanes_at(actor.road_id, actor.s):
+        if bounds.lane_id * t > 0 and bounds.type != "none":
+            edge = max(edge, abs(bounds.t_outer))
+    return abs(t) <= edge + 1e-9
 
 
 def _pick_route_lane(world: World, actor: Actor) -> None:

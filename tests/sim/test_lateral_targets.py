@@ -1,0 +1,76 @@
+"""Where lateral actions lead, as the reference player reads them: a relative target lane counts
+lanes to the reference entity's left in the direction it faces (so +1 from a car driving in a
+left-hand lane against the reference line is a lane of smaller id), and a lane offset that carries
+a lane-bound actor past the road's edge takes it off the road (OffroadCondition sees it)."""
+
+from __future__ import annotations
+
+import pytest
+
+from simtest_operator.openscenario import model
+from tests.sim.worlds import DT, Bench, lane, speed, teleport
+
+
+def _change(target: model.RelativeTargetLane) -> model.LaneChangeAction:
+    return model.LaneChangeAction(
+        dynamics=model.TransitionDynamics(
+            shape=model.DynamicsShape.SINUSOIDAL, dimension=model.DynamicsDimension.TIME, value=2.0
+        ),
+        target=target,
+    )
+
+
+@pytest.mark.parametrize(
+    ("start_lane", "value", "expected_lane"),
+    [
+        (-1, 1, 1),  # along the reference line: left is +t, across the centre lane
+        (-2, 1, -1),
+        (1, 1, -1),  # against it (left-hand lane, RHT): left is -t, across the centre lane
+        (2, 1, 1),
+        (1, -1, 2),  # and right is +t
+    ],
+)
+def test_relative_target_lane_counts_to_the_reference_entitys_left(
+    start_lane: int, value: int, expected_lane: int
+) -> None:
+    bench = Bench("Car")
+    bench.start("Car", teleport(lane(start_lane, 500.0)))
+    bench.start("Car", speed(10.0))
+    bench.start("Car", _change(model.RelativeTargetLane(entity_ref="Car", value=value)))
+    bench.step(round(2.5 / DT))
+    assert bench.actor("Car").lane_id == expected_lane
+
+
+def test_relative_target_lane_follows_the_other_entitys_facing() -> None:
+    bench = Bench("Car", "Oncoming")
+    bench.start("Car", teleport(lane(-1, 500.0)))
+    bench.start("Car", speed(10.0))
+    bench.start("Oncoming", teleport(lane(2, 600.0)))
+    # one lane to the left of the oncoming car (facing -s): lane 1, which Car then drives in
+    bench.start("Car", _change(model.RelativeTargetLane(entity_ref="Oncoming", value=1)))
+    bench.step(round(2.5 / DT))
+    assert bench.actor("Car").lane_id == 1
+
+
+def _offset(value: float) -> model.LaneOffsetAction:
+    return model.LaneOffsetAction(
+        continuous=True,
+        shape=model.DynamicsShape.STEP,
+        target=model.AbsoluteTargetLaneOffset(value=value),
+    )
+
+
+@pytest.mark.parametrize(
+    ("offset", "off_road"),
+    [(-1.5, False), (-1.8, True), (1.5, False)],  # lane -2 spans t in [-7, -3.5]: edge at -7
+)
+def test_lane_offset_past_the_road_edge_is_off_road(offset: float, off_road: bool) -> None:
+    bench = Bench("Car")
+    bench.start("Car", teleport(lane(-2, 100.0)))
+    bench.start("Car", speed(10.0))
+    bench.start("Car", _offset(offset))
+    bench.step(10)
+    car = bench.actor("Car")
+    assert (car.offroad_time > 0.0) is off_road
+    if off_road:
+        assert car.offroad_time == pytest.approx(10 * DT)
