@@ -50,6 +50,7 @@ class Dispatcher:
         "_traffic",
         "_world",
         "assigned",
+        "teleported",
     )
 
     def __init__(
@@ -72,6 +73,9 @@ class Dispatcher:
         self._active: dict[str, dict[Domain, Run]] = {}
         self.assigned: dict[tuple[str, str], None] = {}
         """(entity, controller) pairs assigned during the run, in order (an ordered set)."""
+        self.teleported: set[str] = set()
+        """Entities a TeleportAction moved since the engine last cleared it (it holds them there
+        for that step; an entity an AddEntityAction puts in the world moves at once)."""
 
     def runs(self, actor: Actor) -> dict[Domain, Run]:
         """The actor's active runs by domain (finished ones pruned)."""
@@ -184,6 +188,7 @@ class Dispatcher:
             raise placements.unsupported(actor.obj.unsupported)
         if isinstance(body, model.TeleportAction):
             self.teleport(actor, positions.resolve(world, body.position))
+            self.teleported.add(actor.name)
             return Done(actor)
         if isinstance(body, model.ActivateControllerAction):
             self._activate(actor, body.longitudinal, body.lateral)

@@ -206,6 +206,7 @@ class Simulation:
         world.refresh()
         # Triggers see the world as it is (time and poses of the previous step); then actions and
         # motion take it one step further.
+        self._dispatcher.teleported.clear()
         self._storyboard.update(world.time)
         # Every action measures the others at time t, whichever of them moved first this step
         # (the reference player moves entities only after all actions stepped).
@@ -305,8 +306,12 @@ class Simulation:
             actor.offset = driver.lateral_offset(actor.offset, dt)
         # A trajectory placed the actor for the end of this step (also when it just ended and
         # the actor rejoined its lane): it must not move a second time.
-        placed = actor.mode is Mode.PATH or (
-            isinstance(lateral, PathRun) and lateral.finished and not lateral.stopped
+        # An actor teleported by an action started this step stays where it was put until the
+        # next step (esmini's default motion skips an entity an action positioned).
+        placed = (
+            actor.mode is Mode.PATH
+            or (isinstance(lateral, PathRun) and lateral.finished and not lateral.stopped)
+            or actor.name in self._dispatcher.teleported
         )
         if actor.mode is Mode.PATH and Domain.LATERAL not in self._dispatcher.runs(actor):
             world.attach(actor)

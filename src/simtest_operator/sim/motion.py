@@ -119,16 +119,16 @@ def update_timers(world: World, actor: Actor, dt: float, *, was_stuck: bool) -> 
 
 
 def _within_road_edges(world: World, actor: Actor) -> bool:
-    """Whether a lane-bound actor's reference point lies within the road's edges on its side:
-    the outer border of the lanes of any type but ``none`` (esmini's off-road rule)."""
+    """Whether a lane-bound actor's reference point lies on a lane of any type but ``none``
+    (esmini's off-road rule: beyond the road's outer lanes, not counting ``none`` lanes)."""
     roads = world.roads
     assert roads is not None and actor.road_id is not None
     t = world.lane_t(actor.road_id, actor.s, actor.lane_id) + actor.offset
-    edge = 0.0
-    for bounds in roads.lanes_at(actor.road_id, actor.s):
-        if bounds.lane_id * t > 0 and bounds.type != "none":
-            edge = max(edge, abs(bounds.t_outer))
-    return abs(t) <= edge + 1e-9
+    return any(
+        bounds.t_min - 1e-9 <= t <= bounds.t_max + 1e-9
+        for bounds in roads.lanes_at(actor.road_id, actor.s)
+        if bounds.lane_id != 0 and bounds.type != "none"
+    )
 
 
 def _pick_route_lane(world: World, actor: Actor) -> None:

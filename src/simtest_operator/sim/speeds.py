@@ -44,11 +44,14 @@ def transition_duration(
 
     Like the reference player, a transition never asks more than the vehicle's performance
     allows: its peak acceleration (deceleration) is capped at ``maxAcceleration``
-    (``maxDeceleration``), which stretches the duration when needed.
+    (``maxDeceleration``), which stretches the duration when needed. A time or distance of
+    zero is a step whatever the shape, and a step ignores the performance (as there).
     """
-    if dynamics.shape is model.DynamicsShape.STEP:
-        return 0.0
     value = abs(dynamics.value)
+    if dynamics.shape is model.DynamicsShape.STEP or (
+        dynamics.dimension is not model.DynamicsDimension.RATE and value < 1e-9
+    ):
+        return 0.0
     if dynamics.dimension is model.DynamicsDimension.TIME:
         duration = value
     elif dynamics.dimension is model.DynamicsDimension.DISTANCE:

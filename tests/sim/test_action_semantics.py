@@ -1,7 +1,8 @@
-"""Where lateral actions lead, as the reference player reads them: a relative target lane counts
+"""Lateral and speed actions as the reference player reads them: a relative target lane counts
 lanes to the reference entity's left in the direction it faces (so +1 from a car driving in a
-left-hand lane against the reference line is a lane of smaller id), and a lane offset that carries
-a lane-bound actor past the road's edge takes it off the road (OffroadCondition sees it)."""
+left-hand lane against the reference line is a lane of smaller id), a lane offset that carries a
+lane-bound actor past the road's edge takes it off the road (OffroadCondition sees it), and a
+speed transition over zero time or distance is a step whatever its shape."""
 
 from __future__ import annotations
 
@@ -74,3 +75,23 @@ def test_lane_offset_past_the_road_edge_is_off_road(offset: float, off_road: boo
     assert (car.offroad_time > 0.0) is off_road
     if off_road:
         assert car.offroad_time == pytest.approx(10 * DT)
+
+
+@pytest.mark.parametrize(
+    ("shape", "dimension"),
+    [
+        (model.DynamicsShape.LINEAR, model.DynamicsDimension.TIME),
+        (model.DynamicsShape.SINUSOIDAL, model.DynamicsDimension.DISTANCE),
+    ],
+)
+def test_speed_transition_of_zero_time_or_distance_is_a_step(
+    shape: model.DynamicsShape, dimension: model.DynamicsDimension
+) -> None:
+    # a step ignores the vehicle's acceleration limit (10 m/s^2 here), as in the reference player
+    bench = Bench("Car")
+    bench.start("Car", teleport(lane(-1, 10.0)))
+    dynamics = model.TransitionDynamics(shape=shape, dimension=dimension, value=0.0)
+    bench.start(
+        "Car", model.SpeedAction(dynamics=dynamics, target=model.AbsoluteTargetSpeed(value=30.0))
+    )
+    assert bench.actor("Car").speed == 30.0
