@@ -68,6 +68,9 @@ def compare(relative: str, tmp_path: Path) -> references.Comparison:
         "relative_lane_change.xosc",
         "instant_lane_change.xosc",
         "relative_clearance_freeSpace.xosc",
+        "multi_lane_changes.xosc",
+        "lateral_maneuvers_test.xosc",
+        "relative_lane_offset.xosc",
     ],
 )
 def test_matches_the_reference_player(relative: str, tmp_path: Path) -> None:

@@ -163,14 +163,20 @@ def test_act_stop_trigger_and_storyboard_stop() -> None:
         b.storyboard(
             b.event("E", b.action("long")),
             act_stop=b.trigger((b.sim_time(2.5),)),
-            stop=b.trigger((b.state("act", "A", "stopTransition"),)),
+            stop=b.trigger((b.state("act", "A", "endTransition"),)),
         ),
         durations={"long": 100},
     )
     h.step(2)
     assert not h.runs[0].stopped and not h.board.complete
-    h.step()  # the act stops at t=3 and the stop trigger sees its stopTransition in that step
+    # the act's stop trigger fires at t=3: the act ends (endTransition, as in esmini, so acts
+    # waiting for its end start), the action still running under it is stopped, and the
+    # storyboard's stop trigger sees the act's endTransition in that step
+    h.step()
     assert h.runs[0].stopped and h.board.complete
+    assert not h.board.is_in(
+        model.StoryboardElementType.ACT, "A", model.StoryboardElementState.STOP_TRANSITION
+    )
 
 
 def test_completes_without_stop_trigger_only_when_stories_end() -> None:

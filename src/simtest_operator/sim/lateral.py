@@ -126,30 +126,40 @@ class LaneOffsetRun(Run):
             self._duration = 0.0
         elif action.shape is model.DynamicsShape.SINUSOIDAL:
             self._duration = math.pi * math.sqrt(distance / (2.0 * acc))
-        elif action.shape is model.DynamicsShape.CUBIC:
-            self._duration = math.sqrt(6.0 * distance / acc)
         else:
-            self._duration = math.sqrt(2.0 * distance / acc)
+            # Cubic: the peak acceleration 6d/T^2 at the ends. A linear shape has no finite
+            # peak; the reference player sizes it like the cubic one.
+            self._duration = math.sqrt(6.0 * distance / acc)
         if self._duration <= 0.0:
             actor.offset = self._target(world)
             self.finished = not action.continuous
 
     def _target(self, world: World) -> float:
+        """The offset from the actor's lane centre to aim at. A relative target is ``value``
+        to the reference entity's left (in the direction it faces) of where that entity is
+        across the road, whichever lane it is in (as esmini)."""
         target = self._action.target
         if isinstance(target, model.AbsoluteTargetLaneOffset):
             return target.value
-        return world.actor(target.entity_ref).offset + target.value
+        actor = self.actor
+        assert actor is not None and actor.road_id is not None
+        _, _, ref_t, facing = placements.road_coordinates(world, world.actor(target.entity_ref))
+        return ref_t + target.value * facing - world.lane_t(actor.road_id, actor.s, actor.lane_id)
 
     def step(self, world: World, dt: float) -> None:
+        # The offset of a step is the transition's value at the step's start (the reference
+        # player evaluates before it advances the transition), so it ends one step after
+        # its duration.
         actor = self.actor
         assert actor is not None
+        elapsed = self._elapsed
         self._elapsed += dt
         target = self._target(world)
-        if self._elapsed >= self._duration:
+        if elapsed >= self._duration - 1e-9:
             actor.offset = target
             self.finished = not self._action.continuous
             return
-        fraction = shape_fraction(self._action.shape, self._elapsed / self._duration)
+        fraction = shape_fraction(self._action.shape, elapsed / self._duration)
         actor.offset = self._offset0 + (target - self._offset0) * fraction
 
 

@@ -256,7 +256,9 @@ class Storyboard:
         if act.phase is not Phase.RUNNING:
             return
         if act.stop is not None and act.stop.evaluate(now, self._raw)[0]:
-            self._halt(act)
+            # The act's own stop trigger ends it (endTransition, as in esmini); what still runs
+            # under it is stopped.
+            self._halt(act, Transition.END_TRANSITION)
             return
         for group in act.children:
             if group.phase is not Phase.RUNNING:
@@ -328,8 +330,9 @@ class Storyboard:
                 event.executions = 0
                 event.start.reset()
 
-    def _halt(self, node: Node) -> None:
-        """Stop ``node`` and everything under it that has not completed yet."""
+    def _halt(self, node: Node, transition: Transition = Transition.STOP_TRANSITION) -> None:
+        """Stop ``node`` (with ``transition``) and everything under it that has not completed
+        yet."""
         for child in node.children:
             if child.phase is not Phase.COMPLETE:
                 self._halt(child)
@@ -337,7 +340,7 @@ class Storyboard:
             if not run.finished:
                 run.cancel()
         node.phase = Phase.COMPLETE
-        self._transition(node, Transition.STOP_TRANSITION)
+        self._transition(node, transition)
 
     def _end(self, node: Node) -> None:
         node.phase = Phase.COMPLETE
