@@ -71,6 +71,10 @@ def compare(relative: str, tmp_path: Path) -> references.Comparison:
         "multi_lane_changes.xosc",
         "lateral_maneuvers_test.xosc",
         "relative_lane_offset.xosc",
+        "traj_use_cases.xosc",
+        "trajectory_speed.xosc",
+        "trajectory_heading.xosc",
+        "traj_heading_and_interpolation.xosc",
     ],
 )
 def test_matches_the_reference_player(relative: str, tmp_path: Path) -> None:

@@ -92,6 +92,17 @@ class Path:
         v0, v1 = self.speeds[i - 1], self.speeds[i]
         return min(d0 + v0 * tau + (v1 - v0) * tau * tau / (2.0 * span), d1)
 
+    def time_at_distance(self, d: float) -> float:
+        """Path time at which distance ``d`` is reached (0 for an untimed path; linear between
+        samples)."""
+        if self.times is None:
+            return 0.0
+        d = min(max(d, 0.0), self.length)
+        i = min(max(1, bisect.bisect_left(self.lengths, d)), len(self.lengths) - 1)
+        d0, d1 = self.lengths[i - 1], self.lengths[i]
+        f = (d - d0) / (d1 - d0) if d1 > d0 else 0.0
+        return self.times[i - 1] + f * (self.times[i] - self.times[i - 1])
+
     def following(self) -> Path:
         """This path driven in ``follow`` mode: the speed starts at the first interval's mean
         and changes linearly in time so that each sample is reached at its time (the speed at

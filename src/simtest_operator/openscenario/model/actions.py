@@ -269,7 +269,9 @@ class AcquirePositionAction:
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
 class Timing:
-    """Trajectory time mapping: t_sim = (t_traj * scale + offset), absolute or relative."""
+    """Trajectory time mapping, as the reference player reads it: the trajectory clock runs
+    ``scale`` times as fast as simulation time (from the action start when relative) and the
+    position is taken at clock + ``offset``."""
 
     domain: ReferenceContext
     scale: float
