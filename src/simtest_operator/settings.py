@@ -26,6 +26,9 @@ RESULTS_DSN = f"{ENV_PREFIX}RESULTS_DSN"
 """The variable a simulator pod's or an evaluation Job's template fills from the DSN Secret."""
 RESULTS_RUN_KEY = f"{ENV_PREFIX}RESULTS_RUN_KEY"
 """The variable carrying the run key a simulator pod's rows are stored under."""
+SUT_ENDPOINT = f"{ENV_PREFIX}SUT_ENDPOINT"
+"""The variable a simulator pod's template sets to where its external SUT listens: the sidecar
+on loopback, or the Service of a composed SUT stack (template ``composed-sut``)."""
 
 
 def _default_cache_dir(env: Mapping[str, str]) -> Path:
@@ -238,6 +241,11 @@ class Settings:
     results: ResultsSettings = dataclasses.field(default_factory=ResultsSettings)
     """The results database's defaults (``SIMTEST_RESULTS_*``,
     ``SIMTEST_EVALUATE_SUMMARY_FILE``)."""
+    sut_endpoint: str | None = None
+    """``host:port`` of an external SUT launched as ``sidecar`` or ``endpoint``
+    (``SIMTEST_SUT_ENDPOINT``; unset or empty: none): the pod's template knows where its SUT
+    listens, so this wins over the campaign's ``endpoint``. Applied where run requests are built
+    (the pod's runner, ``simtest run``)."""
 
     @classmethod
     def from_env(
@@ -276,6 +284,7 @@ class Settings:
                 if (summary := env.get(f"{ENV_PREFIX}EVALUATE_SUMMARY_FILE"))
                 else None,
             ),
+            sut_endpoint=env.get(SUT_ENDPOINT, "").strip() or None,
         )
 
 

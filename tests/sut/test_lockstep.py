@@ -18,10 +18,10 @@ import pytest
 from mcap.reader import make_reader
 
 from simtest_operator.drivermodel import ExternalSut, Launch
-from simtest_operator.runner import scenario_execution
-from simtest_operator.settings import SimulationSettings
+from simtest_operator.runner import scenario_execution, suts
+from simtest_operator.settings import SUT_ENDPOINT, Settings, SimulationSettings
 from simtest_operator.sim import BackendChoice, SutConfig
-from simtest_operator.sut.launching import ENDPOINT_ENV, free_port, reference_command
+from simtest_operator.sut.launching import free_port, reference_command
 from simtest_operator.verdicts import Verdict
 
 SCENARIO = Path(__file__).parents[1] / "sim" / "data" / "hard_braking_lead.xosc"
@@ -132,12 +132,10 @@ def test_a_paced_run_records_the_achieved_factor_and_flags_falling_behind() -> N
     assert behind["loopRealTimeFactor"] < 19.0
 
 
-def test_in_a_pod_the_templates_endpoint_wins_over_the_campaigns(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
+def test_in_a_pod_the_templates_endpoint_wins_over_the_campaigns() -> None:
     """A composed stack (template ``composed-sut``): the SUT already runs behind a Service the
-    pod is told about in SIMTEST_SUT_ENDPOINT; the campaign's endpoint is where ``simtest run``
-    would look, and nothing listens there."""
+    pod is told about in SIMTEST_SUT_ENDPOINT (read into the settings, applied to the request);
+    the campaign's endpoint is where ``simtest run`` would look, and nothing listens there."""
     live, dead = free_port(), free_port()
     stack = subprocess.Popen(
         reference_command(),
@@ -150,14 +148,15 @@ def test_in_a_pod_the_templates_endpoint_wins_over_the_campaigns(
             startup_timeout=20.0,
         )  # fmt: skip
         sut = dataclasses.replace(AEB, external=endpoint)
-        monkeypatch.setenv(ENDPOINT_ENV, f"127.0.0.1:{live}")
+        in_pod = Settings.from_env({"HOME": "/h", SUT_ENDPOINT: f"127.0.0.1:{live}"})
         inside = run(AEB, None).outcome
-        outside = run(sut, None).outcome  # the readiness wait polls until the stack accepts
+        # the readiness wait polls until the stack accepts
+        outside = run(suts.reached_here(sut, in_pod), None).outcome
         assert (outside.verdict, outside.reason) == (inside.verdict, inside.reason)
         assert outside.versions["sut.launch"] == "endpoint"
-        monkeypatch.delenv(ENDPOINT_ENV)
         quick = dataclasses.replace(endpoint, startup_timeout=0.3)
-        missed = run(dataclasses.replace(AEB, external=quick), None).outcome
+        elsewhere = dataclasses.replace(AEB, external=quick)
+        missed = run(suts.reached_here(elsewhere, Settings.from_env({"HOME": "/h"})), None).outcome
         assert missed.verdict is Verdict.ERROR
         assert f"did not become ready at 127.0.0.1:{dead}" in missed.reason
     finally:

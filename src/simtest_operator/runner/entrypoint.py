@@ -127,7 +127,7 @@ def requests_for(job: Job, scenario: ScenarioRef, path: Path) -> scenario_execut
         nets_dir=job.settings.cache.nets,
         scenario_id=scenario.id,
         overrides=dict(scenario.overrides),
-        sut=suts.with_image_id(converting.sut(sut), job.settings.cache.image_index),
+        sut=suts.reached_here(converting.sut(sut), job.settings),
         criteria=converting.criteria(evaluation, scenario.id),
         simulation=converting.simulation(simulator),
         output_dir=job.artifacts / safe_name(scenario.id),

@@ -154,9 +154,7 @@ def prepare(request: LocalRunRequest, *, now: datetime.datetime) -> Plan:
         fetch=fetch,
         graphql_sources=graphql,
         settings=dataclasses.replace(request.settings, simulation=converting.simulation(simulator)),
-        sut=suts.with_image_id(
-            converting.sut(spec.environment.sut), request.settings.cache.image_index
-        ),
+        sut=suts.reached_here(converting.sut(spec.environment.sut), request.settings),
         record=simulator.record and spec.artifacts.keep_recordings,
         notes=tuple(notes),
     )

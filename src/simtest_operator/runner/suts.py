@@ -15,7 +15,8 @@ from collections.abc import Mapping, MutableMapping
 from pathlib import Path
 
 from simtest_operator import provenance
-from simtest_operator.settings import SimulationSettings
+from simtest_operator.drivermodel import Launch
+from simtest_operator.settings import Settings, SimulationSettings
 from simtest_operator.sim import Simulation, SutConfig
 from simtest_operator.sut import client, launching, runs
 
@@ -34,6 +35,23 @@ def with_image_id(sut: SutConfig, index: Path) -> SutConfig:
         external.image, index
     )
     return dataclasses.replace(sut, external=dataclasses.replace(external, image_id=found))
+
+
+def reached_here(sut: SutConfig, settings: Settings) -> SutConfig:
+    """``sut`` as this machine reaches it, for the run requests: its image digest where known
+    (:func:`with_image_id`) and, for a ``sidecar`` or ``endpoint`` SUT, the endpoint the settings
+    name (``SIMTEST_SUT_ENDPOINT``: a pod's template knows where its SUT listens), which wins
+    over the campaign's."""
+    sut = with_image_id(sut, settings.cache.image_index)
+    external = sut.external
+    if (
+        external is None
+        or settings.sut_endpoint is None
+        or external.launch not in (Launch.SIDECAR, Launch.ENDPOINT)
+    ):
+        return sut
+    located = dataclasses.replace(external, endpoint=settings.sut_endpoint)
+    return dataclasses.replace(sut, external=located)
 
 
 class SutLink:

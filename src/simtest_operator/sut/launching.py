@@ -18,13 +18,11 @@ import tempfile
 from collections.abc import Iterator, Mapping
 from typing import IO, Any
 
-from simtest_operator.drivermodel import ExternalSut, Launch
+from simtest_operator.drivermodel import ExternalSut
+from simtest_operator.settings import SUT_ENDPOINT
 from simtest_operator.sut import client
 from simtest_operator.sut.errors import SutError
 
-ENDPOINT_ENV = "SIMTEST_SUT_ENDPOINT"
-"""Set in the simulator container by the environment template: where the sidecar listens, or
-the Service of a composed SUT stack (template ``composed-sut``); wins over ``endpoint``."""
 _STDERR_TAIL = 400
 
 
@@ -91,17 +89,15 @@ def open_pilot(
 ) -> Iterator[client.RemotePilot]:
     """A connected, handshaken pilot for one run (SutError when the SUT cannot be reached)."""
     process: _Process | None = None
+    # A pod's SIMTEST_SUT_ENDPOINT is already in ``endpoint``: the run request applied the
+    # settings (runner.suts.reached_here); nothing here reads the environment.
     endpoint = external.endpoint
-    if external.launch in (Launch.SIDECAR, Launch.ENDPOINT):
-        # The pod's template knows where the SUT is: the sidecar on loopback, or the Service of
-        # a stack the Helmfile provisioner composed; the campaign's endpoint serves elsewhere.
-        endpoint = os.environ.get(ENDPOINT_ENV) or endpoint
     try:
         if endpoint is None:
             if not external.command:
                 raise SutError(
                     f"the {external.launch} SUT has no command to start here "
-                    f"(and {ENDPOINT_ENV} is not set)"
+                    f"(and {SUT_ENDPOINT} is not set)"
                 )
             port = free_port()
             command = tuple(
@@ -136,4 +132,4 @@ def reference_command() -> tuple[str, ...]:
     return (sys.executable, "-m", "simtest_operator.sut.reference")
 
 
-__all__ = ["ENDPOINT_ENV", "free_port", "open_pilot", "reference_command"]
+__all__ = ["free_port", "open_pilot", "reference_command"]
