@@ -12,10 +12,10 @@ that status); this phase adds the Job and the events.
 from __future__ import annotations
 
 from simtest_operator.operator import evaluationjobs, names
-from simtest_operator.operator.actions import Action, Create, Emit, Kind
+from simtest_operator.operator.actions import Action, Create, Kind
 from simtest_operator.operator.planning.inputs import Step
 from simtest_operator.operator.planning.outcomes import Outcome
-from simtest_operator.operator.status import conditions
+from simtest_operator.operator.status import campaignstatus, conditions
 from simtest_operator.operator.status.evaluationstatus import (
     CONDITION,
     FINAL_REASONS,
@@ -67,13 +67,6 @@ def _answered(step: Step, state: EvaluationState) -> Action:
 
 
 def _event(step: Step, reason: str, message: str, *, warning: bool) -> Action:
-    campaign = step.campaign
-    return Emit(
-        kind=Kind.CAMPAIGN,
-        name=campaign.name,
-        uid=campaign.uid,
-        reason=reason,
-        message=message,
-        warning=warning,
-        terminal=True,
+    return campaignstatus.event(
+        step.campaign, reason=reason, message=message, warning=warning, terminal=True
     )

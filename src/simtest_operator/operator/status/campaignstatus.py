@@ -165,17 +165,25 @@ def _written(
         actions.append(PatchStatus(kind=Kind.CAMPAIGN, name=campaign.name, patch=patch))
     if campaign.status.phase != phase:
         actions.append(
-            Emit(
-                kind=Kind.CAMPAIGN,
-                name=campaign.name,
-                uid=campaign.uid,
-                reason=reason,
-                message=message,
-                warning=warning,
-                terminal=terminal,
-            )
+            event(campaign, reason=reason, message=message, warning=warning, terminal=terminal)
         )
     return tuple(actions)
+
+
+def event(
+    campaign: CampaignView, *, reason: str, message: str, warning: bool, terminal: bool
+) -> Emit:
+    """An event on the campaign: its phase changes here, the evaluation step's answers
+    (:mod:`~simtest_operator.operator.planning.evaluating`)."""
+    return Emit(
+        kind=Kind.CAMPAIGN,
+        name=campaign.name,
+        uid=campaign.uid,
+        reason=reason,
+        message=message,
+        warning=warning,
+        terminal=terminal,
+    )
 
 
 def _conditions(
