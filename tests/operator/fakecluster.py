@@ -113,6 +113,10 @@ class FakeCluster:
         self.pods_started: list[tuple[str, int]] = []
         self.conflicts = 0
         self.last_status_write: datetime.datetime | None = None
+        self.refusing: dict[tuple[Kind, str], str] = {}
+        """Creates the API server refuses for good, with its answer (RBAC, admission)."""
+        self.refused: dict[tuple[Kind, str], str] = {}
+        """What it refused so far, as the campaign loop keeps it for the planner."""
 
     # --- objects -----------------------------------------------------------------------------
 
@@ -167,6 +171,7 @@ class FakeCluster:
             now=self.now,
             last_status_write=self.last_status_write,
             jobs={j["metadata"]["name"]: jobviews.job_view(j) for j in self.of(Kind.JOB)},
+            refused=dict(self.refused),
         )
 
     def _node_view(self, name: str) -> observed.NodeView:
@@ -185,7 +190,10 @@ class FakeCluster:
         """Apply the plan's actions (only the first ``limit``: a crash mid-apply)."""
         for action in plan.actions[:limit]:
             if isinstance(action, Create):
-                if (action.kind, action.name) not in self.objects:
+                answer = self.refusing.get((action.kind, action.name))
+                if answer is not None:
+                    self.refused[(action.kind, action.name)] = answer
+                elif (action.kind, action.name) not in self.objects:
                     self.add(action.kind, action.body)
             elif isinstance(action, Provision):
                 env = self.get(Kind.ENVIRONMENT, action.environment)

@@ -4,10 +4,10 @@ Covers: no Job while scenarios run, exactly one ``<campaign>-evaluate`` Job (own
 campaign) once every verdict is in, however often the planner runs; ``Evaluated`` Unknown/Running
 with ``status.evaluation.job`` meanwhile and the phase unchanged throughout; the Job's answer
 (exit 0/1/2 with the summary and id from the termination message, a crash after the retries, a
-Job gone before it answered) as the condition, ``status.evaluation.id`` and one event; a restart
-after the Job was created but not recorded finds the Job instead of making a second; no
-``offline`` field, or a cancelled campaign: no Job, no condition; the simulator pods never see
-the field.
+Job gone before it answered, a create the API server refused: its code and words, not retried)
+as the condition, ``status.evaluation.id`` and one event; a restart after the Job was created but
+not recorded finds the Job instead of making a second; no ``offline`` field, or a cancelled
+campaign: no Job, no condition; the simulator pods never see the field.
 """
 
 from __future__ import annotations
@@ -197,6 +197,32 @@ def test_a_job_gone_before_it_answered_is_an_error_not_a_rerun() -> None:
     assert condition is not None
     assert (condition["status"], condition["reason"]) == ("False", "Error")
     assert "disappeared" in condition["message"]
+
+
+FORBIDDEN = (
+    '403 Forbidden: jobs.batch is forbidden: User "system:serviceaccount:ops:simtest-operator" '
+    'cannot create resource "jobs" in API group "batch" in the namespace "tests"'
+)
+
+
+def test_a_refused_create_is_an_error_with_the_servers_words_not_a_retry() -> None:
+    cluster = _cluster()
+    cluster.refusing[(Kind.JOB, JOB)] = FORBIDDEN
+    cluster.run()
+    for _ in range(5):
+        cluster.step(1.0)
+        assert not _creates(cluster), "tried again"
+    assert cluster.get(Kind.JOB, JOB) is None
+    condition = _condition(cluster)
+    assert condition is not None
+    assert (condition["status"], condition["reason"]) == ("False", "Error")
+    assert condition["message"] == (
+        f"the API server refused to create the evaluation Job {JOB}: {FORBIDDEN} (not tried again)"
+    )
+    assert cluster.status()["evaluation"] == {"job": JOB}
+    assert cluster.status()["phase"] == "Succeeded"
+    errors = [e for e in cluster.events if e.reason == "EvaluationError"]
+    assert len(errors) == 1 and errors[0].warning and FORBIDDEN in errors[0].message
 
 
 @pytest.mark.parametrize("case", ["no offline field", "cancelled"])

@@ -3,24 +3,28 @@
 Covers: expectations (present/absent/version, deadline); cache lookups by campaign; the frozen
 list ConfigMap round trip, determinism and size limit; environment names parse back; operator
 configuration from variables and flags; conditions keep their transition time while unchanged;
-API error mapping; campaign phases for an invalid spec, a resolution error and an empty list;
-counter-only campaign status writes are coalesced.
+API error mapping; the applier reports creates refused for good; campaign phases for an invalid
+spec, a resolution error and an empty list; counter-only campaign status writes are coalesced.
 """
 
 from __future__ import annotations
 
+import asyncio
 import datetime
 import hashlib
 import itertools
 import json
+from typing import Any, cast
 
 import pytest
 
 from simtest_operator.errors import SourceError
 from simtest_operator.operator import client, names, observed, planning, scenariolists
-from simtest_operator.operator.actions import Emit, Kind, PatchStatus, Plan
+from simtest_operator.operator.actions import Create, Emit, Kind, PatchStatus, Plan
+from simtest_operator.operator.applying import Applier
 from simtest_operator.operator.caching import ALL_NODES, Cache
 from simtest_operator.operator.expectations import Expectation, Expectations, Want
+from simtest_operator.operator.metrics import Metrics
 from simtest_operator.operator.status import conditions
 from simtest_operator.scenarios import FrozenList, PinnedScenario
 from simtest_operator.settings import InputSettings, OperatorSettings, PacingSettings, Settings
@@ -167,6 +171,48 @@ def test_conditions_keep_transition_time() -> None:
 def test_api_errors_are_mapped(status: int, reason: str, expected: type[Exception]) -> None:
     error = client._error(status, json.dumps({"reason": reason, "message": "m"}))
     assert type(error) is expected and error.status == status
+
+
+class _Answering:
+    """An API client that creates what it has no answer for, and raises the answer otherwise."""
+
+    def __init__(self, answers: dict[str, client.ApiError]) -> None:
+        self.answers = answers
+
+    async def create(self, kind: Kind, namespace: str, body: dict[str, Any]) -> dict[str, Any]:
+        answer = self.answers.get(body["metadata"]["name"])
+        if answer is not None:
+            raise answer
+        return body
+
+
+def test_the_applier_reports_creates_refused_for_good() -> None:
+    """400/403/422 come back by kind and name with the server's words, for the planner to word
+    (the evaluation Job); a transient answer is only a failure, an existing object is done."""
+    answers = {
+        "forbidden": client.ApiError(403, "Forbidden", "jobs.batch is forbidden"),
+        "invalid": client.ApiError(422, "Invalid", "spec.template: Required value"),
+        "busy": client.ApiError(503, "ServiceUnavailable", "try again"),
+        "there": client.AlreadyExistsError(409, "AlreadyExists", "exists"),
+    }
+    applier = Applier(
+        client=cast(client.Client, _Answering(answers)),
+        namespace="tests",
+        campaign="camp",
+        campaign_uid=lambda: "u",
+        metrics=Metrics(),
+        event_interval=10.0,
+    )
+    creates = tuple(
+        Create(kind=Kind.JOB, body={"metadata": {"name": name}}) for name in [*answers, "new"]
+    )
+    applied = asyncio.run(applier.apply(Plan(actions=creates), now=T0))
+    assert applied.refused == {
+        (Kind.JOB, "forbidden"): "403 Forbidden: jobs.batch is forbidden",
+        (Kind.JOB, "invalid"): "422 Invalid: spec.template: Required value",
+    }
+    assert applied.failures == 3
+    assert {e.name for e in applied.expectations} == {"there", "new"}
 
 
 def _halted(body: dict[str, object], **inputs: object) -> Plan:

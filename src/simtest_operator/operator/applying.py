@@ -4,7 +4,11 @@ Actions of one plan are independent of each other (the planner only creates envi
 batches it has seen, and only deletes pods of environments whose status it has seen), so they are
 sent concurrently. Each successful write yields the expectation the next planning step waits
 for. A ``ConflictError`` on a conditional status patch means our view was stale: nothing is written
-and the loop plans again from fresh state. Events are rate limited per object.
+and the loop plans again from fresh state. A create the API server refuses for good (400, 403,
+422: an invalid body, missing RBAC, admission) ends what it served as ``Error`` with the server's
+words: a pod or a helmfile Job in its environment's status, written here; any other object is
+reported back (:attr:`Applied.refused`) for the planner to word in its owner's status. Events are
+rate limited per object.
 """
 
 from __future__ import annotations
@@ -43,6 +47,10 @@ from simtest_operator.render import EnvironmentRequest, RenderedEnvironment
 
 log = logging.getLogger(__name__)
 
+REFUSED_FOR_GOOD = frozenset({400, 403, 422})
+"""API answers to a create that every retry would get the same way (malformed, forbidden,
+invalid): the object it served ends ``Error`` instead of being retried."""
+
 KIND_NAMES = {
     Kind.CAMPAIGN: "TestCampaign",
     Kind.BATCH: "ScenarioBatch",
@@ -58,6 +66,9 @@ class Applied:
     conflict: bool = False
     failures: int = 0
     campaign_written: bool = False
+    refused: dict[tuple[Kind, str], str] = dataclasses.field(default_factory=dict)
+    """Creates the API server refused for good (:data:`REFUSED_FOR_GOOD`), by kind and name:
+    its status code and message (also counted in ``failures``)."""
 
 
 @dataclasses.dataclass(slots=True)
@@ -119,6 +130,10 @@ class Applier:
                 )
             except AlreadyExistsError:
                 created = None
+            except ApiError as exc:
+                if exc.status in REFUSED_FOR_GOOD:
+                    applied.refused[(action.kind, action.name)] = str(exc)
+                raise
             applied.expectations.append(
                 Expectation(kind=action.kind, name=action.name, want=Want.PRESENT)
             )
@@ -235,7 +250,7 @@ class Applier:
                     job = await self.client.get(Kind.JOB, self.namespace, job_name)
                 await self._create(Kind.CONFIG_MAP, _owned_by_job(action.config_map, job))
         except ApiError as exc:
-            if action.status is None or exc.status not in (400, 403, 422):
+            if action.status is None or exc.status not in REFUSED_FOR_GOOD:
                 raise
             # Refused for good (RBAC, admission, an invalid spec): every attempt would be refused
             # the same way, so the environment ends as Error with the server's words.

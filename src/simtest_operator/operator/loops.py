@@ -23,7 +23,7 @@ from collections.abc import Callable
 
 from simtest_operator.errors import ClusterError, ScenarioError, SimtestError
 from simtest_operator.operator import planning, recording_results, resolving
-from simtest_operator.operator.actions import Plan
+from simtest_operator.operator.actions import Kind, Plan
 from simtest_operator.operator.applying import Applier
 from simtest_operator.operator.caching import Cache, CampaignKey
 from simtest_operator.operator.client import Client
@@ -68,6 +68,9 @@ class CampaignLoop:
         self.stored: StoredList | None = None
         self.resolution_error: str | None = None
         self.resolution_generation = 0
+        self.refused: dict[tuple[Kind, str], str] = {}
+        """Creates the API server refused for good while this loop ran (the planner words them
+        where they matter: the evaluation Job)."""
         self.last_status_write: datetime.datetime | None = None
         self.wake_at: datetime.datetime | None = None
         self.backoff = 1.0
@@ -144,10 +147,12 @@ class CampaignLoop:
             now=now,
             last_status_write=self.last_status_write,
             jobs=cache.jobs_of(self.key),
+            refused=dict(self.refused),
         )
         plan = planning.plan(inputs, config=shared.config, render=shared.render)
         shared.metrics.plan.observe(time.perf_counter() - planning_started)
         applied = await self.applier.apply(plan, now=now)
+        self.refused.update(applied.refused)
         self.expectations.expect(applied.expectations, now=now)
         if applied.campaign_written:
             self.last_status_write = now

@@ -4,9 +4,11 @@ Due when every scenario has its final verdict (the campaign is complete, not can
 something): then one Job ``<campaign>-evaluate`` re-scores the run in the results database. Its
 name is fixed per campaign, so a restarted operator finds the Job instead of creating a second;
 ``status.evaluation.job`` records that it was created, so a Job deleted before it answered is
-reported as ``Error`` rather than silently run again. What the step says goes into the campaign's
-status through :func:`~simtest_operator.operator.status.campaignstatus.progressed` (one writer of
-that status); this phase adds the Job and the events.
+reported as ``Error`` rather than silently run again. A create the API server refuses for good
+(missing RBAC, an invalid Job: ``Inputs.refused``) is ``Error`` too, with the server's words.
+What the step says goes into the campaign's status through
+:func:`~simtest_operator.operator.status.campaignstatus.progressed` (one writer of that status);
+this phase adds the Job and the events.
 """
 
 from __future__ import annotations
@@ -43,6 +45,15 @@ def evaluate(step: Step, *, due: bool) -> tuple[Outcome, EvaluationState | None]
         message=f"Job {name} re-scores run {step.run_key} (simtest evaluate)",
     )
     job = step.inputs.jobs.get(name)
+    refusal = step.inputs.refused.get((Kind.JOB, name))
+    if job is None and refusal is not None:
+        refused = EvaluationState(
+            job=name,
+            stage=Stage.ERROR,
+            message=f"the API server refused to create the evaluation Job {name}: {refusal} "
+            "(not tried again)",
+        )
+        return Outcome(actions=(_answered(step, refused),)), refused
     if job is None and recorded is None:
         body = rendering.job(evaluationjobs.request(spec, campaign, run_key=step.run_key))
         started = _event(step, "EvaluationStarted", running.message, warning=False)

@@ -13,6 +13,7 @@ from collections.abc import Callable, Mapping, Sequence
 
 from simtest_operator.api.v1alpha1 import TestCampaignSpec
 from simtest_operator.operator import recording_results
+from simtest_operator.operator.actions import Kind
 from simtest_operator.operator.batches import Layout
 from simtest_operator.operator.jobviews import JobView
 from simtest_operator.operator.observed import (
@@ -47,6 +48,10 @@ class Inputs:
     last_status_write: datetime.datetime | None = None
     jobs: Mapping[str, JobView] = dataclasses.field(default_factory=dict)
     """helmfile Jobs by name (``provisioner: Helmfile``)."""
+    refused: Mapping[tuple[Kind, str], str] = dataclasses.field(default_factory=dict)
+    """Creates the API server refused for good, by kind and name: its status code and message
+    (the applier's :attr:`~simtest_operator.operator.applying.Applied.refused`, kept by the
+    loop; the cache cannot show an object that was never created)."""
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
