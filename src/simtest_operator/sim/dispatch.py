@@ -20,10 +20,11 @@ from simtest_operator.openscenario import model
 from simtest_operator.sim import carla, placements, positions, route_legs, route_planning
 from simtest_operator.sim.actors import Actor, Domain, Mode
 from simtest_operator.sim.backends import TrafficHost
-from simtest_operator.sim.following import DistanceRun, SynchronizeRun
+from simtest_operator.sim.following import DistanceRun
 from simtest_operator.sim.lateral import LaneChangeRun, LaneOffsetRun, LateralDistanceRun
 from simtest_operator.sim.runs import Done, Run
 from simtest_operator.sim.speeds import SpeedProfileRun, SpeedRun, target_speed
+from simtest_operator.sim.synchronize import SynchronizeRun
 from simtest_operator.sim.traffic import Traffic
 from simtest_operator.sim.trajectories import PathRun
 from simtest_operator.sim.world import World

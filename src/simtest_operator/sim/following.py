@@ -1,16 +1,9 @@
-"""Longitudinal actions that depend on another entity: LongitudinalDistanceAction and
-SynchronizeAction.
+"""LongitudinalDistanceAction: keep a distance or time gap to another entity.
 
 Distance keeping without acceleration limits is rigid, as in the reference player: the actor is
 put at the requested gap along its lane and takes the reference's speed. With limits it follows
 the reference player's critically damped spring towards the gap, its acceleration clamped to the
 limits and changed no faster than the allowed rates (jerk).
-
-Synchronize re-plans every step: given the time the master needs to reach its target at its
-current speed (from where it was at the start of the step, also when it moved first), the actor
-picks the acceleration of a cubic position profile that arrives at its own target at that time
-with the requested final speed (or, without one, the constant acceleration that arrives on
-time). A steady-state part shortens the planned distance and time.
 """
 
 from __future__ import annotations
@@ -18,7 +11,7 @@ from __future__ import annotations
 import math
 
 from simtest_operator.openscenario import model
-from simtest_operator.sim import measures, positions
+from simtest_operator.sim import measures
 from simtest_operator.sim.actors import Actor, Mode
 from simtest_operator.sim.runs import LONGITUDINAL, Run
 from simtest_operator.sim.world import World
@@ -27,8 +20,6 @@ SPRING = 0.4
 """Spring constant per m/s^2 of allowed acceleration (1/s^2 per m/s^2) of the gap model."""
 GAP_TOLERANCE = 0.1
 """Gap error (m) below which a non-continuous distance action is done."""
-MASTER_TOLERANCE = 1.0
-"""Default distance (m) at which the synchronize master counts as arrived."""
 
 
 class DistanceRun(Run):
@@ -138,74 +129,3 @@ class DistanceRun(Run):
 
 def _limit(value: float | None) -> float:
     return value if value is not None and value > 0 else math.inf
-
-
-class SynchronizeRun(Run):
-    """A running SynchronizeAction."""
-
-    __slots__ = ("_action", "_last_master", "_master", "_master_target", "_target")
-
-    def __init__(self, world: World, actor: Actor, action: model.SynchronizeAction) -> None:
-        super().__init__(actor, LONGITUDINAL)
-        self._action = action
-        self._master = world.actor(action.master_entity_ref)
-        master_target = positions.resolve(world, action.target_position_master)
-        target = positions.resolve(world, action.target_position)
-        self._master_target = (master_target.x, master_target.y)
-        self._target = (target.x, target.y)
-        self._last_master = math.inf
-
-    def _final_speed(self) -> float | None:
-        final = self._action.final_speed
-        if final is None:
-            return None
-        if isinstance(final, model.AbsoluteFinalSpeed):
-            return final.value
-        if final.value_type is model.SpeedTargetValueType.FACTOR:
-            return self._master.speed * final.value
-        return self._master.speed + final.value
-
-    def _steady(self, final: float | None) -> tuple[float, float]:
-        """(distance, time) reserved for the steady-state part at the final speed."""
-        action_final = self._action.final_speed
-        steady = action_final.steady_state if action_final is not None else None
-        if steady is None or final is None:
-            return 0.0, 0.0
-        if steady.distance is not None:
-            return steady.distance, steady.distance / final if final > 0 else 0.0
-        time = steady.time or 0.0
-        return final * time, time
-
-    def step(self, world: World, dt: float) -> None:
-        actor = self.actor
-        assert actor is not None
-        master = self._master
-        seen = world.state(master.name)  # as it was at time t, also when it moved first
-        dm = math.hypot(self._master_target[0] - seen.x, self._master_target[1] - seen.y)
-        tolerance = self._action.target_tolerance_master or MASTER_TOLERANCE
-        final = self._final_speed()
-        if dm <= tolerance or (dm > self._last_master + 1e-6 and dm < 5.0 * tolerance):
-            if final is not None:
-                actor.speed = final
-            self.finished = True
-            return
-        self._last_master = dm
-        if master.speed <= 0.01:
-            return
-        remaining_time = dm / master.speed
-        distance = math.hypot(self._target[0] - actor.x, self._target[1] - actor.y)
-        steady_distance, steady_time = self._steady(final)
-        distance -= steady_distance
-        remaining_time -= steady_time
-        if distance <= 0.0 or remaining_time <= dt:
-            if final is not None:
-                actor.speed = final
-            return
-        v = actor.speed
-        if final is None:
-            acceleration = 2.0 * (distance - v * remaining_time) / remaining_time**2
-        else:
-            acceleration = (
-                6.0 * distance - 4.0 * v * remaining_time - 2.0 * final * remaining_time
-            ) / (remaining_time**2)
-        actor.speed = max(v + acceleration * dt, 0.0)
