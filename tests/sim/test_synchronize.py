@@ -8,13 +8,14 @@ a TrajectoryPosition on it on a road with 12 m lanes."""
 
 from __future__ import annotations
 
+import shutil
 from pathlib import Path
 
 import pytest
 
 from simtest_operator.openscenario import model
-from simtest_operator.runner import scenario_execution
-from simtest_operator.sim import BackendChoice, SutConfig, Takeover
+from simtest_operator.sim import SutConfig, Takeover
+from tests.sim.carla_scenarios import run
 from tests.sim.worlds import DT, Bench, lane, speed, teleport
 
 CROSSING = Path(__file__).parent / "data" / "ncap_vru" / "vru_crossing.xosc"
@@ -23,15 +24,9 @@ LANE_CENTRE_Y = -6.0  # of the ego's 12 m lane; the VRU's TrajectoryPosition s=5
 
 
 def crossing(tmp_path: Path, **overrides: str) -> dict[str, list[list[float]]]:
-    report = scenario_execution.run_scenario(
-        scenario_execution.RunRequest(
-            scenario=CROSSING,
-            nets_dir=tmp_path,
-            record=False,
-            backend=BackendChoice.MEMORY,
-            sut=SutConfig(takeover=Takeover.NEVER),
-            overrides=overrides,
-        )
+    folder = shutil.copytree(CROSSING.parent, tmp_path / "ncap_vru")
+    report = run(
+        folder / CROSSING.name, sut=SutConfig(takeover=Takeover.NEVER), overrides=overrides
     )
     assert report.storyboard_complete, report.outcome.reason
     return {name: [list(s) for s in samples] for name, samples in report.samples.items()}
