@@ -111,6 +111,8 @@ class FakeCluster:
         self.max_in_flight = 0
         self.max_live_envs = 0
         self.pods_started: list[tuple[str, int]] = []
+        self.pod_deletes: list[tuple[str, int | None]] = []
+        """Each pod delete the operator asked for, with its grace (None: the pod's own)."""
         self.conflicts = 0
         self.last_status_write: datetime.datetime | None = None
         self.refusing: dict[tuple[Kind, str], str] = {}
@@ -216,6 +218,8 @@ class FakeCluster:
                 if action.kind is Kind.CAMPAIGN:
                     self.last_status_write = self.now
             elif isinstance(action, Delete):
+                if action.kind is Kind.POD:
+                    self.pod_deletes.append((action.name, action.grace_seconds))
                 self.delete(action.kind, action.name, uid=action.uid)
             elif isinstance(action, Emit):
                 self.events.append(action)

@@ -201,3 +201,20 @@ def test_a_large_window_opens_over_several_short_steps() -> None:
     assert plan.observation.window == 16
     cluster.run()
     assert cluster.status()["passed"] == 60
+
+
+def test_exited_pods_hand_their_slot_over_at_once() -> None:
+    """A finished environment's pod whose container exited is deleted without grace (the
+    scheduler frees its slot now, not after the kubelet's relist); the baseline setting keeps
+    the graceful delete."""
+    for release, grace in ((True, 0), (False, None)):
+        config = OperatorSettings(
+            inputs=InputSettings(templates_dir=REPO / "helm-templates"),
+            pacing=PacingSettings(release_exited=release),
+        )
+        cluster = FakeCluster(nodes={"n0": 1}, config=config)
+        cluster.start_campaign(campaign_body(batchSize=3), frozen_list(3), batch_size=3)
+        cluster.run()
+        assert cluster.status()["phase"] == "Succeeded"
+        assert len(cluster.pod_deletes) == 3
+        assert {g for _, g in cluster.pod_deletes} == {grace}

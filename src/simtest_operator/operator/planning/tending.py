@@ -12,7 +12,7 @@ from simtest_operator.errors import RenderError
 from simtest_operator.operator import environments, provisioning, requests
 from simtest_operator.operator.actions import Action, Delete, Kind, PatchStatus, Provision
 from simtest_operator.operator.environments import Assessment
-from simtest_operator.operator.observed import EnvironmentView
+from simtest_operator.operator.observed import EnvironmentView, PodView
 from simtest_operator.operator.planning.inputs import Step
 from simtest_operator.operator.planning.outcomes import Outcome
 from simtest_operator.operator.status import environmentstatus, patches
@@ -44,12 +44,25 @@ def _environment(step: Step, env: EnvironmentView, assessment: Assessment) -> Ou
             latencies.append(max((started - queued).total_seconds(), 0.0))
     pod = step.inputs.pods.get(env.status.pod or env.name)
     if env.finished and pod is not None:
-        gone = environments.node_gone(pod, step.inputs.nodes)
-        if not pod.deleting or gone:  # a graceful delete on a dead node never completes
-            actions.append(
-                Delete(kind=Kind.POD, name=pod.name, uid=pod.uid, grace_seconds=0 if gone else None)
-            )
+        actions.extend(_release(step, pod))
     return Outcome(actions=tuple(actions), wakes=wakes, start_latencies=tuple(latencies))
+
+
+def _release(step: Step, pod: PodView) -> tuple[Action, ...]:
+    """Delete the pod of a finished environment, at once where nothing is left to stop.
+
+    Without grace when its node is gone (a graceful delete there never completes) and when its
+    simulator container has exited: the kubelet marks such a pod terminal only a PLEG relist
+    (about 1 s) after the exit, and until then the scheduler counts its slot as taken, so the
+    next pod would wait that second. Removing the object hands the slot over at once; the
+    kubelet tears the sandbox down in the background. A pod still running is deleted
+    gracefully, so its runner gets SIGTERM and keeps what it finished.
+    """
+    gone = environments.node_gone(pod, step.inputs.nodes)
+    force = gone or (pod.container.state == "terminated" and step.config.pacing.release_exited)
+    if pod.deleting and not force:
+        return ()
+    return (Delete(kind=Kind.POD, name=pod.name, uid=pod.uid, grace_seconds=0 if force else None),)
 
 
 def _provision(step: Step, env: EnvironmentView) -> Action:
