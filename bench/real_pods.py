@@ -22,6 +22,7 @@ Needs root and what ``make test`` builds (toolchain, images). Prints a rich tabl
 from __future__ import annotations
 
 import argparse
+import datetime
 import json
 import statistics
 import subprocess
@@ -56,6 +57,12 @@ class PodTimeline:
         self.seen: dict[str, dict[str, float]] = {}
         self.specs: dict[str, str] = {}
         """Each pod's run spec (``SIMTEST_RUN_SPEC``): which scenarios it ran."""
+        self.finished: dict[str, list[tuple[str, float]]] = {}
+        """Each pod's ``finished <id>: ...`` log lines: scenario and the line's container-log
+        time (on this clock), read by following the log while the pod runs (a finished pod is
+        deleted at once, its log with it)."""
+        self._api, self._namespace = api, namespace
+        self._followers: dict[str, threading.Thread] = {}
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, args=(api, namespace), daemon=True)
 
@@ -66,6 +73,8 @@ class PodTimeline:
     def __exit__(self, *_: object) -> None:
         self._stop.set()
         self._thread.join(timeout=10)
+        for follower in list(self._followers.values()):
+            follower.join(timeout=5)
 
     def _run(self, api: client.ApiClient, namespace: str) -> None:
         core = client.CoreV1Api(api)
@@ -87,8 +96,33 @@ class PodTimeline:
                 for status in pod.status.container_statuses or []:
                     if status.state.running or status.state.terminated:
                         marks.setdefault("running", now)
+                        self._follow(pod.metadata.name)
                     if status.state.terminated:
                         marks.setdefault("terminated", now)
+
+    def _follow(self, name: str) -> None:
+        if name not in self._followers:
+            self._followers[name] = threading.Thread(
+                target=self._read_log, args=(name,), daemon=True
+            )
+            self._followers[name].start()
+
+    def _read_log(self, name: str) -> None:
+        """Follow one pod's log; container-log timestamps (RFC 3339) put on the monotonic clock."""
+        offset = time.time() - time.monotonic()
+        lines = self.finished.setdefault(name, [])
+        try:
+            stream = client.CoreV1Api(self._api).read_namespaced_pod_log(
+                name, self._namespace, follow=True, timestamps=True, _preload_content=False
+            )
+            for raw in stream.stream():
+                for line in raw.decode(errors="replace").splitlines():
+                    stamp, _, text = line.partition(" ")
+                    if text.startswith("finished ") and ": " in text:
+                        when = datetime.datetime.fromisoformat(stamp.replace("Z", "+00:00"))
+                        lines.append((text[9:].rsplit(": ", 1)[0], when.timestamp() - offset))
+        except (client.ApiException, OSError, ValueError):
+            pass  # the pod went away: what was read stays
 
 
 def scenario_claim(core: client.CoreV1Api, namespace: str, root: Path = SCENARIOS) -> None:

@@ -67,11 +67,14 @@ class Config:
     slots: int
     barrier: bool
     reuse: bool
+    baseline: bool = False
+    """Run with the ``--baseline`` operator settings (the product as it was before a cut)."""
 
     @property
     def label(self) -> str:
         mode = "barrier" if self.barrier else "window"
-        return f"s{self.slots}-{mode}-{'Reuse' if self.reuse else 'PerScenario'}"
+        suffix = " (baseline)" if self.baseline else ""
+        return f"s{self.slots}-{mode}-{'Reuse' if self.reuse else 'PerScenario'}{suffix}"
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
@@ -90,9 +93,17 @@ class Result:
     overhead_p50: float
     overhead_p95: float
     api_requests_per_scenario: float
+    scenario_overhead_p50: float = float("nan")
+    """Per scenario, not per pod: the slot time from the previous scenario's end in the same pod
+    (or the pod's binding) to this one's ``finished`` log line, minus its run; the pod's exit
+    counts to its last scenario. Equal to the per-pod figure with a pod per scenario; with warm
+    pods it separates the warm gap from the pod start."""
+    scenario_overhead_p95: float = float("nan")
     refill_p50: float = float("nan")
     """Seconds a freed slot stays empty: from a pod's end to the next pod's binding."""
     refill_p95: float = float("nan")
+    durations: dict[str, float] = dataclasses.field(default_factory=dict)
+    """Each scenario's run time as the runner measured it (s)."""
     marks: dict[str, dict[str, float]] = dataclasses.field(default_factory=dict)
     """Each pod's timeline (seconds since the campaign was created), for later analysis."""
 
@@ -155,6 +166,19 @@ def results_of(custom: client.CustomObjectsApi, namespace: str) -> dict[str, dic
     }
 
 
+def scenario_overheads(
+    marks: dict[str, float], finished: Sequence[tuple[str, float]], runs: dict[str, float]
+) -> list[float]:
+    """Each scenario's share of its pod's slot time beyond its run (see ``Result``)."""
+    out: list[float] = []
+    previous = marks["scheduled"]
+    for index, (scenario, at) in enumerate(finished):
+        end = marks["terminated"] if index == len(finished) - 1 else at
+        out.append(max(end - previous - runs.get(scenario, 0.0), 0.0))
+        previous = at
+    return out
+
+
 def run_one(
     api: client.ApiClient,
     kubeconfig: Path,
@@ -176,7 +200,11 @@ def run_one(
         sources=SCENARIOS,
         cache=workdir / "cache",
         log=workdir / f"{config.label}.log",
-        env={"SIMTEST_OPERATOR_SCENARIO_CLAIM": "scenarios", **dict(args.operator_env)},
+        env={
+            "SIMTEST_OPERATOR_SCENARIO_CLAIM": "scenarios",
+            **dict(args.operator_env),
+            **(dict(args.baseline) if config.baseline else {}),
+        },
     ) as (_, port):
         before = metric_total(operator_metrics(port), "simtest_api_requests_total")
         with PodTimeline(api, namespace) as timeline:
@@ -194,7 +222,7 @@ def run_one(
     bound = max(work / config.slots, max(runs.values(), default=0.0))
     # From the moment the scheduler gave the pod a slot (prefetched pods wait Pending for one,
     # which is queueing, not overhead): container start, then the runner's work around the runs.
-    starts, overheads = [], []
+    starts, overheads, per_scenario = [], [], []
     for name, marks in timeline.seen.items():
         if "running" in marks and "scheduled" in marks:
             starts.append(marks["running"] - marks["scheduled"])
@@ -204,6 +232,7 @@ def run_one(
         queue = [s.id for s in RunSpec.loads(spec).scenarios]
         ran = sum(runs.get(i, 0.0) for i in queue)
         overheads.append((marks["terminated"] - marks["scheduled"] - ran) / len(queue))
+        per_scenario.extend(scenario_overheads(marks, timeline.finished.get(name, []), runs))
     ends = sorted(m["terminated"] for m in timeline.seen.values() if "terminated" in m)
     binds = sorted(m["scheduled"] for m in timeline.seen.values() if "scheduled" in m)
     refills = []
@@ -224,11 +253,20 @@ def run_one(
         start_p95=round(percentile(starts, 0.95), 2),
         overhead_p50=round(percentile(overheads, 0.5), 2),
         overhead_p95=round(percentile(overheads, 0.95), 2),
+        scenario_overhead_p50=round(percentile(per_scenario, 0.5), 2),
+        scenario_overhead_p95=round(percentile(per_scenario, 0.95), 2),
         api_requests_per_scenario=round(requests / max(len(found), 1), 1),
         refill_p50=round(percentile(refills, 0.5), 2),
         refill_p95=round(percentile(refills, 0.95), 2),
+        durations=runs,
         marks={
-            name: {k: round(v - started, 3) for k, v in marks.items()}
+            name: {
+                **{k: round(v - started, 3) for k, v in marks.items()},
+                **{
+                    f"finished {i}": round(at - started, 3)
+                    for i, at in timeline.finished.get(name, [])
+                },
+            }
             for name, marks in timeline.seen.items()
         },
     )
@@ -238,8 +276,8 @@ def table(results: Sequence[Result], title: str) -> Table:
     out = Table(title=title)
     columns = (
         "config", "n", "passed", "makespan s", "work s", "bound s", "bound/makespan",
-        "pod start p50/p95 s", "overhead/scenario p50/p95 s", "refill p50/p95 s",
-        "API req/scenario",
+        "pod start p50/p95 s", "overhead/pod p50/p95 s", "overhead/scenario p50/p95 s",
+        "refill p50/p95 s", "API req/scenario",
     )  # fmt: skip
     for column in columns:
         out.add_column(column, justify="left" if column == "config" else "right")
@@ -249,6 +287,7 @@ def table(results: Sequence[Result], title: str) -> Table:
             f"{r.work:.1f}", f"{r.bound:.1f}", f"{r.bound_ratio:.2f}",
             f"{r.start_p50:.2f} / {r.start_p95:.2f}",
             f"{r.overhead_p50:.2f} / {r.overhead_p95:.2f}",
+            f"{r.scenario_overhead_p50:.2f} / {r.scenario_overhead_p95:.2f}",
             f"{r.refill_p50:.2f} / {r.refill_p95:.2f}",
             f"{r.api_requests_per_scenario:.1f}",
         )  # fmt: skip
@@ -258,13 +297,16 @@ def table(results: Sequence[Result], title: str) -> Table:
 def markdown(results: Sequence[Result]) -> str:
     lines = [
         "| config | n | makespan s | work s | bound s | bound/makespan | pod start p50/p95 s "
-        "| overhead/scenario p50/p95 s | refill p50/p95 s | API req/scenario |",
-        "|---|---|---|---|---|---|---|---|---|---|",
+        "| overhead/pod p50/p95 s | overhead/scenario p50/p95 s | refill p50/p95 s "
+        "| API req/scenario |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     lines += [
         f"| {r.config.label} | {r.scenarios} | {r.makespan:.1f} | {r.work:.1f} | {r.bound:.1f} "
         f"| {r.bound_ratio:.2f} | {r.start_p50:.2f} / {r.start_p95:.2f} "
-        f"| {r.overhead_p50:.2f} / {r.overhead_p95:.2f} | {r.refill_p50:.2f} / {r.refill_p95:.2f} "
+        f"| {r.overhead_p50:.2f} / {r.overhead_p95:.2f} "
+        f"| {r.scenario_overhead_p50:.2f} / {r.scenario_overhead_p95:.2f} "
+        f"| {r.refill_p50:.2f} / {r.refill_p95:.2f} "
         f"| {r.api_requests_per_scenario:.1f} |"
         for r in results
     ]
@@ -286,11 +328,11 @@ def plot(results: Sequence[Result], path: Path) -> None:
     left.set_xlim(0, 1.05)
     left.legend(loc="lower right", fontsize=8)
     left.invert_yaxis()
-    right.barh(labels, [r.overhead_p50 for r in results], color="tab:red", label="p50")
+    right.barh(labels, [r.scenario_overhead_p50 for r in results], color="tab:red", label="p50")
     right.barh(
         labels,
-        [max(r.overhead_p95 - r.overhead_p50, 0.0) for r in results],
-        left=[r.overhead_p50 for r in results],
+        [max(r.scenario_overhead_p95 - r.scenario_overhead_p50, 0.0) for r in results],
+        left=[r.scenario_overhead_p50 for r in results],
         color="tab:pink",
         label="to p95",
     )
@@ -324,6 +366,15 @@ def main() -> None:
         metavar="NAME=VALUE",
         help="an environment variable for the operator, e.g. SIMTEST_OPERATOR_PREFETCH=0",
     )
+    parser.add_argument(
+        "--baseline",
+        action="append",
+        default=[],
+        type=lambda text: tuple(text.split("=", 1)),
+        metavar="NAME=VALUE",
+        help="also run every window config with this operator setting, side by side "
+        "(e.g. SIMTEST_OPERATOR_RELEASE_EXITED=false, the graceful delete before the cut)",
+    )
     args = parser.parse_args()
     settings = Settings.from_env()
     toolchain = Toolchain(root=settings.cache.toolchain)
@@ -346,12 +397,17 @@ def main() -> None:
             try:
                 for label in args.configs.split(","):
                     mode, isolation = label.split("-")
-                    config = Config(
-                        slots=slots, barrier=mode == "barrier", reuse=isolation == "Reuse"
-                    )
-                    result = run_one(api, info.kubeconfig, config, ids, args, work)
-                    results.append(result)
-                    console.print(table([result], config.label))
+                    variants = (False, True) if args.baseline and mode == "window" else (False,)
+                    for baseline in variants:
+                        config = Config(
+                            slots=slots,
+                            barrier=mode == "barrier",
+                            reuse=isolation == "Reuse",
+                            baseline=baseline,
+                        )
+                        result = run_one(api, info.kubeconfig, config, ids, args, work)
+                        results.append(result)
+                        console.print(table([result], config.label))
             finally:
                 api.close()  # type: ignore[no-untyped-call]
                 cluster.down()
@@ -368,8 +424,17 @@ def main() -> None:
     )
     stem.with_suffix(".md").write_text(markdown(results))
     plot(results, stem.with_suffix(".png"))
-    window = [r for r in results if not r.config.barrier]
+    window = [r for r in results if not r.config.barrier and not r.config.baseline]
     barrier = {(r.config.slots, r.config.reuse): r for r in results if r.config.barrier}
+    before = {(r.config.slots, r.config.reuse): r for r in results if r.config.baseline}
+    for r in window:
+        old = before.get((r.config.slots, r.config.reuse))
+        if old is not None:
+            console.print(
+                f"{r.config.label}: makespan {r.makespan / old.makespan:.2f}x the baseline's, "
+                f"bound/makespan {old.bound_ratio:.2f} -> {r.bound_ratio:.2f}, "
+                f"refill p50 {old.refill_p50:.2f} -> {r.refill_p50:.2f} s"
+            )
     for r in window:
         other = barrier.get((r.config.slots, r.config.reuse))
         if other is not None:

@@ -370,7 +370,9 @@ def _attempt(
 def _report(attempts: Sequence[delivering.Attempt], termination_log: Path) -> None:
     """After each scenario: its line in the log and every verdict so far in the message."""
     outcome = attempts[-1].outcome
-    sys.stdout.write(f"finished {outcome.scenario_id}: {outcome.verdict.value}\n")
+    sys.stdout.write(
+        f"finished {outcome.scenario_id}: {outcome.verdict.value} ({outcome.wall_seconds:.2f} s)\n"
+    )
     sys.stdout.flush()
     write_message([a.outcome for a in attempts], termination_log)
 
