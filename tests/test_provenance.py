@@ -78,6 +78,7 @@ def test_a_scenario_result_carries_the_record(tmp_path: Path) -> None:
 
 
 DIGEST = "sha256:" + "5e" * 32
+IMAGE_ID = "sha256:" + "1f" * 32
 
 
 def _index(tmp_path: Path, images: object) -> Path:
@@ -90,14 +91,17 @@ def test_an_image_is_named_by_digest_only_where_someone_knows_it(tmp_path: Path)
     index = _index(
         tmp_path,
         {
-            "registry.local:5000/acme/planner:2.1.0": {"digest": DIGEST, "id": "sha256:" + "1" * 6},
+            "registry.local:5000/acme/planner:2.1.0": {"digest": DIGEST, "id": IMAGE_ID},
             "acme/no-digest:1": {"archive": "x.tar"},
+            "acme/short-id:1": {"digest": DIGEST, "id": "sha256:" + "1" * 6},
         },
     )  # fmt: skip
-    # The build index gives the manifest digest, in the form a containerd kubelet reports it.
+    # The build index gives the image id, the form a containerd kubelet reports for an
+    # imported archive (no repo digest), not the manifest digest.
     built = provenance.built_image_id("registry.local:5000/acme/planner:2.1.0", index)
-    assert built == f"registry.local:5000/acme/planner@{DIGEST}"
+    assert built == IMAGE_ID
     assert provenance.built_image_id("acme/no-digest:1", index) == ""
+    assert provenance.built_image_id("acme/short-id:1", index) == ""
     assert provenance.built_image_id("acme/other:1", index) == ""
     assert provenance.built_image_id("acme/other:1", tmp_path / "missing.json") == ""
     (tmp_path / "broken.json").write_text("{")

@@ -124,17 +124,21 @@ def pinned_image_id(image: str) -> str:
 
 
 def built_image_id(image: str, index: Path) -> str:
-    """``repo@sha256:…`` of ``image`` from the build script's index (``images.json``: the
-    manifest digest, which a containerd node that imported the archive reports the same way),
-    else "" (no index, image not built here, or an entry without a digest)."""
+    """``sha256:…`` of ``image`` from the build script's index (``images.json``: the image id,
+    i.e. its config digest), else "" (no index, image not built here, or an entry without one).
+
+    The image id is what a containerd kubelet reports as the container's ``imageID`` for an
+    archive it imported (``ctr images import``: no registry, no repo digest), as the real node
+    shows; the archive's manifest digest names it nowhere a pod can see.
+    """
     try:
         data = json.loads(index.read_text())
     except (OSError, ValueError):
         return ""
     images = data.get("images") if isinstance(data, Mapping) else None
     entry = images.get(image) if isinstance(images, Mapping) else None
-    digest = str(entry.get("digest", "")) if isinstance(entry, Mapping) else ""
-    return f"{_repository(image)}@{digest}" if _DIGEST.match(digest) else ""
+    identity = str(entry.get("id", "")) if isinstance(entry, Mapping) else ""
+    return identity if _DIGEST.match(identity) else ""
 
 
 def _repository(name: str) -> str:

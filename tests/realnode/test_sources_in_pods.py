@@ -160,8 +160,36 @@ def archive(root: Path, work: Path) -> None:
     (root / "suite.tar.gz").write_bytes(buffer.getvalue())
 
 
+STORY = """
+    <Story name="slow-down">
+      <Act name="act">
+        <ManeuverGroup name="ego" maximumExecutionCount="1">
+          <Actors selectTriggeringEntities="false"><EntityRef entityRef="Ego"/></Actors>
+          <Maneuver name="brake">
+            <Event name="brake" priority="overwrite">
+              <Action name="brake"><PrivateAction><LongitudinalAction><SpeedAction>
+                <SpeedActionDynamics dynamicsShape="step" value="0" dynamicsDimension="time"/>
+                <SpeedActionTarget><AbsoluteTargetSpeed value="5"/></SpeedActionTarget>
+              </SpeedAction></LongitudinalAction></PrivateAction></Action>
+              <StartTrigger><ConditionGroup><Condition name="t" delay="0" conditionEdge="none">
+                <ByValueCondition><SimulationTimeCondition value="2" rule="greaterThan"/>
+                </ByValueCondition></Condition></ConditionGroup></StartTrigger>
+            </Event>
+          </Maneuver>
+        </ManeuverGroup>
+        <StartTrigger><ConditionGroup><Condition name="go" delay="0" conditionEdge="none">
+          <ByValueCondition><SimulationTimeCondition value="0" rule="greaterOrEqual"/>
+          </ByValueCondition></Condition></ConditionGroup></StartTrigger>
+      </Act>
+    </Story>
+"""
+
+
 def inline_items() -> list[dict[str, str]]:
-    text = CARLA.read_text(encoding="utf-8")
+    """Two CARLA-authored scenarios (a town by name, CARLA's frame) that run for two seconds:
+    a ScenarioRunner scenario ends with its stories, and a recording of one frame backs no
+    verdict."""
+    text = CARLA.read_text(encoding="utf-8").replace("</Init>", "</Init>" + STORY, 1)
     return [
         {"id": "carla/town01", "content": text},
         {"id": "carla/town01-again", "content": text + "<!-- a second item -->\n"},

@@ -56,18 +56,19 @@ def test_the_external_sut_campaign_runs_locally_like_the_in_process_one(tmp_path
 
 
 DIGEST = "sha256:" + "5e" * 32
+IMAGE_ID = "sha256:" + "1f" * 32
 
 
 def test_the_image_digest_is_named_only_where_it_is_known(tmp_path: Path) -> None:
     index = tmp_path / "images.json"
-    index.write_text(json.dumps({"images": {"acme/planner:2": {"digest": DIGEST}}}))
+    index.write_text(json.dumps({"images": {"acme/planner:2": {"digest": DIGEST, "id": IMAGE_ID}}}))
 
     def recorded(image: str | None, launch: Launch = Launch.SIDECAR) -> dict[str, str]:
         external = ExternalSut(launch=launch, image=image, command=("planner",))
         sut = suts.with_image_id(SutConfig(name="planner", external=external), index)
         return runs.provenance(sut, Identity(name="planner", version="2"))
 
-    assert recorded("acme/planner:2")["sut.imageID"] == f"acme/planner@{DIGEST}"
+    assert recorded("acme/planner:2")["sut.imageID"] == IMAGE_ID  # as the node reports it
     assert recorded(f"ghcr.io/acme/planner@{DIGEST}")["sut.imageID"] == (
         f"ghcr.io/acme/planner@{DIGEST}"
     )
