@@ -1,11 +1,14 @@
-"""Fixtures of the real-node end-to-end tests: the scenarios as a PVC, and the operator."""
+"""Fixtures of the real-node end-to-end tests: the scenarios as a PVC, the operator, and the
+campaigns and Secrets the results tests share."""
 
 from __future__ import annotations
 
+import base64
 import contextlib
-from collections.abc import Callable, Iterator, Mapping
+import time
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import pytest
 import yaml
@@ -14,9 +17,13 @@ from kubernetes import client
 from simtest_operator.devcluster.state import ClusterInfo
 from tests.e2e import support
 from tests.fixtures.forwarding import Forwarder
+from tests.results.s3server import BUCKET
 
 SCENARIOS = support.REPO / "scenarios"
 SMOKE = SCENARIOS / "smoke-campaign.yaml"
+T = TypeVar("T")
+PREFIX = "nightly/team-a"
+"""Where the results tests' campaigns put their artifacts in the S3 bucket."""
 
 
 def smoke_variant(
@@ -148,3 +155,64 @@ def expose(pod_host: str) -> Iterator[Callable[[int], str]]:
     finally:
         for forwarder in forwarders:
             forwarder.close()
+
+
+def create_secret(cluster: support.Cluster, name: str, data: dict[str, str]) -> None:
+    cluster.core.create_namespaced_secret(
+        cluster.namespace,
+        {
+            "apiVersion": "v1",
+            "kind": "Secret",
+            "metadata": {"name": name},
+            "data": {k: base64.b64encode(v.encode()).decode() for k, v in data.items()},
+        },
+    )
+
+
+def results_campaign(
+    tmp_path: Path,
+    name: str,
+    names: Sequence[str],
+    *,
+    database: str | None,
+    s3: str | None = None,
+    pvc: dict[str, str] | None = None,
+    prefix: str = PREFIX,
+) -> dict[str, Any]:
+    """The smoke campaign cut to ``names`` (two at a time, no retries) storing its results in
+    the database of Secret ``database`` and its artifacts in S3 at ``s3`` or on ``pvc``."""
+    path = smoke_variant(
+        tmp_path,
+        name,
+        "*.xosc",
+        maxParallel=2,
+        batchSize=2,
+        retries=0,
+        timeoutSeconds=60,
+        resources={"requests": {"cpu": "500m"}},
+    )
+    body: dict[str, Any] = yaml.safe_load(path.read_text())
+    spec = body["spec"]
+    spec["scenarios"]["include"] = list(names)
+    spec["evaluation"] = {"criteria": {"minTtc": 1.0}}
+    if database is not None:
+        spec["results"] = {"databaseSecretRef": {"name": database, "key": "dsn"}}
+    if s3 is not None:
+        spec["artifacts"] = {
+            "s3": {"endpoint": s3, "bucket": BUCKET, "prefix": prefix, "secretRef": "artifacts-s3"}
+        }
+    if pvc is not None:
+        spec["artifacts"] = {"pvc": pvc}
+    return body
+
+
+def wait_for(what: str, probe: Callable[[], T | None], *, timeout: float) -> T:
+    """Poll ``probe`` until it returns something (no fixed sleeps: a loaded machine is slow)."""
+    deadline = time.monotonic() + timeout
+    while True:
+        value = probe()
+        if value is not None:
+            return value
+        if time.monotonic() > deadline:
+            raise AssertionError(f"{what} not seen after {timeout:.0f}s")
+        time.sleep(0.5)

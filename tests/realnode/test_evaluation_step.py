@@ -22,21 +22,18 @@ Covers:
 
 from __future__ import annotations
 
-import base64
-import time
 import urllib.parse
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import Any
 
 import pytest
-import yaml
 from kubernetes import client
 
 from simtest_operator import results
 from simtest_operator.operator import observed, recording_results
 from tests.e2e import support
-from tests.realnode.conftest import smoke_variant
+from tests.realnode.conftest import create_secret, results_campaign, wait_for
 from tests.results.s3server import BUCKET, CREDENTIALS, S3Server, s3
 
 __all__ = ["s3"]  # the fixture, used by name
@@ -46,23 +43,11 @@ PASSING = "cut-in_highway_v25_gap30_dv5.xosc"
 STRICT = "name: strict-cm\ncollision: true\nbaseScenarios:\n  cut-in: {minTTC: 0.5}\n"
 """Checks collisions on cut-ins (the failing scenario's), other types keep the defaults."""
 BROKEN = "name: broken\nbaseScenarios:\n  cut-in: {minTCC: 1.2}\n"
-T = TypeVar("T")
 
 
 @pytest.fixture
 def cluster(real_api_client: client.ApiClient, real_namespace: str) -> support.Cluster:
     return support.Cluster(real_api_client, real_namespace)
-
-
-def _wait_for(what: str, probe: Callable[[], T | None], *, timeout: float) -> T:
-    deadline = time.monotonic() + timeout
-    while True:
-        value = probe()
-        if value is not None:
-            return value
-        if time.monotonic() > deadline:
-            raise AssertionError(f"{what} not seen after {timeout:.0f}s")
-        time.sleep(0.5)
 
 
 def _setup(
@@ -80,13 +65,7 @@ def _setup(
         },
     }
     for name, data in secrets.items():
-        cluster.core.create_namespaced_secret(
-            cluster.namespace,
-            {
-                "metadata": {"name": name},
-                "data": {k: base64.b64encode(v.encode()).decode() for k, v in data.items()},
-            },
-        )
+        create_secret(cluster, name, data)
     cluster.core.create_namespaced_config_map(
         cluster.namespace,
         {"metadata": {"name": "criteria"}, "data": {"strict.yaml": STRICT, "broken.yaml": BROKEN}},
@@ -97,34 +76,12 @@ def _setup(
 def _campaign(
     tmp_path: Path, name: str, names: tuple[str, ...], *, endpoint: str, key: str
 ) -> dict[str, Any]:
-    path = smoke_variant(
-        tmp_path,
-        name,
-        "*.xosc",
-        maxParallel=2,
-        batchSize=2,
-        retries=0,
-        timeoutSeconds=60,
-        resources={"requests": {"cpu": "500m"}},
+    body = results_campaign(
+        tmp_path, name, names, database="results-db", s3=endpoint, prefix="eval"
     )
-    body: dict[str, Any] = yaml.safe_load(path.read_text())
-    spec = body["spec"]
-    spec["scenarios"]["include"] = list(names)
-    spec["evaluation"] = {
-        "criteria": {"minTtc": 1.0},
-        "offline": {
-            "criteria": {"configMapRef": {"name": "criteria", "key": key}},
-            "backoffLimit": 1,
-        },
-    }
-    spec["results"] = {"databaseSecretRef": {"name": "results-db", "key": "dsn"}}
-    spec["artifacts"] = {
-        "s3": {
-            "endpoint": endpoint,
-            "bucket": BUCKET,
-            "prefix": "eval",
-            "secretRef": "artifacts-s3",
-        }
+    body["spec"]["evaluation"]["offline"] = {
+        "criteria": {"configMapRef": {"name": "criteria", "key": key}},
+        "backoffLimit": 1,
     }
     return body
 
@@ -158,7 +115,7 @@ def test_the_evaluation_step_rescores_the_run_from_the_database(
     cluster.create(_campaign(tmp_path, "evaluated", names, endpoint=endpoint, key="strict.yaml"))
     status = cluster.wait_complete("evaluated", timeout=600, alive=real_operator.alive)
     assert status["phase"] == "Failed"
-    condition = _wait_for(
+    condition = wait_for(
         "the Evaluated condition", lambda: _evaluated(cluster, "evaluated"), timeout=300
     )
     status = cluster.status("evaluated")
@@ -222,7 +179,7 @@ def test_a_criteria_set_that_does_not_load_is_an_error_not_retried(
     cluster.create(_campaign(tmp_path, "badcrit", (PASSING,), endpoint=endpoint, key="broken.yaml"))
     status = cluster.wait_complete("badcrit", timeout=600, alive=real_operator.alive)
     assert status["phase"] == "Succeeded"
-    condition = _wait_for(
+    condition = wait_for(
         "the Evaluated condition", lambda: _evaluated(cluster, "badcrit"), timeout=300
     )
     assert (condition["status"], condition["reason"]) == ("False", "Error"), condition

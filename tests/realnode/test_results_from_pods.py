@@ -24,24 +24,27 @@ Covers:
 
 from __future__ import annotations
 
-import base64
 import json
 import subprocess
 import sys
-import time
 import urllib.parse
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import Any
 
 import pytest
-import yaml
 from kubernetes import client
 
 from simtest_operator import recording, results
 from simtest_operator.operator import observed, recording_results
 from tests.e2e import support
-from tests.realnode.conftest import host_path_claim, smoke_variant
+from tests.realnode.conftest import (
+    PREFIX,
+    create_secret,
+    host_path_claim,
+    results_campaign,
+    wait_for,
+)
 from tests.results.s3server import BUCKET, CREDENTIALS, S3Server, free_port, s3
 
 __all__ = ["s3"]  # the fixture, used by name
@@ -49,8 +52,6 @@ __all__ = ["s3"]  # the fixture, used by name
 FAILING = "cut-in_highway_v30_gap8_dv12.xosc"
 """The smoke suite's failure by design: the cut-in vehicle collides with the ego."""
 PASSING = ("cut-in_highway_v25_gap30_dv5.xosc", "hard-braking_rural_v15_thw2_d4.xosc")
-PREFIX = "nightly/team-a"
-T = TypeVar("T")
 
 
 @pytest.fixture
@@ -62,64 +63,6 @@ def _port(dsn: str) -> int:
     port = urllib.parse.urlsplit(dsn).port
     assert port is not None, dsn
     return port
-
-
-def _secret(cluster: support.Cluster, name: str, data: dict[str, str]) -> None:
-    cluster.core.create_namespaced_secret(
-        cluster.namespace,
-        {
-            "apiVersion": "v1",
-            "kind": "Secret",
-            "metadata": {"name": name},
-            "data": {k: base64.b64encode(v.encode()).decode() for k, v in data.items()},
-        },
-    )
-
-
-def _campaign(
-    tmp_path: Path,
-    name: str,
-    names: Sequence[str],
-    *,
-    database: str | None,
-    s3: str | None = None,
-    pvc: dict[str, str] | None = None,
-) -> dict[str, Any]:
-    path = smoke_variant(
-        tmp_path,
-        name,
-        "*.xosc",
-        maxParallel=2,
-        batchSize=2,
-        retries=0,
-        timeoutSeconds=60,
-        resources={"requests": {"cpu": "500m"}},
-    )
-    body: dict[str, Any] = yaml.safe_load(path.read_text())
-    spec = body["spec"]
-    spec["scenarios"]["include"] = list(names)
-    spec["evaluation"] = {"criteria": {"minTtc": 1.0}}
-    if database is not None:
-        spec["results"] = {"databaseSecretRef": {"name": database, "key": "dsn"}}
-    if s3 is not None:
-        spec["artifacts"] = {
-            "s3": {"endpoint": s3, "bucket": BUCKET, "prefix": PREFIX, "secretRef": "artifacts-s3"}
-        }
-    if pvc is not None:
-        spec["artifacts"] = {"pvc": pvc}
-    return body
-
-
-def _wait_for(what: str, probe: Callable[[], T | None], *, timeout: float) -> T:
-    """Poll ``probe`` until it returns something (no fixed sleeps: a loaded machine is slow)."""
-    deadline = time.monotonic() + timeout
-    while True:
-        value = probe()
-        if value is not None:
-            return value
-        if time.monotonic() > deadline:
-            raise AssertionError(f"{what} not seen after {timeout:.0f}s")
-        time.sleep(0.5)
 
 
 def _run_key(cluster: support.Cluster, name: str) -> results.RunKey:
@@ -156,7 +99,7 @@ def test_artifacts_land_on_a_persistent_volume_claim(
     claim, folder = artifacts_claim
     names = (FAILING, PASSING[0])
     cluster.create(
-        _campaign(
+        results_campaign(
             tmp_path, "onpvc", names, database=None, pvc={"claimName": claim, "subPath": "runs"}
         )
     )
@@ -189,8 +132,8 @@ def test_results_and_artifacts_flow_from_the_pods(
     # Pods and the operator reach the database and the bucket through the node network.
     dsn = postgres_dsn.replace(f"127.0.0.1:{_port(postgres_dsn)}", expose(_port(postgres_dsn)))
     endpoint = f"http://{expose(s3.port)}"
-    _secret(cluster, "results-db", {"dsn": dsn})
-    _secret(
+    create_secret(cluster, "results-db", {"dsn": dsn})
+    create_secret(
         cluster,
         "artifacts-s3",
         {
@@ -198,7 +141,7 @@ def test_results_and_artifacts_flow_from_the_pods(
             "AWS_SECRET_ACCESS_KEY": CREDENTIALS["secret_access_key"],
         },
     )
-    cluster.create(_campaign(tmp_path, "results", names, database="results-db", s3=endpoint))
+    cluster.create(results_campaign(tmp_path, "results", names, database="results-db", s3=endpoint))
     status = cluster.wait_complete("results", timeout=600, alive=real_operator.alive)
     key = _run_key(cluster, "results")
 
@@ -208,7 +151,7 @@ def test_results_and_artifacts_flow_from_the_pods(
         return record if record is not None and record.finished else None
 
     # The operator's recorder works in the background: wait for the run's end record.
-    run = _wait_for("the finished campaign record", finished, timeout=120)
+    run = wait_for("the finished campaign record", finished, timeout=120)
     found = cluster.results("results")
     _check_verdicts(found, names)
     assert all("resultsStored" not in r for r in found.values())
@@ -285,8 +228,10 @@ def test_a_database_that_is_down_costs_the_rows_not_the_verdicts(
     tmp_path: Path,
 ) -> None:
     names = (FAILING, PASSING[0])
-    _secret(cluster, "results-db", {"dsn": f"postgresql://simtest@{pod_host}:{free_port()}/none"})
-    cluster.create(_campaign(tmp_path, "dbdown", names, database="results-db"))
+    create_secret(
+        cluster, "results-db", {"dsn": f"postgresql://simtest@{pod_host}:{free_port()}/none"}
+    )
+    cluster.create(results_campaign(tmp_path, "dbdown", names, database="results-db"))
     status = cluster.wait_complete("dbdown", timeout=600, alive=real_operator.alive)
     batches = {b["metadata"]["name"] for b in cluster.items("scenariobatches")}
 
@@ -301,7 +246,7 @@ def test_a_database_that_is_down_costs_the_rows_not_the_verdicts(
         ]
         return found if len(found) >= len(names) else None
 
-    events = _wait_for("ResultsNotStored events", warnings, timeout=60)
+    events = wait_for("ResultsNotStored events", warnings, timeout=60)
     found = cluster.results("dbdown")
     _check_verdicts(found, names)
     assert status["phase"] == "Failed" and status["failed"] == 1 and status["passed"] == 1
@@ -316,7 +261,7 @@ def test_a_missing_dsn_secret_is_a_container_config_error(
     cluster: support.Cluster,
     tmp_path: Path,
 ) -> None:
-    cluster.create(_campaign(tmp_path, "nosecret", [PASSING[0]], database="no-such-secret"))
+    cluster.create(results_campaign(tmp_path, "nosecret", [PASSING[0]], database="no-such-secret"))
     status = cluster.wait_complete("nosecret", timeout=180, alive=real_operator.alive)
     found = cluster.results("nosecret")
     result = found[PASSING[0]]
