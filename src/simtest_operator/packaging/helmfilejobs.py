@@ -27,6 +27,7 @@ import hashlib
 from collections.abc import Mapping
 from typing import Any
 
+from simtest_operator import podsecurity
 from simtest_operator.errors import RenderError
 
 IMAGE_CHARTS_DIR = "/opt/simtest/charts"
@@ -39,8 +40,6 @@ LABEL_ENVIRONMENT = "simtest.dev/environment"
 LABEL_ACTION = "simtest.dev/helmfile-action"
 MAX_NAME = 63
 """Job names become pod label values, which are at most 63 characters."""
-RUN_AS = 65532
-"""Numeric non-root user of the helmfile image."""
 
 
 class Action(enum.StrEnum):
@@ -153,13 +152,7 @@ def job(request: HelmfileJobRequest) -> dict[str, Any]:
             "requests": {"cpu": request.cpu, "memory": request.memory},
             "limits": {"memory": request.memory},
         },
-        "securityContext": {
-            "allowPrivilegeEscalation": False,
-            "readOnlyRootFilesystem": True,
-            "runAsNonRoot": True,
-            "capabilities": {"drop": ["ALL"]},
-            "seccompProfile": {"type": "RuntimeDefault"},
-        },
+        "securityContext": podsecurity.container_context(),
         "terminationMessagePolicy": "FallbackToLogsOnError",
         "volumeMounts": [
             {"name": "helmfile", "mountPath": HELMFILE_MOUNT, "readOnly": True},
@@ -188,13 +181,7 @@ def job(request: HelmfileJobRequest) -> dict[str, Any]:
                     # helm talks to the API server with this ServiceAccount's token.
                     "automountServiceAccountToken": True,
                     "enableServiceLinks": False,
-                    "securityContext": {
-                        "runAsNonRoot": True,
-                        "runAsUser": RUN_AS,
-                        "runAsGroup": RUN_AS,
-                        "fsGroup": RUN_AS,
-                        "seccompProfile": {"type": "RuntimeDefault"},
-                    },
+                    "securityContext": podsecurity.pod_context(),
                     "containers": [container],
                     "volumes": [
                         {"name": "helmfile", "configMap": {"name": name}},

@@ -18,6 +18,7 @@ import dataclasses
 from collections.abc import Mapping
 from typing import Any
 
+from simtest_operator import podsecurity
 from simtest_operator.render.inputs import ArtifactTarget, OwnerRef, SecretKey
 from simtest_operator.settings import RESULTS_DSN
 
@@ -31,8 +32,6 @@ TERMINATION_LOG = "/dev/termination-log"
 """Where ``--summary-file`` writes: the container's termination message."""
 VERDICT_EXIT_CODES = (1, 2)
 """Exit codes that end the Job without a retry (a verdict, bad input)."""
-RUN_AS = 65532
-"""Numeric non-root user of the runner image (as in the simulator pod)."""
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
@@ -146,13 +145,7 @@ def _pod_spec(request: EvaluationJobRequest) -> dict[str, Any]:
         "serviceAccountName": request.service_account,
         "automountServiceAccountToken": False,
         "enableServiceLinks": False,
-        "securityContext": {
-            "runAsNonRoot": True,
-            "runAsUser": RUN_AS,
-            "runAsGroup": RUN_AS,
-            "fsGroup": RUN_AS,
-            "seccompProfile": {"type": "RuntimeDefault"},
-        },
+        "securityContext": podsecurity.pod_context(),
         "containers": [
             {
                 "name": CONTAINER,
@@ -165,13 +158,7 @@ def _pod_spec(request: EvaluationJobRequest) -> dict[str, Any]:
                     "requests": {"cpu": request.cpu, "memory": request.memory},
                     "limits": {"cpu": request.cpu, "memory": request.memory},
                 },
-                "securityContext": {
-                    "runAsNonRoot": True,
-                    "allowPrivilegeEscalation": False,
-                    "readOnlyRootFilesystem": True,
-                    "capabilities": {"drop": ["ALL"]},
-                    "seccompProfile": {"type": "RuntimeDefault"},
-                },
+                "securityContext": podsecurity.container_context(),
                 "terminationMessagePath": TERMINATION_LOG,
                 "terminationMessagePolicy": "FallbackToLogsOnError",
                 "volumeMounts": mounts,
