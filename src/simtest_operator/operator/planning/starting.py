@@ -68,6 +68,7 @@ def start(step: Step, states: Sequence[ScenarioState], *, in_flight: int, window
     spec = step.spec
     execution = spec.execution
     reuse = execution.isolation.value == "Reuse"
+    running = slots(step)
     units = select(
         states,
         step.layout,
@@ -77,12 +78,12 @@ def start(step: Step, states: Sequence[ScenarioState], *, in_flight: int, window
             barrier_limit=execution.max_parallel,
             in_flight=in_flight,
             chunk=step.config.pacing.reuse_queue if reuse else 1,
-            spread=slots(step),
+            spread=running,
             suspended=spec.suspend,
         ),
     )
     wakes: tuple[datetime.datetime, ...] = ()
-    limit = min(step.config.pacing.max_starts_per_step, _filling(step, in_flight, window))
+    limit = min(step.config.pacing.max_starts_per_step, _filling(running, in_flight, window))
     if len(units) > limit:
         units = units[:limit]
         wakes = (step.now,)
@@ -128,7 +129,7 @@ def start(step: Step, states: Sequence[ScenarioState], *, in_flight: int, window
     return Outcome(actions=tuple(actions), wakes=wakes)
 
 
-def _filling(step: Step, in_flight: int, window: int) -> int:
+def _filling(running: int, in_flight: int, window: int) -> int:
     """How many environments to create now: the prefetched ones (beyond the free slots) only in
     a later step than those that fill free slots.
 
@@ -136,7 +137,7 @@ def _filling(step: Step, in_flight: int, window: int) -> int:
     binds whichever come first; a prefetched pod must come after the pods the slots are meant
     for. With warm queues (largest first) the largest queue otherwise waited Pending behind
     smaller ones and ran last (the tail at s = 3 in ``bench/real_table1.py``)."""
-    free = slots(step) - in_flight
+    free = running - in_flight
     return free if 0 < free < window - in_flight else window
 
 
