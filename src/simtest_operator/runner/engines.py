@@ -2,8 +2,8 @@
 
 :func:`execute` adapts a :class:`~simtest_operator.runner.tasks.ScenarioTask` to the engine's
 :func:`~simtest_operator.runner.scenario_execution.run_scenario` (simulation, online evaluation and
-recording in this process). The engine gets a wall-clock limit a little below the executor's, so
-a slow run normally ends as a clean ``Timeout`` with its metrics and a closed recording; the
+recording in this process). The engine gets the wall-clock limit pods use too
+(:func:`~simtest_operator.runner.scenario_execution.soft_limit`, a little below the executor's); the
 executor's kill is the backstop for a simulator that stops responding altogether.
 """
 
@@ -13,11 +13,6 @@ from simtest_operator.openscenario import LoadOptions
 from simtest_operator.runner import scenario_execution
 from simtest_operator.runner.tasks import ScenarioTask
 from simtest_operator.verdicts import ScenarioOutcome
-
-
-def soft_limit(timeout: float) -> float:
-    """The engine's own wall-clock limit for an executor timeout of ``timeout`` seconds."""
-    return max(timeout * 0.9, timeout - 2.0)
 
 
 def execute(task: ScenarioTask) -> ScenarioOutcome:
@@ -32,7 +27,7 @@ def execute(task: ScenarioTask) -> ScenarioOutcome:
         simulation=task.settings.simulation,
         output_dir=task.out_dir,
         record=task.record,
-        wall_clock_limit=soft_limit(task.timeout_seconds),
+        wall_clock_limit=scenario_execution.soft_limit(task.timeout_seconds),
         loading=LoadOptions(source_root=task.source_root, maps=task.settings.maps),
     )
     return scenario_execution.run_scenario(request).outcome

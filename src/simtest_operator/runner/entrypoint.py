@@ -132,7 +132,7 @@ def requests_for(job: Job, scenario: ScenarioRef, path: Path) -> scenario_execut
         simulation=converting.simulation(simulator),
         output_dir=job.artifacts / safe_name(scenario.id),
         record=simulator.record,
-        wall_clock_limit=max(spec.timeout_seconds * 0.95, spec.timeout_seconds - 2.0),
+        wall_clock_limit=scenario_execution.soft_limit(spec.timeout_seconds),
         loading=LoadOptions(
             source_root=uris.source_root(path, scenario.source), maps=job.settings.maps
         ),

@@ -34,6 +34,16 @@ Sample = tuple[float, float, float, float, float]
 """(t, x, y, heading, speed) of an entity's reference point, as in esmini-reference.json."""
 
 
+def soft_limit(timeout: float) -> float:
+    """The engine's own wall-clock limit for a scenario timeout of ``timeout`` seconds.
+
+    A little below the timeout, so a slow run normally ends as a clean ``Timeout`` with its
+    metrics and a closed recording before the worker's kill (local) or the pod's deadline lands.
+    Local workers and pods both use it: one limit, so equal verdicts hold by construction.
+    """
+    return max(timeout * 0.9, timeout - 2.0)
+
+
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
 class RunRequest:
     """Everything needed to run one scenario once."""
