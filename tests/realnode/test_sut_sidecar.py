@@ -58,6 +58,36 @@ def _sut_pids() -> list[int]:
     return found
 
 
+def _simulator_connected(pid: int) -> bool:
+    """Whether the SUT process holds an established TCP connection from the pod's loopback.
+
+    The simulator reaches its sidecar on 127.0.0.1 (the kubelet's startup probe comes from the
+    node, not loopback). Read from the pod's network namespace (``/proc/<pid>/net/tcp``, state
+    ``01``, remote ``0100007F``) and matched to the SUT's file descriptors by socket inode:
+    evidence that the run is under way, not a guess of how long start-up takes under load.
+    """
+    proc = Path("/proc") / str(pid)
+    try:
+        inodes = {
+            link[len("socket:[") : -1]
+            for fd in (proc / "fd").iterdir()
+            if (link := str(fd.readlink())).startswith("socket:[")
+        }
+        table = (proc / "net" / "tcp").read_text()
+    except OSError:
+        return False
+    for line in table.splitlines()[1:]:
+        fields = line.split()
+        if (
+            len(fields) > 9
+            and fields[3] == "01"
+            and fields[2].startswith("0100007F:")
+            and fields[9] in inodes
+        ):
+            return True
+    return False
+
+
 def test_the_go_sut_as_a_sidecar_gives_the_local_verdicts(
     real_cluster: ClusterInfo,
     real_api_client: client.ApiClient,
@@ -117,7 +147,12 @@ def test_a_sut_killed_mid_run_is_error_naming_the_sut_then_retried(
     while not (pids := _sut_pids()):
         assert time.monotonic() < deadline, "the SUT never started"
         time.sleep(0.2)
-    time.sleep(3.0)  # the simulator is past its handshake and stepping in real time
+    # Kill only once the simulator is connected: a SUT killed before that is restarted by the
+    # kubelet (restartPolicy Always) and the run would pass against the new one.
+    while not any(_simulator_connected(pid) for pid in pids):
+        assert time.monotonic() < deadline, "the simulator never connected to the SUT"
+        time.sleep(0.05)
+        pids = _sut_pids() or pids
     for pid in pids:
         os.kill(pid, signal.SIGKILL)
     # The first attempt's SimEnvironment keeps its verdict (environments kept for the test).
