@@ -291,16 +291,24 @@ def test_the_runner_stops_on_sigterm_within_seconds(tmp_path: Path) -> None:
         isolation="PerScenario",
         timeout_seconds=60,
         artifacts_dir=str(tmp_path / "artifacts"),
-        simulator={"realTimeFactor": 1.0, "record": False},
+        simulator={"realTimeFactor": 1.0},
     )
     log = tmp_path / "termination-log"
+    recording = tmp_path / "artifacts" / entrypoint.safe_name(scenario.name) / "recording.mcap"
     runner = subprocess.Popen(
         [str(Path(sys.executable).parent / "simtest-runner"), "--spec", spec.dumps(),
          "--termination-log", str(log)],
         env={**os.environ, "SIMTEST_CACHE_DIR": str(tmp_path / "cache")},
         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
     )  # fmt: skip
-    time.sleep(2.0)  # started (about 0.7 s), simulating in real time (10 s)
+    # The recording is opened just before the first step: the runner is past its start-up (and
+    # its SIGTERM handler) and simulating in real time (10 s). No fixed sleep: start-up takes
+    # 0.7 s on an idle machine and several seconds on a loaded one.
+    deadline = time.monotonic() + 60
+    while not recording.exists():
+        assert runner.poll() is None, "the runner exited before it started the scenario"
+        assert time.monotonic() < deadline, "the runner never started the scenario"
+        time.sleep(0.05)
     runner.send_signal(signal.SIGTERM)
     stopped = time.monotonic()
     runner.wait(timeout=10)
