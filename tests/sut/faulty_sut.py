@@ -2,8 +2,9 @@
 
 Modes: ``kill`` (SIGKILLed at STEP), ``slow`` (answers STEP after 1 s), ``garbage`` (answers STEP
 with a malformed MotionRequest), ``refuse`` (reports an ERROR at STEP), ``exit`` (exits with
-code 3 before listening), ``silent`` (listens but never answers HELLO), ``version`` (speaks
-protocol 2). Until STEP it behaves like the reference SUT.
+code 3 before listening), ``silent`` (listens but never answers HELLO), ``deaf`` (prints, then
+never listens), ``version`` (speaks protocol 2). Until STEP it behaves like the reference SUT. It
+says what it does on stdout and stderr, as a real SUT logs.
 """
 
 from __future__ import annotations
@@ -22,9 +23,13 @@ from simtest_operator.sut.framing import Kind
 def main() -> None:
     mode = sys.argv[1]
     at = int(sys.argv[2]) if len(sys.argv) > 2 else 5
+    print(f"faulty SUT: mode {mode} at step {at}", flush=True)
     if mode == "exit":
         print("faulty SUT: licence server unreachable", file=sys.stderr)
         sys.exit(3)
+    if mode == "deaf":
+        print("faulty SUT: waiting for the licence server", file=sys.stderr, flush=True)
+        time.sleep(60)
     port = int(os.environ["SIMTEST_SUT_PORT"])
     with socket.create_server(("127.0.0.1", port)) as server:
         conn, _ = server.accept()
@@ -42,6 +47,7 @@ def main() -> None:
                 elif frame.kind is Kind.SENSOR_VIEW and session is not None:
                     if frame.sequence == at:
                         if mode == "kill":
+                            print(f"faulty SUT: crashing at step {at}", file=sys.stderr, flush=True)
                             os.kill(os.getpid(), signal.SIGKILL)
                         if mode == "slow":
                             time.sleep(1.0)

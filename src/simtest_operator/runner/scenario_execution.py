@@ -25,6 +25,7 @@ from simtest_operator.evaluation import quality
 from simtest_operator.openscenario import Deviation, LoadOptions
 from simtest_operator.recording import objects
 from simtest_operator.runner import suts
+from simtest_operator.runner.tasks import SUT_LOG
 from simtest_operator.settings import SimulationSettings
 from simtest_operator.sim import BackendChoice, Simulation, SutConfig, open_simulation
 from simtest_operator.snapshots import WorldSnapshot
@@ -168,6 +169,7 @@ def run_scenario(request: RunRequest) -> RunReport:
             settings=request.simulation,
             map_reference=logic.name if logic is not None else "map",
             versions=versions,
+            log=out / SUT_LOG if out is not None else None,
         )
         if out is not None and request.record:
             recorder = recording.Recorder(
@@ -193,6 +195,8 @@ def run_scenario(request: RunRequest) -> RunReport:
     finally:
         link.close()
         simulation.close()
+        if out is not None and (out / SUT_LOG).is_file():
+            artifacts["sutLog"] = str(out / SUT_LOG)
         for at, env in simulation.environments:
             log.append(f"environment {env.name} at t={at:g} s (recorded, not rendered)")
             if recorder is not None:

@@ -74,11 +74,18 @@ class SutLink:
         settings: SimulationSettings,
         map_reference: str,
         versions: MutableMapping[str, str],
+        log: Path | None = None,
     ) -> None:
-        """Start/connect the SUT, handshake and let it drive the ego (SutError on failure)."""
+        """Start/connect the SUT, handshake and let it drive the ego (SutError on failure).
+
+        ``versions`` names the configured SUT before it is reached, so a start-up error says
+        which SUT and configuration failed; a SUT process started here leaves its output in
+        ``log``.
+        """
         external = self.sut.external
         if external is None or simulation.ego is None:
             return
+        versions.update(runs.provenance(self.sut, None))
         hello = runs.hello(
             self.sut,
             ego_id=simulation.world.actors[simulation.ego].id,
@@ -87,7 +94,7 @@ class SutLink:
             seed=settings.seed,
         )
         self._pilot = self._stack.enter_context(
-            launching.open_pilot(external, hello=hello, map_reference=map_reference)
+            launching.open_pilot(external, hello=hello, map_reference=map_reference, log=log)
         )
         simulation.attach_pilot(self._pilot)
         versions.update(runs.provenance(self.sut, self._pilot.identity))

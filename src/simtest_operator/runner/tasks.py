@@ -25,6 +25,8 @@ RESULT = "result.json"
 """File name of the full result."""
 ENGINE_LOG = "run.log"
 """File name of the engine's own summary log (written by the real engine only)."""
+SUT_LOG = "sut.log"
+"""File name of what a SUT process the runner started printed (bounded, stdout and stderr)."""
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
@@ -66,5 +68,10 @@ ExecuteFn = Callable[[ScenarioTask], ScenarioOutcome]
 (workers are spawned and receive it by reference). Raising is allowed: ScenarioError becomes
 Invalid, anything else Error."""
 
-ARTIFACT_FILES: Mapping[str, str] = {"recording": RECORDING, "log": LOG, "engineLog": ENGINE_LOG}
+ARTIFACT_FILES: Mapping[str, str] = {
+    "recording": RECORDING,
+    "log": LOG,
+    "engineLog": ENGINE_LOG,
+    "sutLog": SUT_LOG,
+}
 """Artifacts a scenario folder may hold besides its result, by name in ``outcome.artifacts``."""

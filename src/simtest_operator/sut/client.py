@@ -27,6 +27,8 @@ from simtest_operator.sut.framing import Kind
 
 CONNECT_POLL = 0.02
 """Seconds between connection attempts while the SUT starts (readiness polling)."""
+LATE_GRACE_SECONDS = 1.0
+"""After a missed step deadline, how much longer (at least) to wait to say by how much."""
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
@@ -120,6 +122,19 @@ class RemotePilot:
 
     def handshake(self, hello: Mapping[str, Any], *, timeout: float) -> Identity:
         """Send HELLO and wait for READY (the SUT's start-up readiness check)."""
+        try:
+            return self._handshake(hello, timeout=timeout)
+        except SutError as exc:
+            raise self._explained(exc) from exc
+
+    def drive(self, view: PilotView) -> Order:
+        """One lockstep exchange: SensorView (and TrafficCommand) out, the order back."""
+        try:
+            return self._drive(view)
+        except SutError as exc:
+            raise self._explained(exc) from exc
+
+    def _handshake(self, hello: Mapping[str, Any], *, timeout: float) -> Identity:
         payload = json.dumps({"protocol": framing.PROTOCOL_VERSION, **hello}).encode()
         framing.send(self._sock, Kind.HELLO, 0, payload)
         frame = self._receive(timeout, what="the handshake (READY)")
@@ -147,8 +162,7 @@ class RemotePilot:
         )
         return self.identity
 
-    def drive(self, view: PilotView) -> Order:
-        """One lockstep exchange: SensorView (and TrafficCommand) out, the order back."""
+    def _drive(self, view: PilotView) -> Order:
         snapshot = view.snapshot
         ego = _find(snapshot.entities, view.ego_id)
         self.step += 1
@@ -168,9 +182,11 @@ class RemotePilot:
         except OSError as exc:
             raise SutError(
                 f"the SUT is gone at step {self.step} (t={snapshot.time:.3f} s): "
-                f"{exc.strerror or exc}{self._fate()}"
+                f"{exc.strerror or exc}"
             ) from exc
-        frame = self._receive(self._deadline, what=f"step {self.step} (t={snapshot.time:.3f} s)")
+        frame = self._receive(
+            self._deadline, what=f"step {self.step} (t={snapshot.time:.3f} s)", step=True
+        )
         self.round_trips.append(time.perf_counter() - sent)
         if frame.sequence != self.step:
             raise SutProtocolError(
@@ -187,24 +203,39 @@ class RemotePilot:
             ) from exc
         raise SutProtocolError(f"the SUT answered step {self.step} with {frame.kind.name}")
 
-    def _receive(self, timeout: float, *, what: str) -> framing.Frame:
+    def _receive(self, timeout: float, *, what: str, step: bool = False) -> framing.Frame:
         self._sock.settimeout(timeout)
+        asked = time.perf_counter()
         try:
             frame = framing.receive(self._sock)
         except TimeoutError:
+            late = f": {self._lateness(timeout, asked)}" if step else ""
             raise SutDeadlineError(
-                f"the SUT missed the {timeout * 1000:g} ms deadline for {what}"
+                f"the SUT missed the {timeout * 1000:g} ms deadline for {what}{late}"
             ) from None
         except SutError as exc:
-            raise type(exc)(f"{exc} during {what}{self._fate()}") from exc
+            raise type(exc)(f"{exc} during {what}") from exc
         if frame.kind is Kind.ERROR:
             reason = frame.payload.decode("utf-8", "replace")
             raise SutError(f"the SUT reported an error during {what}: {reason}")
         return frame
 
-    def _fate(self) -> str:
+    def _lateness(self, timeout: float, asked: float) -> str:
+        """How late the answer came: wait a while longer (only once the run has failed) so the
+        SUT's developer learns whether it was a little slow or not answering at all."""
+        grace = max(LATE_GRACE_SECONDS, 10 * timeout)
+        self._sock.settimeout(grace)
+        try:
+            framing.receive(self._sock)
+        except (TimeoutError, SutError):
+            return f"no answer within {(timeout + grace) * 1000:g} ms"
+        late = (time.perf_counter() - asked - timeout) * 1000
+        return f"the answer came {late:.0f} ms late"
+
+    def _explained(self, exc: SutError) -> SutError:
+        """``exc`` with what the SUT's process did or said last (every SUT error says it)."""
         fate = self.postmortem() if self.postmortem is not None else None
-        return f"; {fate}" if fate else ""
+        return type(exc)(f"{exc}; {fate}") if fate else exc
 
     def close(self) -> None:
         """Say GOODBYE (best effort) and close the connection."""

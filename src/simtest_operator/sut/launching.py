@@ -3,27 +3,29 @@ endpoint), wait until it is ready, hand out a connected :class:`RemotePilot`, cl
 
 Readiness is two checks, no sleeps: the SUT accepts the TCP connection (polled) and answers the
 HELLO with READY within the start-up timeout. A local process that exits while we wait ends the
-wait at once with its exit code and the tail of its stderr.
+wait at once with its exit code and the tail of its output; every SUT error quotes that tail,
+and the process's whole output (bounded) becomes the scenario's ``sut.log``.
 """
 
 from __future__ import annotations
 
 import contextlib
-import functools
 import os
 import socket
 import subprocess
 import sys
-import tempfile
 from collections.abc import Iterator, Mapping
-from typing import IO, Any
+from pathlib import Path
+from typing import Any
 
 from simtest_operator.drivermodel import ExternalSut
 from simtest_operator.settings import SUT_ENDPOINT
 from simtest_operator.sut import client
 from simtest_operator.sut.errors import SutError
+from simtest_operator.sut.output import BoundedOutput
 
-_STDERR_TAIL = 400
+_OUTPUT_TAIL = 400
+"""Characters of the SUT's last output quoted in an error."""
 
 
 def free_port() -> int:
@@ -35,10 +37,9 @@ def free_port() -> int:
 
 
 class _Process:
-    """A local SUT process with its stderr kept for error messages."""
+    """A local SUT process with its output kept (bounded) for errors and the ``sut.log``."""
 
     def __init__(self, command: tuple[str, ...], env: Mapping[str, str], port: int) -> None:
-        self._stderr: IO[bytes] = tempfile.TemporaryFile()  # noqa: SIM115 (lives with the process)
         environment = {
             **os.environ,
             **env,
@@ -50,12 +51,14 @@ class _Process:
                 command,
                 env=environment,
                 stdin=subprocess.DEVNULL,
-                stdout=subprocess.DEVNULL,
-                stderr=self._stderr,
+                stdout=subprocess.PIPE,
+                stderr=subprocess.STDOUT,
             )
         except OSError as exc:
-            self._stderr.close()
             raise SutError(f"cannot start the SUT {command[0]!r}: {exc.strerror or exc}") from exc
+        self.output = BoundedOutput()
+        assert self.process.stdout is not None
+        self.output.follow(self.process.stdout)
 
     def fate(self, wait: float = 0.0) -> str | None:
         """None while it runs (after waiting up to ``wait`` s for it to end: a crashed SUT's
@@ -67,12 +70,21 @@ class _Process:
             code = None
         if code is None:
             return None
+        self.output.finish()
         how = f"killed by signal {-code}" if code < 0 else f"exited with code {code}"
-        self._stderr.seek(0)
-        tail = " ".join(self._stderr.read().decode("utf-8", "replace").split())[-_STDERR_TAIL:]
+        tail = self.output.last(_OUTPUT_TAIL)
         return f"the SUT process {how}" + (f": {tail}" if tail else "")
 
-    def stop(self) -> None:
+    def postmortem(self, wait: float = 1.0) -> str | None:
+        """For an error: how the process ended, or, still running, what it said last."""
+        fate = self.fate(wait)
+        if fate is not None:
+            return fate
+        tail = self.output.last(_OUTPUT_TAIL)
+        return f"the SUT process is running; it said last: {tail}" if tail else None
+
+    def stop(self, log: Path | None) -> None:
+        """End the process (TERM, then KILL after 3 s) and keep its output in ``log``."""
         if self.process.poll() is None:
             self.process.terminate()
             try:
@@ -80,14 +92,23 @@ class _Process:
             except subprocess.TimeoutExpired:
                 self.process.kill()
                 self.process.wait()
-        self._stderr.close()
+        self.output.finish()
+        if log is not None:
+            self.output.write(log)
 
 
 @contextlib.contextmanager
 def open_pilot(
-    external: ExternalSut, *, hello: Mapping[str, Any], map_reference: str = "map"
+    external: ExternalSut,
+    *,
+    hello: Mapping[str, Any],
+    map_reference: str = "map",
+    log: Path | None = None,
 ) -> Iterator[client.RemotePilot]:
-    """A connected, handshaken pilot for one run (SutError when the SUT cannot be reached)."""
+    """A connected, handshaken pilot for one run (SutError when the SUT cannot be reached).
+
+    A SUT process started here leaves what it printed in ``log`` (bounded) when the run ends.
+    """
     process: _Process | None = None
     # A pod's SIMTEST_SUT_ENDPOINT is already in ``endpoint``: the run request applied the
     # settings (runner.suts.reached_here); nothing here reads the environment.
@@ -106,11 +127,17 @@ def open_pilot(
             )
             process = _Process(command, external.env, port)
             endpoint = f"127.0.0.1:{port}"
-        sock = client.connect(
-            endpoint,
-            timeout=external.startup_timeout,
-            alive=process.fate if process is not None else None,
-        )
+        try:
+            sock = client.connect(
+                endpoint,
+                timeout=external.startup_timeout,
+                alive=process.fate if process is not None else None,
+            )
+        except SutError as exc:
+            said = process.output.last(_OUTPUT_TAIL) if process is not None else ""
+            if said and said not in str(exc):
+                raise SutError(f"{exc}; the SUT process said last: {said}") from exc
+            raise
         pilot = client.RemotePilot(
             sock,
             step_deadline=external.step_deadline,
@@ -118,13 +145,13 @@ def open_pilot(
             map_reference=map_reference,
         )
         if process is not None:
-            pilot.postmortem = functools.partial(process.fate, 1.0)
+            pilot.postmortem = process.postmortem
         with pilot:
             pilot.handshake(hello, timeout=external.startup_timeout)
             yield pilot
     finally:
         if process is not None:
-            process.stop()
+            process.stop(log)
 
 
 def reference_command() -> tuple[str, ...]:

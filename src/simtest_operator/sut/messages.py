@@ -28,7 +28,8 @@ LATERAL_DEADBAND = 1e-6
 """Lateral displacements (m) below this are rounding, not steering."""
 
 # MotionRequest.MotionRequestType
-DESIRED_STATE, DESIRED_TRAJECTORY = 0, 1
+DESIRED_STATE, TRAJECTORY = 0, 1
+"""OSI 3.7.0 MotionRequestType: MOTION_REQUEST_TYPE_DESIRED_STATE, MOTION_REQUEST_TYPE_TRAJECTORY."""
 
 
 def _object_layout(state: EntityState) -> osiwire.ObjectLayout:
@@ -180,10 +181,10 @@ def decode_motion_request(payload: bytes, ego: EntityState, *, nanos: int, dt: f
             acceleration=pw.vector(pw.sub_message(fields, 5)),
             horizon=dt,
         )
-    if kind == DESIRED_TRAJECTORY:
+    if kind == TRAJECTORY:
         trajectory = pw.sub_message(values, 5)
         if trajectory is None:
-            raise ValueError("motion_request_type DESIRED_TRAJECTORY without desired_trajectory")
+            raise ValueError("motion_request_type TRAJECTORY without desired_trajectory")
         for raw in pw.message_fields(trajectory).get(1, []):
             if not isinstance(raw, bytes):
                 raise ValueError("trajectory_point should be a message")

@@ -57,19 +57,19 @@ def config_hash(sut: SutConfig) -> str:
     return "sha256:" + hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
-def provenance(sut: SutConfig, identity: Identity) -> dict[str, str]:
-    """Versions entries naming the SUT that produced a result."""
+def provenance(sut: SutConfig, identity: Identity | None) -> dict[str, str]:
+    """Versions entries naming the SUT that produced a result (``identity`` None: it never
+    answered READY, and the entries say what was configured, for the start-up error)."""
     external = sut.external
-    out = {
-        "sut.reported": identity.describe(),
-        "sut.configHash": config_hash(sut),
-    }
+    out = {"sut.configHash": config_hash(sut)}
+    if identity is not None:
+        out["sut.reported"] = identity.describe()
     if external is not None:
         out["sut.launch"] = str(external.launch)
         if external.image:
             out["sut.image"] = external.image
             out[SUT_IMAGE_ID] = external.image_id or UNKNOWN_IMAGE
-    if identity.digest:
+    if identity is not None and identity.digest:
         out["sut.digest"] = identity.digest
     return out
 
