@@ -27,9 +27,8 @@ _SIGNATURE = operator.attrgetter("id", "box", "kind", "category")
 LATERAL_DEADBAND = 1e-6
 """Lateral displacements (m) below this are rounding, not steering."""
 
-# MotionRequest.MotionRequestType
+# MotionRequest.MotionRequestType (OSI 3.7.0: MOTION_REQUEST_TYPE_DESIRED_STATE, ..._TRAJECTORY)
 DESIRED_STATE, TRAJECTORY = 0, 1
-"""OSI 3.7.0 MotionRequestType: MOTION_REQUEST_TYPE_DESIRED_STATE, MOTION_REQUEST_TYPE_TRAJECTORY."""
 
 
 def _object_layout(state: EntityState) -> osiwire.ObjectLayout:
