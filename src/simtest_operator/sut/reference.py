@@ -211,21 +211,30 @@ class Session:
         )
 
 
+def _log(line: str) -> None:
+    """One line of the SUT's own log (stderr: the runner keeps it as the scenario's sut.log)."""
+    print(f"reference SUT: {line}", file=sys.stderr, flush=True)
+
+
 def serve_connection(conn: socket.socket, *, name: str = NAME, version: str = VERSION) -> None:
     """Serve one run; returns when the simulator says GOODBYE or disconnects."""
     conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
     session: Session | None = None
     ego_id = -1
+    scenario, steps = "?", 0
     while True:
         try:
             frame = framing.receive(conn)
-        except SutError:
+        except SutError as exc:
+            _log(f"run {scenario}: connection ended after {steps} steps ({exc})")
             return
         try:
             if frame.kind is Kind.HELLO:
                 hello = json.loads(frame.payload)
                 session = Session(config_from(hello), dt=float(hello["step"]))
                 ego_id = int(hello.get("egoId", -1))
+                scenario = str(hello.get("scenario", "?"))
+                _log(f"run {scenario}: ego {ego_id}, step {hello['step']} s")
                 ready = {"protocol": framing.PROTOCOL_VERSION, "name": name, "version": version}
                 digest = os.environ.get("SIMTEST_SUT_DIGEST", "")
                 if digest:
@@ -239,11 +248,13 @@ def serve_connection(conn: socket.socket, *, name: str = NAME, version: str = VE
                 framing.send(
                     conn, Kind.MOTION_REQUEST, frame.sequence, session.answer(frame.payload)
                 )
+                steps += 1
             elif frame.kind is Kind.GOODBYE:
                 return
             else:
                 raise ValueError(f"unexpected {frame.kind.name} frame")
         except (ValueError, KeyError, TypeError) as exc:
+            _log(f"run {scenario}: giving up at step {frame.sequence}: {exc}")
             framing.send(conn, Kind.ERROR, frame.sequence, str(exc).encode())
             return
 
@@ -251,6 +262,7 @@ def serve_connection(conn: socket.socket, *, name: str = NAME, version: str = VE
 def serve(host: str, port: int, *, once: bool = False) -> None:
     """Accept runs one after the other (a sidecar serves every scenario of its pod)."""
     with socket.create_server((host, port), reuse_port=False) as server:
+        _log(f"{NAME} {VERSION} listening on {host}:{port}")
         while True:
             conn, _ = server.accept()
             with conn:
