@@ -2,9 +2,9 @@
 
 Modes: ``kill`` (SIGKILLed at STEP), ``slow`` (answers STEP after 1 s), ``garbage`` (answers STEP
 with a malformed MotionRequest), ``refuse`` (reports an ERROR at STEP), ``exit`` (exits with
-code 3 before listening), ``silent`` (listens but never answers HELLO), ``deaf`` (prints, then
-never listens), ``version`` (speaks protocol 2). Until STEP it behaves like the reference SUT. It
-says what it does on stdout and stderr, as a real SUT logs.
+code 3 before listening), ``silent`` (listens but never answers HELLO), ``version`` (speaks
+protocol 2). Until STEP it behaves like the reference SUT. It says what it does on stdout and
+stderr, as a real SUT logs.
 """
 
 from __future__ import annotations
@@ -27,9 +27,6 @@ def main() -> None:
     if mode == "exit":
         print("faulty SUT: licence server unreachable", file=sys.stderr)
         sys.exit(3)
-    if mode == "deaf":
-        print("faulty SUT: waiting for the licence server", file=sys.stderr, flush=True)
-        time.sleep(60)
     port = int(os.environ["SIMTEST_SUT_PORT"])
     with socket.create_server(("127.0.0.1", port)) as server:
         conn, _ = server.accept()
