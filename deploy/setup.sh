@@ -21,9 +21,11 @@ CACHE_ROOT="${SIMTEST_CACHE_DIR:-${XDG_CACHE_HOME:-$HOME/.cache}/simtest}"
 
 case "$MODE" in
   run) APT_PACKAGES=(git) ;;
-  # protobuf-compiler: protoc for the Go example SUT's OSI bindings (deploy/sut-go/build.sh)
+  # protobuf-compiler: protoc for the example SUTs' OSI bindings (deploy/sut-go, deploy/sut-cpp);
+  # g++, libprotobuf-dev, nlohmann-json3-dev: the C++ example SUT (deploy/sut-cpp/build.sh)
   test) APT_PACKAGES=(git postgresql chromium containerd runc containernetworking-plugins buildah
-        debootstrap iproute2 gcc libc6-dev protobuf-compiler) ;;
+        debootstrap iproute2 gcc libc6-dev protobuf-compiler g++ libprotobuf-dev
+        nlohmann-json3-dev) ;;
   *) echo "setup.sh: error: unknown mode '$MODE' (run or test)" >&2; exit 2 ;;
 esac
 
