@@ -23,6 +23,7 @@ from simtest_operator.openscenario.model import common as m
 from simtest_operator.openscenario.model import entities as e
 from simtest_operator.openscenario.model import scenarios as s
 from simtest_operator.openscenario.readers import entities, storyboards, traffic_signals
+from simtest_operator.openscenario.rulesets import CARLA_PREFIX
 from simtest_operator.xmlsafe import Element
 
 
@@ -47,9 +48,6 @@ def file_kind(path: Path) -> FileKind:
         raise ScenarioError("not a scenario, catalog or parameter distribution", file=str(path))
     return kind
 
-
-CARLA_PREFIX = "CARLA:"
-"""FileHeader description prefix that puts a file's positions in CARLA's frame."""
 
 MAX_SCENARIO_BYTES = 8 * 1024 * 1024
 """Default size limit of scenario and catalog files: real ones are below 1 MB; 8 MB parse in

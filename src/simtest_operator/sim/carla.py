@@ -20,7 +20,7 @@ from __future__ import annotations
 import enum
 
 from simtest_operator.drivermodel import DriverModel, SutConfig
-from simtest_operator.openscenario import model
+from simtest_operator.openscenario import model, rulesets
 from simtest_operator.sim.actors import Actor
 
 CRUISE_SPEED = 30.0 / 3.6
@@ -46,12 +46,8 @@ _MODULES = {
 
 def module_of(controller: model.Controller) -> Module:
     """The mapping of ``controller``'s ``module`` property (OTHER when absent or unknown)."""
-    name = controller.property("module")
-    if name is None:
-        return Module.OTHER
-    # A module is named (``external_control``) or given as the path of its Python file.
-    stem = name.strip().replace("\\", "/").rsplit("/", 1)[-1].lower().removesuffix(".py")
-    return _MODULES.get(stem, Module.OTHER)
+    stem = rulesets.module_name(controller)
+    return _MODULES.get(stem, Module.OTHER) if stem is not None else Module.OTHER
 
 
 def autopilot(actor: Actor, *, on: bool) -> None:
