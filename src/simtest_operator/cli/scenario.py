@@ -258,8 +258,8 @@ def check(
     max_mb: float,
 ) -> None:
     """Run every scenario under DIRECTORY in parallel and print a table with each verdict, the
-    rule set it ran under and the schema deviations accepted in the file (warnings). Files the scenarios reference must be
-    inside DIRECTORY (or --root) or come from a map library."""
+    rule set it ran under and the schema deviations accepted in the file (warnings). Files the
+    scenarios reference must be inside DIRECTORY (or --root) or come from a map library."""
     # Only `check` prints a table: `scenario run` starts without rich.
     from rich.console import Console
     from rich.markup import escape
