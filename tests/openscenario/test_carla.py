@@ -8,7 +8,7 @@ and the engine places the entities on the intended lanes of Town01; ``h="180"`` 
 degrees (deviation), fractional headings beyond a turn stay radians; TrajectoryPosition ``s``/``t``
 along a polyline; strict mode refuses the CARLA file; a 0.9 catalog header is a deviation; the
 rule set each of ScenarioRunner's conventions chooses while the frame follows the header alone;
-a LaneOffsetAction's target in CARLA's frame.
+a LaneOffsetAction's target positive to the right under ScenarioRunner's rules.
 """
 
 from __future__ import annotations
@@ -266,12 +266,16 @@ _OFFSETS = """
     </Act></Story>"""
 
 
-@pytest.mark.parametrize(("header", "side"), [("CARLA:Mine", -1.0), ("test", 1.0)])
-def test_lane_offset_action_target_is_read_in_carlas_frame(
-    write_scenario: ScenarioWriter, header: str, side: float
+@pytest.mark.parametrize(
+    ("header", "stop", "side"),
+    [("CARLA:Mine", "", -1.0), ("test", _CRITERION, -1.0), ("test", "", 1.0)],
+)
+def test_lane_offset_action_target_is_positive_to_the_right_for_scenario_runner(
+    write_scenario: ScenarioWriter, header: str, stop: str, side: float
 ) -> None:
-    # Positive is to the right in CARLA's frame, as the other lateral offsets of a CARLA: file.
-    path = write_scenario(stories=_OFFSETS)
+    # Positive is to the right in a CARLA: file, as its other lateral offsets, and in any file
+    # under ScenarioRunner's rules (it measures offsets from the waypoint in CARLA's frame).
+    path = write_scenario(stories=_OFFSETS, stop=stop)
     path.write_text(
         path.read_text(encoding="utf-8").replace('description="test"', f'description="{header}"'),
         encoding="utf-8",

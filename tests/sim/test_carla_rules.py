@@ -2,7 +2,7 @@
 ``carla/avenue.xodr``): how long actions last (a SpeedAction its dynamics time or distance
 whatever the shape, a ``rate`` read as seconds, the speed change going on after the action ended;
 a routing action until the last waypoint), event priorities not applied, lateral actions aimed at
-the ``external_control`` hero ignored and listed, a LaneOffsetAction in CARLA's frame, and the
+the ``external_control`` hero ignored and listed, a LaneOffsetAction positive to the right, and the
 conditions of 1.0-era files (unsigned longitudinal distance, standstill at <= 0.1 m/s).
 
 Each test reads the 1 Hz samples (t, x, y, heading, speed) of the run; the avenue runs along +x,
@@ -90,14 +90,22 @@ def test_acquire_position_lasts_until_the_position_is_reached(tmp_path: Path) ->
 
 
 @pytest.mark.parametrize(
-    ("description", "side"),
-    [("CARLA:Rules", -1.0), ("Rules", 1.0)],
+    ("description", "written_y"),
+    [("CARLA:Rules", 5.25), ("Rules", -5.25)],
 )
-def test_lane_offset_is_in_carlas_frame(tmp_path: Path, description: str, side: float) -> None:
-    # Positive is to the right in a CARLA: file (towards y < -5.25 here), to the left otherwise.
+def test_lane_offset_is_positive_to_the_right_for_scenario_runner(
+    tmp_path: Path, description: str, written_y: float
+) -> None:
+    # Without the CARLA: header positions stay in OpenDRIVE's frame (ScenarioRunner negates y
+    # only after the header), but a lane offset goes to the right in either file (ScenarioRunner
+    # measures it from the waypoint in CARLA's frame): from lane -2 towards the sidewalk.
     events = cs.event("Shift", cs.lane_offset(1.0), cs.at(0))
-    samples = tuple(adversary(tmp_path, events, description=description))
-    assert at(samples, 6.0)[2] == pytest.approx(-5.25 + side, abs=0.05)
+    position = f'<WorldPosition x="60" y="{written_y:g}" z="0" h="0"/>'
+    samples = tuple(
+        adversary(tmp_path, events, description=description, adversary_position=position)
+    )
+    assert at(samples, 0.0)[2] == pytest.approx(-5.25)
+    assert at(samples, 6.0)[2] == pytest.approx(-6.25, abs=0.05)
 
 
 def test_lateral_actions_on_the_external_hero_are_ignored(tmp_path: Path) -> None:

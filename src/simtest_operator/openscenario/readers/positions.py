@@ -3,13 +3,14 @@
 Routes and trajectories (polyline, clothoid, clothoid spline, NURBS) are read here because they
 hold positions and positions refer to them (RoutePosition, TrajectoryPosition).
 
-Two conventions of files written for CARLA are read here. A file whose FileHeader description
+Three conventions of files written for CARLA are read here. A file whose FileHeader description
 starts with ``CARLA:`` gives positions in CARLA's left-handed frame (ScenarioRunner's
-``use_carla_coordinate_system``): y, dy, headings and lateral offsets (``t``, ``dt``,
-``offset``, and a LaneOffsetAction's target) are negated into OpenDRIVE's frame. A whole-number
-heading beyond one turn (``h="180"``, ``h="-90"``) is degrees, which CARLA files write; it is
-converted with a deviation. Fractional ones stay radians (esmini's tests write
-``h="7.853981633974483"``, 2.5 pi).
+``use_carla_coordinate_system``): y, dy and headings are negated into OpenDRIVE's frame. Lateral
+offsets from the road (``t``, ``dt``, ``offset``, and a LaneOffsetAction's target) are positive
+to the right in every file ScenarioRunner runs (``Context.right_offsets``: the ``CARLA:`` files
+and those under its rules) and are negated too. A whole-number heading beyond one turn
+(``h="180"``, ``h="-90"``) is degrees, which CARLA files write; it is converted with a deviation.
+Fractional ones stay radians (esmini's tests write ``h="7.853981633974483"``, 2.5 pi).
 """
 
 from __future__ import annotations
@@ -50,10 +51,15 @@ def _heading(el: Element, ctx: reading.Context, name: str) -> float | None:
     return -value if ctx.carla_frame else value
 
 
-def lateral(ctx: reading.Context, value: float) -> float:
-    """A y or lateral offset: CARLA's frame has y (and left) the other way (also read so:
-    LaneOffsetAction targets)."""
+def _y(ctx: reading.Context, value: float) -> float:
+    """A y or dy: CARLA's frame has y the other way."""
     return -value if ctx.carla_frame else value
+
+
+def lateral(ctx: reading.Context, value: float) -> float:
+    """A lateral offset from the road (also a LaneOffsetAction's target): positive to the right
+    in ScenarioRunner's files."""
+    return -value if ctx.right_offsets else value
 
 
 def _orientation_of(el: Element, ctx: reading.Context) -> m.Orientation | None:
@@ -78,7 +84,7 @@ def position_choice(el: Element, ctx: reading.Context) -> p.Position:
 def _world(el: Element, ctx: reading.Context) -> p.WorldPosition:
     return p.WorldPosition(
         x=ctx.double(el, "x"),
-        y=lateral(ctx, ctx.double(el, "y")),
+        y=_y(ctx, ctx.double(el, "y")),
         z=ctx.opt_double(el, "z"),
         h=_heading(el, ctx, "h"),
         p=ctx.opt_double(el, "p"),
@@ -95,7 +101,7 @@ def _relative_world_or_object(
     return kind(
         entity_ref=ctx.string(el, "entityRef"),
         dx=ctx.double(el, "dx"),
-        dy=lateral(ctx, ctx.double(el, "dy")),
+        dy=_y(ctx, ctx.double(el, "dy")),
         dz=ctx.opt_double(el, "dz"),
         orientation=_orientation_of(el, ctx),
         line=el.sourceline,
