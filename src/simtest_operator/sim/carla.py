@@ -8,7 +8,7 @@ them; it maps each to what it already has:
   :data:`CRUISE_SPEED` as set speed, because such scenarios wait for the ego to move.
 - ``npc_vehicle_control``, ``vehicle_longitudinal_control``: lane following at the speed the
   SpeedActions ask for -- what the engine does for every scripted vehicle.
-- ``carla_autopilot`` and, in ``CARLA:`` files, ``ActivateControllerAction`` on a non-ego
+- ``carla_autopilot`` and, under ScenarioRunner's rules, ``ActivateControllerAction`` on a non-ego
   vehicle: CARLA's traffic-manager autopilot, here the driver model (IDM car following, lane
   keeping, AEB) with the SUT defaults at the vehicle's speed, or :data:`CRUISE_SPEED` from rest.
 
