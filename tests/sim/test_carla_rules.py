@@ -1,7 +1,8 @@
 """ScenarioRunner's rules on ScenarioRunner-style files (``carla_scenarios.maneuver`` on
 ``carla/avenue.xodr``): how long actions last (a SpeedAction its dynamics time or distance
 whatever the shape, a ``rate`` read as seconds, the speed change going on after the action ended;
-a routing action until the last waypoint), event priorities not applied, lateral actions aimed at
+a routing action until the last waypoint, never on the external hero; a replaced action has
+ended), event priorities not applied, lateral actions aimed at
 the ``external_control`` hero ignored and listed, a LaneOffsetAction positive to the right, and the
 conditions of 1.0-era files (unsigned longitudinal distance, standstill at <= 0.1 m/s).
 
@@ -159,3 +160,31 @@ def test_standstill_holds_at_a_crawl(tmp_path: Path) -> None:
     events = cs.event("Crawl", cs.speed(0.05), cs.at(0)) + cs.event("Go", cs.speed(6.0), still)
     samples = tuple(adversary(tmp_path, events))
     assert at(samples, 3.0)[4] == pytest.approx(6.0)
+
+
+def test_a_replaced_action_has_ended(tmp_path: Path) -> None:
+    # A newer SpeedAction replaces the first at 1 s; ScenarioRunner knows one end of an element,
+    # so the offset waiting for the first one's endTransition starts then (not only on a goal).
+    events = (
+        cs.event("First", cs.speed(5.0, shape="linear", dimension="time", over=10.0), cs.at(0))
+        + cs.event("Second", cs.speed(8.0), cs.at(1.0))
+        + cs.event("Shift", cs.lane_offset(1.0), cs.after("First"))
+    )
+    samples = tuple(adversary(tmp_path, events))
+    assert at(samples, 3.0)[4] == pytest.approx(8.0)
+    assert abs(at(samples, 6.0)[2] + 5.25) > 0.5
+
+
+def test_a_route_of_the_external_hero_never_ends(tmp_path: Path) -> None:
+    # ScenarioRunner's ExternalControl reports no reached goal: the hero drives past the
+    # position, the event waiting for the routing action's end never starts.
+    acquire = """<RoutingAction><AcquirePositionAction><Position>
+                  <LanePosition roadId="1" laneId="-1" s="40" offset="0"/>
+                </Position></AcquirePositionAction></RoutingAction>"""
+    events = cs.event("Route", acquire, cs.at(0)) + cs.event(
+        "Brake", cs.speed(0.0), cs.after("Route")
+    )
+    report = run(cs.write(tmp_path, cs.maneuver(events, actor="hero")), time_limit=10.0)
+    hero = report.samples["hero"]
+    assert max(s[1] for s in hero) > 60.0
+    assert hero[-1][4] > 5.0

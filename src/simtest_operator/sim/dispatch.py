@@ -263,10 +263,12 @@ class Dispatcher:
 
     def _routed(self, actor: Actor, last: model.Position) -> Run:
         """A routing action's run: done at once, or, under ScenarioRunner's rules, once the
-        actor reached the last waypoint."""
+        actor reached the last waypoint (an ``external_control`` actor: never)."""
         if not self._carla:
             return Done(actor)
-        return self._watch("waypoints", RouteHold(actor, positions.resolve(self._world, last)))
+        external = actor.name in self._external
+        goal = None if external else positions.resolve(self._world, last)
+        return self._watch("waypoints", RouteHold(actor, goal))
 
     def _watch(self, kind: str, run: Run) -> Run:
         """Keep a run that steers nothing until it ends; it ends an older one of its ``kind``

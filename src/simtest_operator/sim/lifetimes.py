@@ -10,7 +10,8 @@ controller and then only watches for its own end:
   controller keeps the target after the action ended, so the speed change itself
   (:class:`SpeedHold` ``inner``) goes on to its end;
 - AcquirePositionAction and AssignRouteAction (``ChangeActorWaypoints``) end when the controller
-  reached the last waypoint (:class:`RouteHold`);
+  reached the last waypoint (:class:`RouteHold`) -- never for an ``external_control`` actor,
+  whose controller reports no goal (the route still guides the SUT at junctions);
 - a lateral action aimed at an ``external_control`` actor reaches that controller, which runs
   nothing: it moves no one and ends only when the actor happens to meet its goal
   (:class:`IgnoredLateral`).
@@ -86,11 +87,12 @@ class SpeedHold(Run):
 class RouteHold(Run):
     """A routing action as ScenarioRunner's ``ChangeActorWaypoints`` lets it last: until the
     actor reached the last waypoint (within :data:`REACH`, or passed it within
-    :data:`PASS_ASIDE` to the side)."""
+    :data:`PASS_ASIDE` to the side). ``goal`` None: never (an ``external_control`` actor's
+    controller never reports a reached goal), unless replaced or stopped."""
 
     __slots__ = ("_goal",)
 
-    def __init__(self, actor: Actor, goal: placements.Placement) -> None:
+    def __init__(self, actor: Actor, goal: placements.Placement | None) -> None:
         super().__init__(actor)
         self._goal = goal
 
@@ -100,6 +102,8 @@ class RouteHold(Run):
     def after_motion(self, world: World) -> None:
         actor = self.actor
         assert actor is not None
+        if self._goal is None:
+            return
         dx, dy = self._goal.x - actor.x, self._goal.y - actor.y
         ahead = dx * math.cos(actor.heading) + dy * math.sin(actor.heading)
         aside = -dx * math.sin(actor.heading) + dy * math.cos(actor.heading)
