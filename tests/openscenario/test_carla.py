@@ -6,7 +6,9 @@ unknown name is an error listing the folders searched; a ``CARLA:`` file's World
 heading, RoadPosition t and a TrajectoryPosition's polyline are negated into OpenDRIVE's frame
 and the engine places the entities on the intended lanes of Town01; ``h="180"`` is read as
 degrees (deviation), fractional headings beyond a turn stay radians; TrajectoryPosition ``s``/``t``
-along a polyline; strict mode refuses the CARLA file; a 0.9 catalog header is a deviation.
+along a polyline; strict mode refuses the CARLA file; a 0.9 catalog header is a deviation; the
+rule set each of ScenarioRunner's conventions chooses while the frame follows the header alone;
+a LaneOffsetAction's target positive to the right under ScenarioRunner's rules.
 """
 
 from __future__ import annotations
@@ -18,7 +20,13 @@ import pytest
 
 from simtest_operator import maps
 from simtest_operator.errors import ScenarioError
-from simtest_operator.openscenario import LoadOptions, StrictDeviationError, load_scenario, model
+from simtest_operator.openscenario import (
+    LoadOptions,
+    StrictDeviationError,
+    load_scenario,
+    model,
+    rulesets,
+)
 from simtest_operator.runner import scenario_execution
 from simtest_operator.settings import Settings
 from simtest_operator.sim import BackendChoice
@@ -184,3 +192,97 @@ def test_old_catalog_header_is_a_deviation(tmp_path: Path, write_scenario: Scena
     assert deviation.code == "catalog-revision-0"
     assert deviation.file == str(folder / "old.xosc")
     assert "0.9 catalog header read as 1.0" in deviation.message
+
+
+def _controller(module: str) -> str:
+    return f"""
+        <Private entityRef="Ego"><PrivateAction><ControllerAction><AssignControllerAction>
+          <Controller name="Driver"><Properties>
+            <Property name="module" value="{module}"/>
+          </Properties></Controller>
+        </AssignControllerAction></ControllerAction></PrivateAction></Private>"""
+
+
+_CRITERION = """
+    <ConditionGroup>
+      <Condition name="criteria_CollisionTest" delay="0" conditionEdge="rising">
+        <ByValueCondition><ParameterCondition parameterRef="" value="" rule="lessThan"/>
+        </ByValueCondition>
+      </Condition>
+    </ConditionGroup>"""
+
+
+@pytest.mark.parametrize(
+    ("parts", "header", "rules"),
+    [
+        ({}, "test", "OpenSCENARIO (esmini)"),
+        ({}, "CARLA:Mine", "ScenarioRunner (description 'CARLA:')"),
+        ({"stop": _CRITERION}, "test", "ScenarioRunner (criteria_* conditions)"),
+        (
+            {"init": _controller("srunner/actorcontrols/carla_autopilot.py")},
+            "test",
+            "ScenarioRunner (controller module carla_autopilot)",
+        ),
+        ({"init": _controller("my_own_driver")}, "test", "OpenSCENARIO (esmini)"),
+        ({"road": '<LogicFile filepath="Town01"/>'}, "test", "ScenarioRunner (CARLA town Town01)"),
+    ],
+)
+def test_rule_set_follows_scenario_runners_conventions(
+    write_scenario: ScenarioWriter, parts: dict[str, str], header: str, rules: str
+) -> None:
+    path = write_scenario(**parts)
+    path.write_text(
+        path.read_text(encoding="utf-8").replace('description="test"', f'description="{header}"'),
+        encoding="utf-8",
+    )
+    scenario = load_scenario(path)
+    assert rulesets.rules_of(scenario).describe() == rules
+    # The frame is the header's alone (ScenarioRunner's use_carla_coordinate_system).
+    assert any("CARLA's left-handed frame" in note for note in scenario.notes) == (
+        header.startswith("CARLA:")
+    )
+
+
+_OFFSETS = """
+    <Story name="S"><Act name="A">
+      <ManeuverGroup name="G" maximumExecutionCount="1">
+        <Actors selectTriggeringEntities="false"><EntityRef entityRef="Ego"/></Actors>
+        <Maneuver name="M"><Event name="E" priority="parallel">
+          <Action name="Absolute"><PrivateAction><LateralAction>
+            <LaneOffsetAction continuous="false">
+              <LaneOffsetActionDynamics dynamicsShape="linear" maxLateralAcc="1"/>
+              <LaneOffsetTarget><AbsoluteTargetLaneOffset value="0.5"/></LaneOffsetTarget>
+            </LaneOffsetAction>
+          </LateralAction></PrivateAction></Action>
+          <Action name="Relative"><PrivateAction><LateralAction>
+            <LaneOffsetAction continuous="false">
+              <LaneOffsetActionDynamics dynamicsShape="linear" maxLateralAcc="1"/>
+              <LaneOffsetTarget><RelativeTargetLaneOffset entityRef="Ego" value="0.3"/>
+              </LaneOffsetTarget>
+            </LaneOffsetAction>
+          </LateralAction></PrivateAction></Action>
+        </Event></Maneuver>
+      </ManeuverGroup>
+    </Act></Story>"""
+
+
+@pytest.mark.parametrize(
+    ("header", "stop", "side"),
+    [("CARLA:Mine", "", -1.0), ("test", _CRITERION, -1.0), ("test", "", 1.0)],
+)
+def test_lane_offset_action_target_is_positive_to_the_right_for_scenario_runner(
+    write_scenario: ScenarioWriter, header: str, stop: str, side: float
+) -> None:
+    # Positive is to the right in a CARLA: file, as its other lateral offsets, and in any file
+    # under ScenarioRunner's rules (it measures offsets from the waypoint in CARLA's frame).
+    path = write_scenario(stories=_OFFSETS, stop=stop)
+    path.write_text(
+        path.read_text(encoding="utf-8").replace('description="test"', f'description="{header}"'),
+        encoding="utf-8",
+    )
+    event = load_scenario(path).storyboard.stories[0].acts[0].maneuver_groups[0]
+    targets = []
+    for action in event.maneuvers[0].events[0].actions:
+        assert isinstance(action.body, model.LaneOffsetAction)
+        targets.append(action.body.target.value)
+    assert targets == [side * 0.5, side * 0.3]

@@ -260,3 +260,104 @@ def run(
             overrides=overrides or {},
         )
     )
+
+
+def event(name: str, action: str, start: str, *, priority: str = "parallel") -> str:
+    """An event with one action (``action``: the PrivateAction's body) and a start condition."""
+    return f"""
+            <Event name="{name}" priority="{priority}">
+              <Action name="{name}"><PrivateAction>{action}</PrivateAction></Action>
+              <StartTrigger><ConditionGroup>
+                <Condition name="{name}Start" delay="0" conditionEdge="rising">{start}</Condition>
+              </ConditionGroup></StartTrigger>
+            </Event>"""
+
+
+def at(seconds: float) -> str:
+    """A start condition: simulation time past ``seconds``."""
+    return f"""<ByValueCondition>
+                  <SimulationTimeCondition value="{seconds:g}" rule="greaterThan"/>
+                </ByValueCondition>"""
+
+
+def after(action: str, state: str = "endTransition") -> str:
+    """A start condition: the action called ``action`` passed ``state``."""
+    return f"""<ByValueCondition>
+                  <StoryboardElementStateCondition storyboardElementType="action"
+                    storyboardElementRef="{action}" state="{state}"/>
+                </ByValueCondition>"""
+
+
+def speed(value: float, *, shape: str = "step", dimension: str = "time", over: float = 0) -> str:
+    """A SpeedAction body to ``value`` m/s."""
+    return f"""<LongitudinalAction><SpeedAction>
+                  <SpeedActionDynamics dynamicsShape="{shape}" value="{over:g}"
+                    dynamicsDimension="{dimension}"/>
+                  <SpeedActionTarget><AbsoluteTargetSpeed value="{value:g}"/></SpeedActionTarget>
+                </SpeedAction></LongitudinalAction>"""
+
+
+def lane_offset(value: float, *, continuous: bool = False) -> str:
+    """A LaneOffsetAction body to an absolute offset of ``value`` m."""
+    return f"""<LateralAction><LaneOffsetAction continuous="{str(continuous).lower()}">
+                  <LaneOffsetActionDynamics dynamicsShape="linear" maxLateralAcc="1"/>
+                  <LaneOffsetTarget><AbsoluteTargetLaneOffset value="{value:g}"/></LaneOffsetTarget>
+                </LaneOffsetAction></LateralAction>"""
+
+
+def maneuver(
+    events: str,
+    *,
+    actor: str = "adversary",
+    description: str = "CARLA:Rules",
+    rev_minor: int = 0,
+    hero_control: str = HERO_CONTROL,
+    adversary_position: str = '<LanePosition roadId="1" laneId="-2" s="60" offset="0"/>',
+    stop: str | None = None,
+) -> str:
+    """A ScenarioRunner-style file on ``avenue.xodr`` whose one maneuver (for ``actor``) holds
+    ``events`` and one that never starts (so the run lasts to the time limit); the hero starts
+    at s=20 in lane -1, the adversary stands at ``adversary_position``; the storyboard
+    StopTrigger holds ``stop`` (default: CollisionTest)."""
+    stop_groups = stop if stop is not None else criteria("CollisionTest", distance=None)
+    return f"""<?xml version="1.0" encoding="UTF-8"?>
+<OpenSCENARIO>
+  <FileHeader revMajor="1" revMinor="{rev_minor}" date="2020-03-20T12:00:00" description="{description}" author=""/>
+  <ParameterDeclarations/>
+  <CatalogLocations/>
+  <RoadNetwork><LogicFile filepath="avenue.xodr"/></RoadNetwork>
+  <Entities>{vehicle("hero", "ego_vehicle")}{vehicle("adversary", "simulation")}
+  </Entities>
+  <Storyboard>
+    <Init>
+      <Actions>
+        <Private entityRef="hero">
+          <PrivateAction><TeleportAction><Position>
+            <LanePosition roadId="1" laneId="-1" s="20" offset="0"/>
+          </Position></TeleportAction></PrivateAction>{hero_control}
+        </Private>
+        <Private entityRef="adversary">
+          <PrivateAction><TeleportAction><Position>{adversary_position}</Position></TeleportAction>
+          </PrivateAction>
+        </Private>
+      </Actions>
+    </Init>
+    <Story name="Story">
+      <Act name="Act">
+        <ManeuverGroup name="Group" maximumExecutionCount="1">
+          <Actors selectTriggeringEntities="false"><EntityRef entityRef="{actor}"/></Actors>
+          <Maneuver name="Maneuver">{events}{event("Never", speed(0.0), at(1000))}
+          </Maneuver>
+        </ManeuverGroup>
+        <StartTrigger><ConditionGroup>
+          <Condition name="ActStart" delay="0" conditionEdge="rising">{at(0)}</Condition>
+        </ConditionGroup></StartTrigger>
+      </Act>
+    </Story>
+    <StopTrigger>
+      <ConditionGroup>{stop_groups}
+      </ConditionGroup>
+    </StopTrigger>
+  </Storyboard>
+</OpenSCENARIO>
+"""  # noqa: E501

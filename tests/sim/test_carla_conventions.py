@@ -5,8 +5,9 @@ Town01) are written as ScenarioRunner's examples are: ``CARLA:`` header, the her
 SUT by ``external_control``, an act that starts once the hero moved, ``criteria_*`` tests in the
 storyboard StopTrigger. Covers: the run ends when the stories end and passes with each criterion
 reported; each judged criterion failing on its own (KeepLane, WrongLane, OnSidewalk, Collision,
-DrivenDistance); the external ego must drive for the act to start; esmini's edge rule on the same
-file without ``CARLA:`` never starts the act; AddEntityAction/DeleteEntityAction at run time and
+DrivenDistance); the external ego must drive for the act to start; ScenarioRunner's rules chosen
+by any of its conventions, esmini's edge rule on the same file without any never starting the
+act; AddEntityAction/DeleteEntityAction at run time and
 an entity absent until added; the built-in autopilot for ``carla_autopilot``; the environment in
 the run log and the recording's metadata.
 """
@@ -56,17 +57,50 @@ def test_act_waits_for_the_externally_driven_ego(tmp_path: Path) -> None:
     assert max(s[4] for s in driven.samples["hero"]) > 5.0
 
 
-def test_without_the_carla_header_the_rising_start_never_fires(tmp_path: Path) -> None:
+_LATE_STOP = """
+        <Condition name="Late" delay="0" conditionEdge="rising">
+          <ByValueCondition>
+            <SimulationTimeCondition value="100" rule="greaterThan"/>
+          </ByValueCondition>
+        </Condition>"""
+
+
+@pytest.mark.parametrize(
+    ("stop", "hero_control", "logic_file", "rules"),
+    [
+        (_LATE_STOP, "", "avenue.xodr", "OpenSCENARIO (esmini)"),
+        (cs.criteria("CollisionTest", distance=None), "", "avenue.xodr", "criteria_*"),
+        (_LATE_STOP, cs.HERO_CONTROL, "avenue.xodr", "controller module external_control"),
+        (_LATE_STOP, "", "Town01", "CARLA town Town01"),
+    ],
+)
+def test_without_the_carla_header_its_conventions_choose_the_rules(
+    tmp_path: Path, stop: str, hero_control: str, logic_file: str, rules: str
+) -> None:
     # SimulationTime == 0 is true at the first evaluation only: esmini's rising edge never fires
     # there, ScenarioRunner's level-triggered, one-shot condition does and holds until the hero
-    # has moved a metre.
+    # has moved a metre. Without the CARLA: header, any of ScenarioRunner's conventions picks
+    # its rules; a file with none of them runs under esmini's.
+    town = logic_file == "Town01"
     text = cs.follow_leading(
-        description="FollowLeadingVehicle", stop=cs.criteria("CollisionTest", distance=None)
+        description="FollowLeadingVehicle",
+        stop=stop,
+        hero_control=hero_control,
+        logic_file=logic_file,
+        hero_position='<LanePosition roadId="4" laneId="-1" s="48.58" offset="0"/>'
+        if town
+        else '<LanePosition roadId="1" laneId="-1" s="20" offset="0"/>',
     )
-    plain = run(cs.write(tmp_path, text), time_limit=15.0)
-    assert plain.outcome.verdict is Verdict.TIMEOUT
-    lead_speeds = {s[4] for s in plain.samples["adversary"]}
-    assert lead_speeds == {0.0}
+    path = cs.write(tmp_path, text)
+    report = run(path, sut=SutConfig(takeover=Takeover.AFTER_INIT), time_limit=15.0)
+    assert rules in report.rules
+    lead_speeds = {s[4] for s in report.samples["adversary"]}
+    if rules.startswith("OpenSCENARIO"):
+        assert report.outcome.verdict is Verdict.TIMEOUT
+        assert lead_speeds == {0.0}
+    else:
+        assert report.rules.startswith("ScenarioRunner (")
+        assert max(lead_speeds) > 5.0, report.outcome.reason
 
 
 @pytest.mark.parametrize(

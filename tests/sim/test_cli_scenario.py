@@ -1,5 +1,6 @@
 """``simtest scenario run`` and ``check`` (kept with the sim tests; they exercise the engine):
-run prints verdict, reason and metrics and writes the artifacts; check skips catalogs, runs a
+run prints verdict, reason, rule set and metrics and writes the artifacts, check has the rule set
+of each file; check skips catalogs, runs a
 directory and ends with exactly ``N ran, M invalid, K errors``; with --reference it adds the
 comparison and the match count."""
 
@@ -12,6 +13,8 @@ import pytest
 from click.testing import CliRunner
 
 from simtest_operator.cli.main import cli
+
+from . import carla_scenarios as cs
 
 DATA = Path(__file__).parent / "data"
 CORPUS = Path(__file__).resolve().parents[3] / "shared" / "scenarios-dev"
@@ -31,6 +34,7 @@ def test_run_prints_verdict_and_writes_artifacts(tmp_path: Path, env: dict[str, 
     lines = result.output.splitlines()
     assert lines[0] == "verdict: Passed"
     assert lines[1].startswith("reason: storyboard complete")
+    assert lines[2] == "rules: OpenSCENARIO (esmini)"
     assert any(line.startswith("minTTC: ") for line in lines)
     assert (out / "recording.mcap").is_file() and (out / "result.json").is_file()
 
@@ -44,7 +48,19 @@ def test_check_directory_table_and_summary(tmp_path: Path, env: dict[str, str]) 
     result = CliRunner().invoke(cli, ["scenario", "check", str(folder), "--jobs", "1"], env=env)
     assert result.exit_code == 0, result.output
     assert "hard_braking_lead.xosc" in result.output and "Invalid" in result.output
+    assert "OpenSCENARIO (esmini)" in result.output
     assert result.output.splitlines()[-1] == "1 ran, 1 invalid, 0 errors"
+
+
+def test_run_and_check_print_scenario_runners_rules(tmp_path: Path, env: dict[str, str]) -> None:
+    folder = tmp_path / "carla"
+    folder.mkdir()
+    text = cs.follow_leading(description="FollowLeadingVehicle")
+    path = cs.write(folder, text)
+    run = CliRunner().invoke(cli, ["scenario", "run", str(path), "--no-record"], env=env)
+    assert "rules: ScenarioRunner (criteria_* conditions)" in run.output.splitlines(), run.output
+    check = CliRunner().invoke(cli, ["scenario", "check", str(folder), "--jobs", "1"], env=env)
+    assert "ScenarioRunner (criteria_*" in check.output, check.output
 
 
 def test_check_with_reference(tmp_path: Path, env: dict[str, str]) -> None:

@@ -129,7 +129,7 @@ def run(
     root: Path | None,
     max_mb: float,
 ) -> None:
-    """Run FILE and print its verdict, reason, accepted deviations and metrics.
+    """Run FILE and print its verdict, reason, rule set, accepted deviations and metrics.
 
     Exit code, as for `simtest run`: 0 passed, 1 failed or timed out (verdict Failed or
     Timeout: a verdict on the system under test), 2 error or invalid input (Error, Invalid,
@@ -151,6 +151,8 @@ def run(
     outcome = report.outcome
     click.echo(f"verdict: {outcome.verdict}")
     click.echo(f"reason: {outcome.reason}")
+    if report.rules:
+        click.echo(f"rules: {report.rules}")
     if "outside the scenario's source root" in outcome.reason:
         click.echo("hint: --root DIR lets the scenario reference files anywhere inside DIR")
     for deviation in report.deviations:
@@ -255,9 +257,9 @@ def check(
     root: Path | None,
     max_mb: float,
 ) -> None:
-    """Run every scenario under DIRECTORY in parallel and print a table with each verdict and
-    the schema deviations accepted in the file (warnings). Files the scenarios reference must be
-    inside DIRECTORY (or --root) or come from a map library."""
+    """Run every scenario under DIRECTORY in parallel and print a table with each verdict, the
+    rule set it ran under and the schema deviations accepted in the file (warnings). Files the
+    scenarios reference must be inside DIRECTORY (or --root) or come from a map library."""
     # Only `check` prints a table: `scenario run` starts without rich.
     from rich.console import Console
     from rich.markup import escape
@@ -271,7 +273,7 @@ def check(
     for index, report in runner.run_many(requests, jobs=jobs or os.cpu_count() or 1):
         reports[index] = report
     table = Table(title=f"scenarios under {directory}")
-    columns = ["file", "verdict", "reason", "warnings", "simulated s", "wall s"]
+    columns = ["file", "verdict", "rules", "reason", "warnings", "simulated s", "wall s"]
     if ref is not None:
         columns += ["end Δ s", "median err m", "max err m", "match", "intended differences"]
     for column in columns:
@@ -284,6 +286,7 @@ def check(
         row = [
             outcome.scenario_id,
             outcome.verdict.value,
+            reports[index].rules,
             outcome.reason,
             "\n".join(_short(d) for d in reports[index].deviations),
             f"{outcome.simulated_seconds:.2f}",

@@ -14,7 +14,7 @@ from pathlib import Path
 from simtest_operator import xmlsafe
 from simtest_operator.errors import ScenarioError
 from simtest_operator.maps import MapLibraries
-from simtest_operator.openscenario import headers, parameters, reading
+from simtest_operator.openscenario import headers, parameters, reading, rulesets
 from simtest_operator.openscenario.catalogs import Catalogs
 from simtest_operator.openscenario.confinement import Confinement
 from simtest_operator.openscenario.deviations import Deviations
@@ -47,9 +47,6 @@ def file_kind(path: Path) -> FileKind:
         raise ScenarioError("not a scenario, catalog or parameter distribution", file=str(path))
     return kind
 
-
-CARLA_PREFIX = "CARLA:"
-"""FileHeader description prefix that puts a file's positions in CARLA's frame."""
 
 MAX_SCENARIO_BYTES = 8 * 1024 * 1024
 """Default size limit of scenario and catalog files: real ones are below 1 MB; 8 MB parse in
@@ -88,8 +85,23 @@ def load_scenario(
     Raises ScenarioError (file, element, line) for unusable input: unsafe or malformed XML, a
     catalog or distribution file, undeclared or mistyped parameters, missing catalogs or entries,
     a missing road network. Unsupported-but-parseable elements do not raise; they are in
-    ``scenario.unsupported()``.
+    ``scenario.unsupported()``. A file under ScenarioRunner's rules (:mod:`.rulesets`) has its
+    lateral offsets from the road read positive to the right, as ScenarioRunner places them.
     """
+    scenario = _load(path, overrides, options, rulesets.OPENSCENARIO)
+    rules = rulesets.rules_of(scenario)
+    if rules.scenario_runner and not scenario.header.description.startswith(rulesets.CARLA_PREFIX):
+        # Its conventions show up only once read: read again with ScenarioRunner's offsets.
+        scenario = _load(path, overrides, options, rules)
+    return scenario
+
+
+def _load(
+    path: Path,
+    overrides: Mapping[str, str] | None,
+    options: LoadOptions,
+    rules: rulesets.Rules,
+) -> s.Scenario:
     path = path.resolve()
     file = str(path)
     confinement = Confinement.for_scenario(path, options.source_root)
@@ -114,10 +126,17 @@ def load_scenario(
     )
     ctx = dataclasses.replace(ctx, catalogs=catalogs, root_scope=ctx.scope)
     header = _header(ctx.require(root, "FileHeader"), ctx)
-    if header.description.startswith(CARLA_PREFIX):
+    if header.description.startswith(rulesets.CARLA_PREFIX):
         # CARLA ScenarioRunner's convention: such a file's positions are in CARLA's frame.
-        ctx = dataclasses.replace(ctx, carla_frame=True)
+        ctx = dataclasses.replace(ctx, carla_frame=True, right_offsets=True)
         ctx.note(root, "positions read in CARLA's left-handed frame (description 'CARLA:')")
+    elif rules.scenario_runner:
+        ctx = dataclasses.replace(ctx, right_offsets=True)
+        ctx.note(
+            root,
+            "lateral offsets from the road read positive to the right, as ScenarioRunner places "
+            f"them (its rules: {rules.because}); positions stay in OpenDRIVE's frame",
+        )
     libraries = MapLibraries.with_user(options.maps)
     road = _road_network(
         reading.child(root, "RoadNetwork"), ctx, path.parent, confinement, libraries

@@ -110,7 +110,12 @@ class Context:
     """How many catalog references deep we are."""
     carla_frame: bool = False
     """The file gives positions in CARLA's left-handed frame (FileHeader description starting
-    with ``CARLA:``): y, headings and lateral offsets are negated while reading."""
+    with ``CARLA:``): y and headings are negated while reading."""
+    right_offsets: bool = False
+    """Lateral offsets from the road (``t``, ``dt``, ``offset``, LaneOffsetAction targets) are
+    positive to the right, as ScenarioRunner places them whatever the header (its waypoint
+    arithmetic runs in CARLA's frame): set for ``CARLA:`` files and files under ScenarioRunner's
+    rules; they are negated while reading."""
 
     def with_scope(self, scope: parameters.Scope) -> Context:
         """The same context with another parameter scope."""

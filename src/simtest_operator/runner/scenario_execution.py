@@ -86,6 +86,9 @@ class RunReport:
     """Wall time to load the scenario, map and network and start the backend."""
     deviations: tuple[Deviation, ...] = ()
     """Accepted deviations from the OpenSCENARIO schema (empty under strict mode)."""
+    rules: str = ""
+    """The rule set the scenario ran under and why (``ScenarioRunner (criteria_* conditions)``);
+    empty when it did not load."""
 
 
 class _Samples:
@@ -146,6 +149,7 @@ def run_scenario(request: RunRequest) -> RunReport:
         f"network {opened.net_file} (cache {'hit' if opened.net_from_cache else 'miss'}, "
         f"{opened.net_seconds:.2f} s); ego {simulation.ego}"
     )
+    log.append(f"rules: {simulation.rules.describe()}")
     evaluator = evaluation.OnlineEvaluator(
         request.criteria,
         ego=simulation.ego,
@@ -247,6 +251,7 @@ def run_scenario(request: RunRequest) -> RunReport:
         net_from_cache=opened.net_from_cache,
         startup_seconds=startup,
         deviations=deviations,
+        rules=simulation.rules.describe(),
     )
     if out is not None:
         _write_outputs(out, report, log)

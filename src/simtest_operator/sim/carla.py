@@ -8,7 +8,7 @@ them; it maps each to what it already has:
   :data:`CRUISE_SPEED` as set speed, because such scenarios wait for the ego to move.
 - ``npc_vehicle_control``, ``vehicle_longitudinal_control``: lane following at the speed the
   SpeedActions ask for -- what the engine does for every scripted vehicle.
-- ``carla_autopilot`` and, in ``CARLA:`` files, ``ActivateControllerAction`` on a non-ego
+- ``carla_autopilot`` and, under ScenarioRunner's rules, ``ActivateControllerAction`` on a non-ego
   vehicle: CARLA's traffic-manager autopilot, here the driver model (IDM car following, lane
   keeping, AEB) with the SUT defaults at the vehicle's speed, or :data:`CRUISE_SPEED` from rest.
 
@@ -20,7 +20,7 @@ from __future__ import annotations
 import enum
 
 from simtest_operator.drivermodel import DriverModel, SutConfig
-from simtest_operator.openscenario import model
+from simtest_operator.openscenario import model, rulesets
 from simtest_operator.sim.actors import Actor
 
 CRUISE_SPEED = 30.0 / 3.6
@@ -46,12 +46,8 @@ _MODULES = {
 
 def module_of(controller: model.Controller) -> Module:
     """The mapping of ``controller``'s ``module`` property (OTHER when absent or unknown)."""
-    name = controller.property("module")
-    if name is None:
-        return Module.OTHER
-    # A module is named (``external_control``) or given as the path of its Python file.
-    stem = name.strip().replace("\\", "/").rsplit("/", 1)[-1].lower().removesuffix(".py")
-    return _MODULES.get(stem, Module.OTHER)
+    stem = rulesets.module_name(controller)
+    return _MODULES.get(stem, Module.OTHER) if stem is not None else Module.OTHER
 
 
 def autopilot(actor: Actor, *, on: bool) -> None:

@@ -23,6 +23,11 @@ from simtest_operator.snapshots import EntityKind
 StateQuery = Callable[[model.StoryboardElementType, str, model.StoryboardElementState], bool]
 
 _EPSILON = 1e-9
+SCENARIO_RUNNER_STILL = 0.1
+"""m/s up to which an entity stands still under ScenarioRunner's rules. ScenarioRunner's
+StandStill restarts its clock above 0.001 m/s, but CARLA's physics brings a braking vehicle to
+rest while the stand-in's car-following model only approaches zero; 0.1 m/s is ScenarioRunner's
+own standstill in its RunningStopTest."""
 _OBJECT_TYPES = {
     "vehicle": EntityKind.VEHICLE,
     "pedestrian": EntityKind.PEDESTRIAN,
@@ -67,14 +72,28 @@ def _compare_typed(current: model.ParameterValue, rule: model.Rule, text: str) -
 class Conditions:
     """Evaluates condition bodies against the world and the storyboard state."""
 
-    __slots__ = ("_signed_longitudinal", "_state_query", "_world")
+    __slots__ = (
+        "_scenario_runner",
+        "_signed_longitudinal",
+        "_state_query",
+        "_still_since",
+        "_world",
+    )
 
     def __init__(
-        self, world: World, state_query: StateQuery, *, signed_longitudinal: bool = False
+        self,
+        world: World,
+        state_query: StateQuery,
+        *,
+        signed_longitudinal: bool = False,
+        scenario_runner: bool = False,
     ) -> None:
         self._world = world
         self._state_query = state_query
         self._signed_longitudinal = signed_longitudinal
+        self._scenario_runner = scenario_runner
+        self._still_since: dict[tuple[int, str], tuple[float, float]] = {}
+        """ScenarioRunner's StandStill clocks: (condition, entity) -> (slow since, last seen)."""
 
     def __call__(self, body: model.ByEntity | model.ByValue) -> Truth:
         if isinstance(body, model.ByValue):
@@ -134,6 +153,8 @@ class Conditions:
             value = 0.0 if _lateral(condition.direction) else actor.acceleration
             return compare(value, condition.rule, condition.value)
         if isinstance(condition, model.StandStillCondition):
+            if self._scenario_runner:
+                return self._slow_for(condition, actor) >= condition.duration - _EPSILON
             return actor.standstill_time >= condition.duration - _EPSILON and actor.speed == 0.0
         if isinstance(condition, model.TraveledDistanceCondition):
             return actor.odometer >= condition.value
@@ -184,6 +205,18 @@ class Conditions:
         if isinstance(condition, model.TimeToCollisionCondition):
             return compare(self._ttc(actor, condition), condition.rule, condition.value)
         raise ScenarioError(f"condition {type(condition).__name__} is not supported")
+
+    def _slow_for(self, condition: model.StandStillCondition, actor: Actor) -> float:
+        """Seconds ``actor`` has been at most :data:`SCENARIO_RUNNER_STILL` fast, counted from
+        when the condition started watching (ScenarioRunner's StandStill starts its clock when
+        the condition is first checked, or again after a pause, and restarts it on motion)."""
+        now = self._world.time
+        key = (id(condition), actor.name)
+        since, seen = self._still_since.get(key, (now, now))
+        if now - seen > 1.5 * self._world.dt or actor.speed > SCENARIO_RUNNER_STILL:
+            since = now
+        self._still_since[key] = (since, now)
+        return now - since
 
     def _collision(self, actor: Actor, condition: model.CollisionCondition) -> bool:
         world = self._world

@@ -9,6 +9,10 @@ driver's new set speed (a request to the driver, like a driver turning the cruis
 and other longitudinal actions on the ego are not executed and are listed as ignored. Lateral
 actions still run (the model only keeps its lane). Controllers of other entities are not
 simulated: those entities keep following the storyboard, and the controller is listed as ignored.
+
+Under ScenarioRunner's rules (``scenario_runner``) speed and routing actions last as long as
+ScenarioRunner lets them (:mod:`~simtest_operator.sim.lifetimes`), and lateral actions aimed at an
+``external_control`` actor are ignored (listed), as ScenarioRunner's ExternalControl ignores them.
 """
 
 from __future__ import annotations
@@ -22,6 +26,7 @@ from simtest_operator.sim.actors import Actor, Domain, Mode
 from simtest_operator.sim.backends import TrafficHost
 from simtest_operator.sim.following import DistanceRun
 from simtest_operator.sim.lateral import LaneChangeRun, LaneOffsetRun, LateralDistanceRun
+from simtest_operator.sim.lifetimes import IgnoredLateral, RouteHold, SpeedHold
 from simtest_operator.sim.runs import Done, Run
 from simtest_operator.sim.speeds import SpeedProfileRun, SpeedRun, target_speed
 from simtest_operator.sim.synchronize import SynchronizeRun
@@ -46,9 +51,11 @@ class Dispatcher:
         "_active",
         "_carla",
         "_ego",
+        "_external",
         "_host",
         "_switch",
         "_traffic",
+        "_watched",
         "_world",
         "assigned",
         "teleported",
@@ -66,12 +73,21 @@ class Dispatcher:
     ) -> None:
         self._world = world
         self._carla = carla_conventions
-        """The file is CARLA ScenarioRunner's (``CARLA:`` header): its controller conventions."""
+        """The file runs under ScenarioRunner's rules: its controllers and action lifetimes."""
         self._traffic = traffic if traffic is not None else Traffic(seed=0)
         self._host = host
         self._ego = ego
         self._switch = switch
         self._active: dict[str, dict[Domain, Run]] = {}
+        self._watched: dict[tuple[str, str], Run] = {}
+        """Running actions that steer nothing (ScenarioRunner's lifetimes), by (entity, kind)."""
+        self._external = {
+            actor.name
+            for actor in world.actors.values()
+            if isinstance(actor.obj.controller, model.Controller)
+            and carla.module_of(actor.obj.controller) is carla.Module.EXTERNAL
+        }
+        """Entities an ``external_control`` controller drives (ScenarioRunner's rules only)."""
         self.assigned: dict[tuple[str, str], None] = {}
         """(entity, controller) pairs assigned during the run, in order (an ordered set)."""
         self.teleported: set[str] = set()
@@ -84,7 +100,11 @@ class Dispatcher:
         if mine is None:
             return {}
         for domain in [d for d, run in mine.items() if run.finished]:
-            del mine[domain]
+            ended = mine.pop(domain)
+            # An action ScenarioRunner let end before its speed change did hands it on.
+            rest = ended.successor if isinstance(ended, SpeedHold) else None
+            if rest is not None:
+                mine[domain] = rest
         return mine
 
     def active(self) -> list[Run]:
@@ -94,6 +114,9 @@ class Dispatcher:
             for run in mine.values():
                 if not run.finished:
                     seen[id(run)] = run
+        for run in self._watched.values():
+            if not run.finished:
+                seen[id(run)] = run
         return list(seen.values())
 
     def start(self, action: model.Action, actors: tuple[str, ...]) -> Sequence[Run]:
@@ -175,6 +198,9 @@ class Dispatcher:
         in the snapshots and no part in conditions until an AddEntityAction brings it back."""
         for run in self._active.pop(actor.name, {}).values():
             run.cancel()
+        for (name, _), run in self._watched.items():
+            if name == actor.name:
+                run.cancel()
         actor.placed = False
         actor.driver = None
 
@@ -213,22 +239,53 @@ class Dispatcher:
                     approach.pop()
                 actor.route = tuple(approach + leg_roads)
                 actor.route_index = 0
-            return Done(actor)
+            return self._routed(actor, route.waypoints[-1].position)
         if isinstance(body, model.AcquirePositionAction):
             self._route(actor, [body.position])
-            return Done(actor)
+            return self._routed(actor, body.position)
+        if (
+            self._carla
+            and actor.name in self._external
+            and isinstance(body, model.LaneOffsetAction | model.LaneChangeAction)
+        ):
+            self._ignore(f"{type(body).__name__} on the externally controlled {actor.name}")
+            return self._watch("waypoints", IgnoredLateral(actor, body))
         if actor.driver is not None:
             if isinstance(body, model.SpeedAction):
                 actor.driver.set_speed = target_speed(world, body.target)
+                if self._carla:
+                    return self._watch("speed", SpeedHold(world, actor, body, None))
                 return Done(actor)
             if isinstance(body, _SUT_LONGITUDINAL):
                 self._ignore(f"{type(body).__name__} on the SUT-driven {actor.name}")
                 return Done(actor)
         return self._register(actor, self._make(actor, body))
 
+    def _routed(self, actor: Actor, last: model.Position) -> Run:
+        """A routing action's run: done at once, or, under ScenarioRunner's rules, once the
+        actor reached the last waypoint (an ``external_control`` actor: never)."""
+        if not self._carla:
+            return Done(actor)
+        external = actor.name in self._external
+        goal = None if external else positions.resolve(self._world, last)
+        return self._watch("waypoints", RouteHold(actor, goal))
+
+    def _watch(self, kind: str, run: Run) -> Run:
+        """Keep a run that steers nothing until it ends; it ends an older one of its ``kind``
+        on the same actor (ScenarioRunner's newer command replaces the goal)."""
+        assert run.actor is not None
+        key = (run.actor.name, kind)
+        old = self._watched.get(key)
+        if old is not None:
+            old.finished = True
+        self._watched[key] = run
+        return run
+
     def _make(self, actor: Actor, body: model.AnyAction) -> Run:
         world = self._world
         if isinstance(body, model.SpeedAction):
+            if self._carla:
+                return SpeedHold(world, actor, body, SpeedRun(world, actor, body))
             return SpeedRun(world, actor, body)
         if isinstance(body, model.SpeedProfileAction):
             return SpeedProfileRun(world, actor, body)
@@ -300,6 +357,8 @@ class Dispatcher:
             carla.autopilot(actor, on=body.activate_longitudinal is not False)
             return
         self.assigned.setdefault((actor.name, controller.name), None)
+        if module is carla.Module.EXTERNAL:
+            self._external.add(actor.name)
         self._activate(actor, body.activate_longitudinal, body.activate_lateral)
         if module is carla.Module.EXTERNAL and actor.driver is not None:
             carla.start_moving(actor.driver)

@@ -19,8 +19,7 @@ from __future__ import annotations
 from simtest_operator.drivermodel import DriverModel, SutConfig, Takeover
 from simtest_operator.errors import ScenarioError
 from simtest_operator.opendrive import RoadNetwork
-from simtest_operator.openscenario import model
-from simtest_operator.openscenario.loading import CARLA_PREFIX
+from simtest_operator.openscenario import model, rulesets
 from simtest_operator.sim import carla, motion, perception
 from simtest_operator.sim.actors import Actor, Domain, Mode
 from simtest_operator.sim.backends import ActorSpec, Backend, BackendConfig
@@ -68,6 +67,7 @@ class Simulation:
         "_sut_engaged",
         "_traffic",
         "ego",
+        "rules",
         "world",
     )
 
@@ -98,7 +98,9 @@ class Simulation:
         )
         self._traffic = Traffic(seed=backend_config.seed)
         header = scenario.header
-        scenario_runner = header.description.startswith(CARLA_PREFIX)
+        self.rules = rulesets.rules_of(scenario)
+        """The reference player whose rules this run follows (docs/simulator.md, "Rule sets")."""
+        scenario_runner = self.rules.scenario_runner
         self._dispatcher = Dispatcher(
             self.world,
             ego=self.ego,
@@ -110,7 +112,9 @@ class Simulation:
         self._conditions = Conditions(
             self.world,
             self._state_query,
-            signed_longitudinal=(header.rev_major, header.rev_minor) == (1, 0),
+            signed_longitudinal=(header.rev_major, header.rev_minor) == (1, 0)
+            and not scenario_runner,
+            scenario_runner=scenario_runner,
         )
         self._storyboard = Storyboard(
             scenario.storyboard,

@@ -16,6 +16,10 @@ reference player (esmini) shows on the development corpus.
 
 Event priorities apply within the event's maneuver: ``override`` (1.0 ``overwrite``) stops the
 other running events, ``skip`` does not start while another event runs, ``parallel`` just starts.
+Under ScenarioRunner's rules priorities are not applied: ScenarioRunner runs the events of a
+maneuver side by side (a parallel composite) and never reads the attribute; and its
+StoryboardElementStateCondition knows one end of an element, so ``endTransition`` and
+``stopTransition`` both see an element end however it ended.
 An event or maneuver group that ended with executions left goes back to standby (maneuver group:
 restarts at once) until ``maximumExecutionCount`` is used up.
 """
@@ -31,6 +35,9 @@ from simtest_operator.sim.triggers import RawCondition, TriggerState
 
 Kind = model.StoryboardElementType
 Transition = model.StoryboardElementState
+
+
+_ENDINGS = (Transition.END_TRANSITION, Transition.STOP_TRANSITION)
 
 
 class Phase(enum.StrEnum):
@@ -166,6 +173,7 @@ class Storyboard:
         "_fired",
         "_pending",
         "_raw",
+        "_scenario_runner",
         "_start_action",
         "_stop",
         "_stop_defined",
@@ -183,6 +191,7 @@ class Storyboard:
     ) -> None:
         self._raw = raw
         self._start_action = start_action
+        self._scenario_runner = scenario_runner
         self._stories = tuple(_build_story(story, scenario_runner) for story in storyboard.stories)
         stop = storyboard.stop_trigger
         self._stop = TriggerState(stop, level=scenario_runner)
@@ -226,6 +235,9 @@ class Storyboard:
         nodes = self._by_name.get((kind, name), ())
         if state in (Transition.STANDBY_STATE, Transition.RUNNING_STATE, Transition.COMPLETE_STATE):
             return any(node.phase.value == state.value for node in nodes)
+        if self._scenario_runner and state in _ENDINGS:
+            # ScenarioRunner knows one end of an element, however it came (its END rule).
+            return any((kind, name, ending) in self._visible for ending in _ENDINGS)
         return (kind, name, state) in self._visible
 
     def known(self, kind: Kind, name: str) -> bool:
@@ -285,10 +297,10 @@ class Storyboard:
             source = event.source
             assert isinstance(source, model.Event)
             running = [e for e in maneuver.children if e is not event and e.phase is Phase.RUNNING]
-            if source.priority is model.Priority.SKIP and running:
+            if not self._scenario_runner and source.priority is model.Priority.SKIP and running:
                 self._transition(event, Transition.SKIP_TRANSITION)
                 continue
-            if source.priority is model.Priority.OVERRIDE:
+            if not self._scenario_runner and source.priority is model.Priority.OVERRIDE:
                 for other in running:
                     self._halt(other)
             self._start_event(event, self._actors(group, who))

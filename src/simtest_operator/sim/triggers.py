@@ -14,10 +14,10 @@ into its result through
 State lives per condition inside a :class:`TriggerState`, one per storyboard element trigger, and
 is reset when the element goes back to standby for another execution.
 
-Files written for CARLA ScenarioRunner (FileHeader description ``CARLA:``) are evaluated as
-ScenarioRunner does (``level=True``): conditions are level-triggered -- the edge is not looked
-at, so a ``rising`` condition already true at its first evaluation fires there -- and a
-condition that was true once stays true until its trigger fires (ScenarioRunner's one-shot
+Files under CARLA ScenarioRunner's rules (:mod:`~simtest_operator.openscenario.rulesets`) are
+evaluated as ScenarioRunner does (``level=True``): conditions are level-triggered -- the edge is
+not looked at, so a ``rising`` condition already true at its first evaluation fires there -- and
+a condition that was true once stays true until its trigger fires (ScenarioRunner's one-shot
 conditions), so ``SimulationTime == 0 AND TraveledDistance > 1`` in one group fires once the
 entity has moved a metre.
 """

@@ -229,12 +229,12 @@ def _lane_offset(el: Element, ctx: reading.Context) -> a.LaneOffsetAction:
     offset: a.AbsoluteTargetLaneOffset | a.RelativeTargetLaneOffset
     if target_el.tag == "AbsoluteTargetLaneOffset":
         offset = a.AbsoluteTargetLaneOffset(
-            value=ctx.double(target_el, "value"), line=target_el.sourceline
+            value=positions.lateral(ctx, ctx.double(target_el, "value")), line=target_el.sourceline
         )
     elif target_el.tag == "RelativeTargetLaneOffset":
         offset = a.RelativeTargetLaneOffset(
             entity_ref=ctx.string(target_el, "entityRef"),
-            value=ctx.double(target_el, "value"),
+            value=positions.lateral(ctx, ctx.double(target_el, "value")),
             line=target_el.sourceline,
         )
     else:

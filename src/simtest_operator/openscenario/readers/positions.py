@@ -3,10 +3,12 @@
 Routes and trajectories (polyline, clothoid, clothoid spline, NURBS) are read here because they
 hold positions and positions refer to them (RoutePosition, TrajectoryPosition).
 
-Two conventions of files written for CARLA are read here. A file whose FileHeader description
+Three conventions of files written for CARLA are read here. A file whose FileHeader description
 starts with ``CARLA:`` gives positions in CARLA's left-handed frame (ScenarioRunner's
-``use_carla_coordinate_system``): y, dy, headings and lateral offsets (``t``, ``dt``,
-``offset``) are negated into OpenDRIVE's frame. A whole-number heading beyond one turn
+``use_carla_coordinate_system``): y, dy and headings are negated into OpenDRIVE's frame. Lateral
+offsets from the road (``t``, ``dt``, ``offset``, and a LaneOffsetAction's target) are positive
+to the right in every file ScenarioRunner runs (``Context.right_offsets``: the ``CARLA:`` files
+and those under its rules) and are negated too. A whole-number heading beyond one turn
 (``h="180"``, ``h="-90"``) is degrees, which CARLA files write; it is converted with a deviation.
 Fractional ones stay radians (esmini's tests write ``h="7.853981633974483"``, 2.5 pi).
 """
@@ -49,9 +51,15 @@ def _heading(el: Element, ctx: reading.Context, name: str) -> float | None:
     return -value if ctx.carla_frame else value
 
 
-def _lateral(ctx: reading.Context, value: float) -> float:
-    """A y or lateral offset: CARLA's frame has y (and left) the other way."""
+def _y(ctx: reading.Context, value: float) -> float:
+    """A y or dy: CARLA's frame has y the other way."""
     return -value if ctx.carla_frame else value
+
+
+def lateral(ctx: reading.Context, value: float) -> float:
+    """A lateral offset from the road (also a LaneOffsetAction's target): positive to the right
+    in ScenarioRunner's files."""
+    return -value if ctx.right_offsets else value
 
 
 def _orientation_of(el: Element, ctx: reading.Context) -> m.Orientation | None:
@@ -76,7 +84,7 @@ def position_choice(el: Element, ctx: reading.Context) -> p.Position:
 def _world(el: Element, ctx: reading.Context) -> p.WorldPosition:
     return p.WorldPosition(
         x=ctx.double(el, "x"),
-        y=_lateral(ctx, ctx.double(el, "y")),
+        y=_y(ctx, ctx.double(el, "y")),
         z=ctx.opt_double(el, "z"),
         h=_heading(el, ctx, "h"),
         p=ctx.opt_double(el, "p"),
@@ -93,7 +101,7 @@ def _relative_world_or_object(
     return kind(
         entity_ref=ctx.string(el, "entityRef"),
         dx=ctx.double(el, "dx"),
-        dy=_lateral(ctx, ctx.double(el, "dy")),
+        dy=_y(ctx, ctx.double(el, "dy")),
         dz=ctx.opt_double(el, "dz"),
         orientation=_orientation_of(el, ctx),
         line=el.sourceline,
@@ -104,7 +112,7 @@ def _road(el: Element, ctx: reading.Context) -> p.RoadPosition:
     return p.RoadPosition(
         road_id=ctx.string(el, "roadId"),
         s=ctx.double(el, "s"),
-        t=_lateral(ctx, ctx.double(el, "t")),
+        t=lateral(ctx, ctx.double(el, "t")),
         orientation=_orientation_of(el, ctx),
         line=el.sourceline,
     )
@@ -114,7 +122,7 @@ def _relative_road(el: Element, ctx: reading.Context) -> p.RelativeRoadPosition:
     return p.RelativeRoadPosition(
         entity_ref=ctx.string(el, "entityRef"),
         ds=ctx.double(el, "ds"),
-        dt=_lateral(ctx, ctx.double(el, "dt")),
+        dt=lateral(ctx, ctx.double(el, "dt")),
         orientation=_orientation_of(el, ctx),
         line=el.sourceline,
     )
@@ -125,7 +133,7 @@ def _lane(el: Element, ctx: reading.Context) -> p.LanePosition:
         road_id=ctx.string(el, "roadId"),
         lane_id=ctx.integer(el, "laneId"),
         s=ctx.double(el, "s"),
-        offset=_lateral(ctx, ctx.double_or(el, "offset", 0.0)),
+        offset=lateral(ctx, ctx.double_or(el, "offset", 0.0)),
         orientation=_orientation_of(el, ctx),
         line=el.sourceline,
     )
@@ -141,7 +149,7 @@ def _relative_lane(el: Element, ctx: reading.Context) -> p.RelativeLanePosition:
         d_lane=ctx.integer(el, "dLane"),
         ds=ds,
         ds_lane=ds_lane,
-        offset=_lateral(ctx, ctx.double_or(el, "offset", 0.0)),
+        offset=lateral(ctx, ctx.double_or(el, "offset", 0.0)),
         orientation=_orientation_of(el, ctx),
         line=el.sourceline,
     )
@@ -151,7 +159,7 @@ def _trajectory_position(el: Element, ctx: reading.Context) -> p.TrajectoryPosit
     return p.TrajectoryPosition(
         trajectory=trajectory_or_ref(ctx.choice(ctx.require(el, "TrajectoryRef")), ctx),
         s=ctx.double(el, "s"),
-        t=_lateral(ctx, ctx.double_or(el, "t", 0.0)),
+        t=lateral(ctx, ctx.double_or(el, "t", 0.0)),
         orientation=_orientation_of(el, ctx),
         line=el.sourceline,
     )

@@ -1,0 +1,120 @@
+"""Which reference player's rules a scenario runs under: OpenSCENARIO as esmini reads it, or CARLA
+ScenarioRunner's.
+
+Files are written for one player and rely on its reading of the standard (docs/simulator.md,
+"Rule sets"). ScenarioRunner's rules apply to a file that shows it was written for ScenarioRunner
+by any of (first match named):
+
+- a FileHeader ``description`` starting with ``CARLA:`` (ScenarioRunner's own marker);
+- ``criteria_<Test>`` conditions in the storyboard StopTrigger (ScenarioRunner's pass/fail tests);
+- a controller whose ``module`` property names one of ScenarioRunner's controller modules
+  (``external_control``, ``carla_autopilot``, ...), assigned to an entity or by an action;
+- a CARLA town (``Town01``, ``Town10HD``, ...) as the road network's ``LogicFile``.
+
+Every other file runs under OpenSCENARIO's rules, as esmini reads it. CARLA's left-handed
+coordinate frame is a separate matter: ScenarioRunner applies it only after the ``CARLA:`` header
+(``loading.CARLA_PREFIX``), and so does the reader.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import enum
+import re
+from collections.abc import Iterator
+
+from simtest_operator.openscenario.model.actions import AnyAction
+from simtest_operator.openscenario.model.controls import AssignControllerAction
+from simtest_operator.openscenario.model.entities import Controller
+from simtest_operator.openscenario.model.scenarios import Scenario
+
+CARLA_PREFIX = "CARLA:"
+"""FileHeader description prefix of ScenarioRunner's files; it also puts positions in CARLA's
+frame."""
+
+SCENARIO_RUNNER_MODULES = frozenset(
+    {
+        "external_control",
+        "carla_autopilot",
+        "npc_vehicle_control",
+        "simple_vehicle_control",
+        "vehicle_longitudinal_control",
+        "vehicle_velocity_control",
+        "vehicle_teleport_control",
+        "pedestrian_control",
+    }
+)
+"""ScenarioRunner's controller modules (``srunner/scenariomanager/actorcontrols``), by stem."""
+
+_TOWN = re.compile(r"town\d+[a-z_]*", re.IGNORECASE)
+"""A CARLA town's map name (``Town01``, ``Town10HD``, ``Town04_Opt``)."""
+
+
+class RuleSet(enum.StrEnum):
+    """The reference player whose rules a scenario runs under."""
+
+    OPENSCENARIO = "OpenSCENARIO (esmini)"
+    SCENARIO_RUNNER = "ScenarioRunner"
+
+
+@dataclasses.dataclass(frozen=True, slots=True)
+class Rules:
+    """A scenario's rule set and what in the file chose it."""
+
+    rule_set: RuleSet
+    because: str = ""
+    """The first ScenarioRunner convention found (empty for OpenSCENARIO's rules)."""
+
+    @property
+    def scenario_runner(self) -> bool:
+        return self.rule_set is RuleSet.SCENARIO_RUNNER
+
+    def describe(self) -> str:
+        """``ScenarioRunner (criteria_* conditions)`` or ``OpenSCENARIO (esmini)``."""
+        return f"{self.rule_set} ({self.because})" if self.because else str(self.rule_set)
+
+
+OPENSCENARIO = Rules(RuleSet.OPENSCENARIO)
+
+
+def module_name(controller: Controller) -> str | None:
+    """The stem of ``controller``'s ``module`` property (``external_control``), lower case: a
+    module is named or given as the path of its Python file; None without the property."""
+    name = controller.property("module")
+    if name is None:
+        return None
+    return name.strip().replace("\\", "/").rsplit("/", 1)[-1].lower().removesuffix(".py")
+
+
+def rules_of(scenario: Scenario) -> Rules:
+    """The rule set ``scenario`` runs under (see the module docstring)."""
+    if scenario.header.description.startswith(CARLA_PREFIX):
+        return Rules(RuleSet.SCENARIO_RUNNER, f"description {CARLA_PREFIX!r}")
+    stop = scenario.storyboard.stop_trigger
+    if stop is not None and stop.criteria:
+        return Rules(RuleSet.SCENARIO_RUNNER, "criteria_* conditions")
+    for controller in _controllers(scenario):
+        module = module_name(controller)
+        if module in SCENARIO_RUNNER_MODULES:
+            return Rules(RuleSet.SCENARIO_RUNNER, f"controller module {module}")
+    logic = scenario.road_network.logic_file
+    if logic is not None and _TOWN.fullmatch(logic.stem):
+        return Rules(RuleSet.SCENARIO_RUNNER, f"CARLA town {logic.stem}")
+    return OPENSCENARIO
+
+
+def _controllers(scenario: Scenario) -> Iterator[Controller]:
+    for obj in scenario.entities:
+        if isinstance(obj.controller, Controller):
+            yield obj.controller
+    board = scenario.storyboard
+    bodies: list[AnyAction] = [body for p in board.init.private for body in p.actions]
+    for story in board.stories:
+        for act in story.acts:
+            for group in act.maneuver_groups:
+                for maneuver in group.maneuvers:
+                    for event in maneuver.events:
+                        bodies.extend(action.body for action in event.actions)
+    for body in bodies:
+        if isinstance(body, AssignControllerAction) and isinstance(body.controller, Controller):
+            yield body.controller
