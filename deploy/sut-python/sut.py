@@ -209,7 +209,13 @@ def serve(conn: socket.socket) -> None:
                 run = Controller(params=params, dt=float(hello["step"]), ego_id=int(hello["egoId"]))
                 scenario = str(hello.get("scenario", "?"))
                 print(f"sut-python: run {scenario}", file=sys.stderr, flush=True)
-                ready = {"protocol": PROTOCOL, "name": "simtest-sut-python", "version": "1.0.0"}
+                # reset: each HELLO builds a new Controller, so one process serves many runs.
+                ready = {
+                    "protocol": PROTOCOL,
+                    "name": "simtest-sut-python",
+                    "version": "1.0.0",
+                    "reset": True,
+                }
                 send_frame(conn, READY, 0, json.dumps(ready).encode())
             elif kind == TRAFFIC_COMMAND and run is not None:
                 run.command(payload)

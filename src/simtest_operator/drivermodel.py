@@ -82,6 +82,16 @@ class Launch(enum.StrEnum):
     """Connect to ``endpoint``; nothing is started."""
 
 
+class Lifetime(enum.StrEnum):
+    """How long a SUT process the runner starts lives."""
+
+    SCENARIO = "scenario"
+    """Started for each run, stopped after it."""
+    WORKER = "worker"
+    """Kept warm by the local worker process across its runs while the SUT resets itself
+    between them (READY ``"reset": true``)."""
+
+
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
 class ExternalSut:
     """An external system under test reached through the OSI SUT protocol."""
@@ -107,6 +117,8 @@ class ExternalSut:
     """Radius (m) around the ego beyond which other objects are left out of the SensorView."""
     config: Mapping[str, str] = dataclasses.field(default_factory=dict)
     """Free-form configuration sent to the SUT in the handshake."""
+    lifetime: Lifetime = Lifetime.SCENARIO
+    """How long a process started from ``command`` lives."""
 
 
 IDM_DELTA = 4.0

@@ -22,6 +22,7 @@ from simtest_operator.runner import scenario_execution, suts
 from simtest_operator.settings import SUT_ENDPOINT, Settings, SimulationSettings
 from simtest_operator.sim import BackendChoice, SutConfig
 from simtest_operator.sut.launching import free_port, reference_command
+from simtest_operator.sut.processes import SutProcesses
 from simtest_operator.verdicts import Verdict
 
 SCENARIO = Path(__file__).parents[1] / "sim" / "data" / "hard_braking_lead.xosc"
@@ -35,7 +36,13 @@ def external(command: tuple[str, ...], **extra: float) -> ExternalSut:
     return ExternalSut(launch=Launch.LOCAL, command=command, **options)  # type: ignore[arg-type]
 
 
-def run(sut: SutConfig, out: Path | None, **simulation: float) -> scenario_execution.RunReport:
+def run(
+    sut: SutConfig,
+    out: Path | None,
+    *,
+    processes: SutProcesses | None = None,
+    **simulation: float,
+) -> scenario_execution.RunReport:
     return scenario_execution.run_scenario(
         scenario_execution.RunRequest(
             scenario=SCENARIO,
@@ -45,7 +52,8 @@ def run(sut: SutConfig, out: Path | None, **simulation: float) -> scenario_execu
             record=out is not None,
             backend=BackendChoice.MEMORY,
             simulation=SimulationSettings(**simulation),  # type: ignore[arg-type]
-        )
+        ),
+        processes=processes,
     )
 
 

@@ -23,13 +23,15 @@ def faulty(mode: str, step: int = 5, **options: float) -> SutConfig:
 def test_a_crashed_sut_leaves_its_log_and_its_last_words_in_the_reason(tmp_path: Path) -> None:
     outcome = run(faulty("kill"), tmp_path).outcome
     assert outcome.verdict is Verdict.ERROR
-    assert "killed by signal 9: faulty SUT: mode kill at step 5 faulty SUT: crashing" in (
+    assert "killed by signal 9: faulty SUT: mode kill at step 5 faulty SUT: run " in (
         outcome.reason
     ), outcome.reason
+    assert outcome.reason.endswith("faulty SUT: crashing at step 5"), outcome.reason
     log = Path(outcome.artifacts["sutLog"])
     assert log == tmp_path / "sut.log"
     assert log.read_text().splitlines() == [
         "faulty SUT: mode kill at step 5",
+        "faulty SUT: run hard_braking_lead.xosc",
         "faulty SUT: crashing at step 5",
     ]
 
@@ -64,7 +66,10 @@ def test_a_missed_step_deadline_says_by_how_much() -> None:
 def test_a_passing_run_keeps_the_sut_log_too(tmp_path: Path) -> None:
     outcome = run(faulty("kill", step=100_000), tmp_path).outcome
     assert outcome.verdict is Verdict.PASSED, outcome.reason
-    assert (tmp_path / "sut.log").read_text() == "faulty SUT: mode kill at step 100000\n"
+    assert (tmp_path / "sut.log").read_text().splitlines() == [
+        "faulty SUT: mode kill at step 100000",
+        "faulty SUT: run hard_braking_lead.xosc",
+    ]
     assert outcome.artifacts["sutLog"] == str(tmp_path / "sut.log")
 
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from simtest_operator.api import v1alpha1
 from simtest_operator.api.v1alpha1 import environment, evaluation, sources
-from simtest_operator.drivermodel import ExternalSut, Launch, SutConfig, Takeover
+from simtest_operator.drivermodel import ExternalSut, Launch, Lifetime, SutConfig, Takeover
 from simtest_operator.evaluation import DEFAULT_TIME_LIMIT, Criteria
 from simtest_operator.scenarios import batching, globbing, specs
 from simtest_operator.scenarios.pinned import PinnedScenario
@@ -140,6 +140,7 @@ def external_sut(spec: environment.ExternalSut, config: dict[str, str]) -> Exter
         startup_timeout=float(spec.startup_timeout_seconds),
         perception_range=spec.perception_range,
         config=dict(config),
+        lifetime=Lifetime(spec.lifetime.value.lower()),
     )
 
 

@@ -12,10 +12,11 @@ from __future__ import annotations
 from simtest_operator.openscenario import LoadOptions
 from simtest_operator.runner import scenario_execution
 from simtest_operator.runner.tasks import ScenarioTask
+from simtest_operator.sut.processes import SutProcesses
 from simtest_operator.verdicts import ScenarioOutcome
 
 
-def execute(task: ScenarioTask) -> ScenarioOutcome:
+def execute(task: ScenarioTask, processes: SutProcesses | None = None) -> ScenarioOutcome:
     """Run one attempt of a scenario on the SUMO stand-in (module-level: workers import it)."""
     request = scenario_execution.RunRequest(
         scenario=task.scenario_path,
@@ -30,4 +31,4 @@ def execute(task: ScenarioTask) -> ScenarioOutcome:
         wall_clock_limit=scenario_execution.soft_limit(task.timeout_seconds),
         loading=LoadOptions(source_root=task.source_root, maps=task.settings.maps),
     )
-    return scenario_execution.run_scenario(request).outcome
+    return scenario_execution.run_scenario(request, processes=processes).outcome

@@ -30,6 +30,7 @@ import time
 from simtest_operator.errors import ScenarioError
 from simtest_operator.openscenario import headers
 from simtest_operator.runner.tasks import ScenarioTask
+from simtest_operator.sut.processes import SutProcesses
 from simtest_operator.verdicts import ScenarioOutcome, Verdict
 
 PROPERTY = "simtest:fake"
@@ -41,8 +42,9 @@ def behaviour(task: ScenarioTask) -> str:
     return header.properties.get(PROPERTY, "pass").strip()
 
 
-def execute(task: ScenarioTask) -> ScenarioOutcome:
-    """Act out the scenario's ``simtest:fake`` behaviour (see the module docstring)."""
+def execute(task: ScenarioTask, processes: SutProcesses | None = None) -> ScenarioOutcome:
+    """Act out the scenario's ``simtest:fake`` behaviour (see the module docstring; it starts no
+    SUT, so ``processes`` stays unused)."""
     started = time.monotonic()
     what = behaviour(task)
     sys.stdout.write(f"fake engine: {task.scenario_id} attempt {task.attempt}: {what}\n")

@@ -29,6 +29,7 @@ from simtest_operator.runner.tasks import SUT_LOG
 from simtest_operator.settings import SimulationSettings
 from simtest_operator.sim import BackendChoice, Simulation, SutConfig, open_simulation
 from simtest_operator.snapshots import WorldSnapshot
+from simtest_operator.sut import launching
 from simtest_operator.verdicts import ScenarioOutcome, Verdict
 
 Sample = tuple[float, float, float, float, float]
@@ -113,8 +114,14 @@ class _Samples:
             self.data.setdefault(e.name, []).append(sample)
 
 
-def run_scenario(request: RunRequest) -> RunReport:
-    """Run one scenario to its verdict; never raises for scenario or simulator problems."""
+def run_scenario(
+    request: RunRequest, *, processes: launching.SutProcesses | None = None
+) -> RunReport:
+    """Run one scenario to its verdict; never raises for scenario or simulator problems.
+
+    ``processes``: the calling worker's warm SUT processes (``lifetime: worker``); without it
+    every run starts its SUT afresh.
+    """
     started = time.perf_counter()
     scenario_id = request.scenario_id or request.scenario.name
     out = request.output_dir
@@ -164,7 +171,7 @@ def run_scenario(request: RunRequest) -> RunReport:
     error: str | None = None
     wall_hit = False
     startup = 0.0
-    link = suts.SutLink(request.sut)
+    link = suts.SutLink(request.sut, processes)
     logic = opened.scenario.road_network.logic_file
     try:
         link.attach(

@@ -58,10 +58,11 @@ class SutLink:
     """Opens the external SUT for a run (if any) and closes it; use :meth:`attach` then
     :meth:`close`."""
 
-    __slots__ = ("_closing", "_pilot", "_stack", "sut")
+    __slots__ = ("_closing", "_pilot", "_processes", "_stack", "sut")
 
-    def __init__(self, sut: SutConfig) -> None:
+    def __init__(self, sut: SutConfig, processes: launching.SutProcesses | None = None) -> None:
         self.sut = sut
+        self._processes = processes
         self._stack = contextlib.ExitStack()
         self._pilot: client.RemotePilot | None = None
         self._closing = 0.0
@@ -94,7 +95,13 @@ class SutLink:
             seed=settings.seed,
         )
         self._pilot = self._stack.enter_context(
-            launching.open_pilot(external, hello=hello, map_reference=map_reference, log=log)
+            launching.open_pilot(
+                external,
+                hello=hello,
+                map_reference=map_reference,
+                log=log,
+                processes=self._processes,
+            )
         )
         simulation.attach_pilot(self._pilot)
         versions.update(runs.provenance(self.sut, self._pilot.identity))

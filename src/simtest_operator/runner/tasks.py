@@ -9,13 +9,17 @@ same executor drives the real engine and the documented test double in :mod:`fak
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from pathlib import Path
+from typing import TYPE_CHECKING, Protocol
 
 from simtest_operator.drivermodel import SutConfig
 from simtest_operator.evaluation import Criteria
 from simtest_operator.settings import Settings
 from simtest_operator.verdicts import ScenarioOutcome
+
+if TYPE_CHECKING:
+    from simtest_operator.sut.processes import SutProcesses
 
 RECORDING = "recording.mcap"
 """File name of the omega-prime recording inside a scenario's output folder."""
@@ -63,10 +67,16 @@ class ScenarioTask:
         return self.out_dir / LOG
 
 
-ExecuteFn = Callable[[ScenarioTask], ScenarioOutcome]
-"""Runs one task in the current process and returns its outcome. Must be a module-level function
-(workers are spawned and receive it by reference). Raising is allowed: ScenarioError becomes
-Invalid, anything else Error."""
+class ExecuteFn(Protocol):
+    """Runs one task in the current process and returns its outcome. Must be a module-level
+    function (workers are spawned and receive it by reference). ``processes`` are the worker's
+    warm SUT processes (``lifetime: worker``). Raising is allowed: ScenarioError becomes
+    Invalid, anything else Error."""
+
+    def __call__(
+        self, task: ScenarioTask, /, processes: SutProcesses | None = None
+    ) -> ScenarioOutcome: ...
+
 
 ARTIFACT_FILES: Mapping[str, str] = {
     "recording": RECORDING,

@@ -35,6 +35,7 @@ from typing import Any
 from simtest_operator.errors import ScenarioError
 from simtest_operator.runner import tasks
 from simtest_operator.runner.tasks import ExecuteFn, ScenarioTask
+from simtest_operator.sut.processes import SutProcesses
 from simtest_operator.verdicts import ScenarioOutcome, Verdict
 
 LOG_FORMAT = "%(asctime)s %(levelname)s %(name)s: %(message)s"
@@ -146,23 +147,29 @@ def serve(conn: multiprocessing.connection.Connection, execute: ExecuteFn, paren
     logging.basicConfig(level=logging.INFO, stream=sys.stderr, format=LOG_FORMAT)
     threading.Thread(target=_watch_parent, args=(parent,), daemon=True).start()
     conn.send((_READY, os.getpid()))
-    while True:
-        try:
-            task = conn.recv()
-        except (EOFError, OSError):
-            return
-        if task is None:
-            # Nothing is left to flush or clean up: skip interpreter finalisation (slow with the
-            # simulator's modules loaded) so a retired worker frees its slot at once.
-            sys.stdout.flush()
-            sys.stderr.flush()
-            conn.close()
-            os._exit(0)
-        outcome = run_task(execute, task)
-        conn.send((_RESULT, outcome.to_json()))
+    # SUT processes kept warm across this worker's scenarios (``lifetime: worker``); they share
+    # the worker's process group, so a kill of the worker takes them down too.
+    with SutProcesses() as processes:
+        while True:
+            try:
+                task = conn.recv()
+            except (EOFError, OSError):
+                return
+            if task is None:
+                # Only the warm SUTs need stopping: skip interpreter finalisation (slow with the
+                # simulator's modules loaded) so a retired worker frees its slot at once.
+                processes.close()
+                sys.stdout.flush()
+                sys.stderr.flush()
+                conn.close()
+                os._exit(0)
+            outcome = run_task(execute, task, processes)
+            conn.send((_RESULT, outcome.to_json()))
 
 
-def run_task(execute: ExecuteFn, task: ScenarioTask) -> ScenarioOutcome:
+def run_task(
+    execute: ExecuteFn, task: ScenarioTask, processes: SutProcesses | None = None
+) -> ScenarioOutcome:
     """Run one attempt with its output captured; map exceptions to Invalid or Error."""
     task.out_dir.mkdir(parents=True, exist_ok=True)
     for stale in (tasks.RESULT, tasks.RECORDING, tasks.ENGINE_LOG):
@@ -170,7 +177,7 @@ def run_task(execute: ExecuteFn, task: ScenarioTask) -> ScenarioOutcome:
     started = time.monotonic()
     with captured_output(task.log_path, attempt=task.attempt):
         try:
-            outcome = execute(task)
+            outcome = execute(task, processes)
         except ScenarioError as exc:
             outcome = _outcome(task, Verdict.INVALID, str(exc), started)
         except Exception as exc:

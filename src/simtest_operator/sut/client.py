@@ -39,6 +39,8 @@ class Identity:
     version: str = ""
     digest: str = ""
     answers: str = "MotionRequest"
+    resets: bool = False
+    """READY's ``reset``: the SUT starts every run afresh, so one process may serve many."""
 
     def describe(self) -> str:
         parts = [p for p in (self.name, self.version) if p]
@@ -92,6 +94,7 @@ class RemotePilot:
         "_encoder",
         "_last_speed",
         "_sock",
+        "failed",
         "identity",
         "postmortem",
         "round_trips",
@@ -119,6 +122,8 @@ class RemotePilot:
         """Seconds from sending each step to its answer."""
         self.postmortem: Callable[[], str | None] | None = None
         """What happened to the SUT's process, for errors (set by the launcher)."""
+        self.failed = False
+        """Whether the SUT failed this run (a warm process is then not trusted with another)."""
 
     def handshake(self, hello: Mapping[str, Any], *, timeout: float) -> Identity:
         """Send HELLO and wait for READY (the SUT's start-up readiness check)."""
@@ -159,6 +164,7 @@ class RemotePilot:
             version=str(ready.get("version", "")),
             digest=str(ready.get("digest", "")),
             answers=answers,
+            resets=ready.get("reset") is True,
         )
         return self.identity
 
@@ -234,6 +240,7 @@ class RemotePilot:
 
     def _explained(self, exc: SutError) -> SutError:
         """``exc`` with what the SUT's process did or said last (every SUT error says it)."""
+        self.failed = True
         fate = self.postmortem() if self.postmortem is not None else None
         return type(exc)(f"{exc}; {fate}") if fate else exc
 

@@ -72,9 +72,15 @@ class BoundedOutput:
         return head.decode("utf-8", "replace") + middle + tail.decode("utf-8", "replace")
 
     def write(self, path: Path) -> None:
-        """Write what was kept to ``path`` (the scenario's ``sut.log``)."""
+        """Write what was kept to ``path`` (the scenario's ``sut.log``) and start over: a warm
+        SUT's next run gets a log of its own."""
+        text = self.text()
+        with self._lock:
+            self._head.clear()
+            self._tail.clear()
+            self._skipped = 0
         path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(self.text(), encoding="utf-8")
+        path.write_text(text, encoding="utf-8")
 
     def _pump(self, stream: IO[bytes]) -> None:
         try:

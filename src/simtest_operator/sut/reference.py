@@ -235,7 +235,13 @@ def serve_connection(conn: socket.socket, *, name: str = NAME, version: str = VE
                 ego_id = int(hello.get("egoId", -1))
                 scenario = str(hello.get("scenario", "?"))
                 _log(f"run {scenario}: ego {ego_id}, step {hello['step']} s")
-                ready = {"protocol": framing.PROTOCOL_VERSION, "name": name, "version": version}
+                # reset: every HELLO builds a new Session, so one process may serve many runs.
+                ready = {
+                    "protocol": framing.PROTOCOL_VERSION,
+                    "name": name,
+                    "version": version,
+                    "reset": True,
+                }
                 digest = os.environ.get("SIMTEST_SUT_DIGEST", "")
                 if digest:
                     ready["digest"] = digest

@@ -67,6 +67,18 @@ class Takeover(enum.StrEnum):
     """The ego stays scripted; the SUT settings have no effect (reproduces a reference player)."""
 
 
+class SutLifetime(enum.StrEnum):
+    """How long a SUT process the runner starts (``command`` without ``image``/``endpoint``,
+    or a sidecar's command under ``simtest run``) lives."""
+
+    SCENARIO = "Scenario"
+    """Started for each scenario and stopped after it."""
+    WORKER = "Worker"
+    """Started once per local worker process and kept warm: it serves that worker's scenarios
+    one after the other when its READY says ``"reset": true`` (it starts each run afresh);
+    a SUT that does not say so, or that failed a run, is restarted for the next."""
+
+
 ENDPOINT = r"^[A-Za-z0-9]([-A-Za-z0-9.]*[A-Za-z0-9])?:[0-9]{1,5}$"
 ENV_NAME = r"^[A-Za-z_][A-Za-z0-9_]*$"
 
@@ -134,6 +146,9 @@ class ExternalSut(ApiModel):
     """Time the SUT has to accept the connection and answer the handshake."""
     perception_range: Annotated[float, Field(gt=0, le=10000)] | None = None
     """Objects farther than this (m) from the ego are left out of the SensorView."""
+    lifetime: SutLifetime = SutLifetime.SCENARIO
+    """How long a SUT process the runner starts lives: one scenario, or one local worker
+    (kept warm between scenarios; in a pod, a sidecar already lives as long as the pod)."""
 
     @model_validator(mode="after")
     def _one_way_to_reach(self) -> ExternalSut:
