@@ -23,7 +23,9 @@ def _local_request(
 ) -> scenario_execution.RunRequest:
     seen: list[scenario_execution.RunRequest] = []
 
-    def capture(request: scenario_execution.RunRequest) -> scenario_execution.RunReport:
+    def capture(
+        request: scenario_execution.RunRequest, *, processes: object = None
+    ) -> scenario_execution.RunReport:
         seen.append(request)
         outcome = ScenarioOutcome(scenario_id="s", verdict=Verdict.PASSED)
         return scenario_execution.RunReport(outcome=outcome, storyboard_complete=True)
