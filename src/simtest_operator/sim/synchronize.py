@@ -20,7 +20,8 @@ steady state (``TargetDistanceSteadyState``/``TargetTimeSteadyState``, a time ta
 the final speed at the start) reserves the last stretch to be covered at the final speed: the plan
 aims at its start, and once there (or once time runs short) the actor keeps the final speed. As in
 esmini, the actor's own speed in the apex calculation is its velocity along its road's s-axis (near
-zero for a pedestrian crossing the road), its speed as given elsewhere. """
+zero for a pedestrian crossing the road), its speed as given elsewhere.
+"""
 
 from __future__ import annotations
 
