@@ -1,14 +1,13 @@
 """RoutePosition placements as the reference player (esmini 3.6) makes them.
 
-Lane ids, lane offsets and t of a RoutePosition are those of the route's first road: where the
-route later runs the other way along a road (it enters it against its s), they keep their side
-of travel, so lane -1 is still the lane to the right. The entity faces along the route; a
-relative Orientation does not turn it (esmini's Euro NCAP junction results: obstruction vehicles
-written with ``h="3.14159" type="relative"`` face along the route, and one placed relative to
-another lands ahead of it), an absolute one replaces the heading. The scenario is written for
-these tests: an X junction with 60 m arms, the cyclist's route from the north, the oncoming route
-from the south that leaves the junction against the north arm's s, and a westbound route that
-starts against the east arm's s.
+pathS picks the road and its s along the route's legs; lane id, lane offset and t are that
+road's own, whichever way the route runs along it (esmini's ``Position::SetRouteLanePosition``),
+and the entity faces the lane's driving direction, turned by a relative Orientation. An
+Orientation written after InRoutePosition (out of schema order, as in the Euro NCAP far-side
+crossings) is ignored with a deviation: esmini places the entity before it reads it. The
+scenario is written for these tests: an X junction with 60 m arms, the cyclist's route from the
+north, the oncoming route from the south that leaves the junction against the north arm's s,
+and a westbound route that starts against the east arm's s.
 """
 
 from __future__ import annotations
@@ -19,6 +18,7 @@ from pathlib import Path
 
 import pytest
 
+from simtest_operator.runner import scenario_execution
 from simtest_operator.sim import SutConfig, Takeover
 from tests.sim.carla_scenarios import run
 
@@ -31,10 +31,15 @@ Start = dict[str, tuple[float, float, float]]
 
 
 @pytest.fixture(scope="module")
-def start(tmp_path_factory: pytest.TempPathFactory) -> Start:
+def report(tmp_path_factory: pytest.TempPathFactory) -> scenario_execution.RunReport:
     folder = shutil.copytree(SCENARIO.parent, tmp_path_factory.mktemp("routes") / "junction")
-    report = run(folder / SCENARIO.name, sut=SutConfig(takeover=Takeover.NEVER))
-    assert report.storyboard_complete, report.outcome.reason
+    result = run(folder / SCENARIO.name, sut=SutConfig(takeover=Takeover.NEVER))
+    assert result.storyboard_complete, result.outcome.reason
+    return result
+
+
+@pytest.fixture(scope="module")
+def start(report: scenario_execution.RunReport) -> Start:
     return {name: tuple(samples[0][1:4]) for name, samples in report.samples.items()}  # type: ignore[misc]
 
 
@@ -49,19 +54,28 @@ def test_a_forward_leg_places_by_the_roads_lanes(start: Start) -> None:
     assert _at(start, "Ego") == pytest.approx((20.0, -1.75, 0.0), abs=1e-3)
 
 
-def test_lanes_and_offsets_on_a_reversed_leg_are_in_the_routes_frame(start: Start) -> None:
-    # Northbound: south arm (60 m) + straight connector (23 m), then the north arm against its s;
-    # pathS 103 is 20 m into it (y 31.5). Lane -1 is right of travel (east), +0.5 m is left (west).
-    assert _at(start, "Oncoming") == pytest.approx((ARM_X + 1.75 - 0.5, 31.5, NORTH), abs=1e-3)
-    # FromRoadCoordinates t=-1.0: 1 m right of travel, heading replaced by the absolute 0
-    assert _at(start, "Turned") == pytest.approx((ARM_X + 1.0, 41.5, 0.0), abs=1e-3)
+def test_lanes_and_offsets_on_a_reversed_leg_are_the_roads_own(start: Start) -> None:
+    # Northbound: south arm (60 m) + straight connector (23 m), then the north arm against its
+    # s; pathS 103 is 20 m into it (s 40, y 31.5). Lane -1 is the north arm's lane -1 (west,
+    # southbound), facing its driving direction; +0.5 m is left of the road's s (east).
+    assert _at(start, "Oncoming") == pytest.approx((ARM_X - 1.75 + 0.5, 31.5, SOUTH), abs=1e-3)
+    # FromRoadCoordinates t=-1.0: 1 m right of the road's s (west), heading replaced by absolute 0
+    assert _at(start, "Turned") == pytest.approx((ARM_X - 1.0, 41.5, 0.0), abs=1e-3)
 
 
-def test_a_relative_orientation_keeps_the_route_heading(start: Start) -> None:
-    # laneOffset -2 m: 2 m right of southbound travel (west); h=pi relative does not turn it
-    assert _at(start, "ParkedLarge") == pytest.approx((ARM_X - 1.75 - 2.0, 21.5, SOUTH), abs=1e-3)
-    # placed dx=5 m along ParkedLarge's heading: further south, not 10 m away behind it
-    assert _at(start, "ParkedSmall") == pytest.approx((ARM_X - 3.75, 16.5, SOUTH), abs=1e-3)
+def test_a_relative_orientation_turns_the_entity_from_its_lanes_direction(start: Start) -> None:
+    # laneOffset -2 m: 2 m right of the southbound lane (west); h=pi relative faces it north
+    assert _at(start, "ParkedLarge") == pytest.approx((ARM_X - 3.75, 21.5, NORTH), abs=1e-3)
+    # placed dx=5 m along ParkedLarge's heading: further north
+    assert _at(start, "ParkedSmall") == pytest.approx((ARM_X - 3.75, 26.5, NORTH), abs=1e-3)
+
+
+def test_an_orientation_after_the_in_route_position_is_ignored_with_a_deviation(
+    report: scenario_execution.RunReport, start: Start
+) -> None:
+    assert _at(start, "ParkedLate") == pytest.approx((ARM_X - 3.75, 61.5, SOUTH), abs=1e-3)
+    codes = [d.code for d in report.deviations]
+    assert codes == ["route-orientation-after-position"]
 
 
 def test_a_route_that_starts_against_a_roads_s_keeps_the_lane_ids_of_that_road(

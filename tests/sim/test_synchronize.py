@@ -156,3 +156,20 @@ def test_the_actor_is_done_within_its_own_tolerance() -> None:
     # plans to reach 25 m when the master reaches 400 m, ends on reaching it (no final speed)
     assert b.actor("Car").s == pytest.approx(25.0, abs=1.0)
     assert done < 20.0
+
+
+def test_a_master_reversing_towards_its_target_is_waited_for() -> None:
+    # the master faces along the road and backs towards its target 100 m behind at 10 m/s:
+    # it arrives in 10 s like a forward-driving one (esmini starts Euro NCAP CPRA_Cm's
+    # pedestrian for its reversing car); before, the actor thought it would never arrive
+    b = Bench("Car", "Lead")
+    b.start("Lead", teleport(lane(-1, 200.0)))
+    b.start("Lead", speed(-10.0))
+    b.start("Car", teleport(lane(-2, 0.0)))
+    b.start("Car", speed(10.0))
+    done = run_until_done(
+        b, synchronize(master_target=lane(-1, 100.0), target=lane(-2, 150.0), final=15.0)
+    )
+    assert b.actor("Lead").s == pytest.approx(100.0, abs=1.0)
+    assert done == pytest.approx(10.0, abs=2 * DT)
+    assert b.actor("Car").s == pytest.approx(150.0, abs=1.0)

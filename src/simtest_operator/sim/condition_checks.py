@@ -14,7 +14,7 @@ from collections.abc import Callable
 from simtest_operator import geometry
 from simtest_operator.errors import ScenarioError
 from simtest_operator.openscenario import model
-from simtest_operator.sim import clearance, measures, placements, positions
+from simtest_operator.sim import angles, clearance, measures, placements, positions
 from simtest_operator.sim.actors import Actor
 from simtest_operator.sim.triggers import Truth
 from simtest_operator.sim.world import World
@@ -204,6 +204,8 @@ class Conditions:
             return clearance.is_clear(self._world, actor, condition)
         if isinstance(condition, model.TimeToCollisionCondition):
             return compare(self._ttc(actor, condition), condition.rule, condition.value)
+        if isinstance(condition, model.AngleCondition | model.RelativeAngleCondition):
+            return self._angle(actor, condition)
         raise ScenarioError(f"condition {type(condition).__name__} is not supported")
 
     def _slow_for(self, condition: model.StandStillCondition, actor: Actor) -> float:
@@ -217,6 +219,18 @@ class Conditions:
             since = now
         self._still_since[key] = (since, now)
         return now - since
+
+    def _angle(
+        self, actor: Actor, condition: model.AngleCondition | model.RelativeAngleCondition
+    ) -> bool:
+        world = self._world
+        kind, system = condition.angle_type, condition.coordinate_system
+        value = angles.angle(world, actor, kind, system)
+        if isinstance(condition, model.RelativeAngleCondition):
+            other = world.actor(condition.entity_ref)
+            reference = angles.angle(world, other, kind, system) if other.placed else None
+            value = None if value is None or reference is None else value - reference
+        return value is not None and angles.within(value, condition.angle, condition.tolerance)
 
     def _collision(self, actor: Actor, condition: model.CollisionCondition) -> bool:
         world = self._world

@@ -106,25 +106,19 @@ def resolve(
     if isinstance(where, model.FromCurrentEntity):
         actor = world.actor(where.entity_ref)
         return placements.Placement(x=actor.x, y=actor.y, z=actor.z, heading=actor.heading)
-    route_legs = legs(world, route, place)
-    road_id, s, direction = at_path_s(route_legs, where.path_s)
-    # As esmini places it: lane ids, lane offsets and t are those of the route's first road and
-    # keep their side of travel where the route runs the other way along a later road (so a
-    # lane -1 on a route that enters a road against its s is that road's lane 1), and the
-    # entity faces along the route: a relative Orientation does not turn it (esmini's NCAP
-    # junction results), an absolute one replaces the heading.
-    side = direction * route_legs[0].direction
-    orientation = position.orientation
-    if orientation is not None and orientation.type is not model.ReferenceContext.ABSOLUTE:
-        orientation = None
+    road_id, s, _ = at_path_s(legs(world, route, place), where.path_s)
+    # As esmini places it (Position::SetRouteLanePosition): pathS picks the road and its s; lane
+    # id, lane offset and t are that road's own, whichever way the route runs along it, and the
+    # entity faces the lane's driving direction (a relative Orientation turns it from there).
+    # So a parked car on a route's far arm stands in the road's lane -1 facing along its s.
     if isinstance(where, model.FromLaneCoordinates):
         return placements.lane_placement(
             world,
             road_id,
-            where.lane_id * side,
+            where.lane_id,
             s,
-            where.lane_offset * side,
-            orientation=orientation,
-            direction=direction,
+            where.lane_offset,
+            orientation=position.orientation,
+            direction=None,
         )
-    return placements.road_placement(world, road_id, s, where.t * side, direction, orientation)
+    return placements.road_placement(world, road_id, s, where.t, None, position.orientation)

@@ -11,16 +11,16 @@ speed, if one is given, and keeps it (along the trajectory it follows, if any).
 
 Otherwise both distances are shortened by their tolerance (the plan reaches the edge of the
 tolerance circle) and the master's time left is its distance over its speed along the road's
-reference line (its velocity projected on the road's s-axis). Without a final speed the actor
-accelerates constantly to arrive on time. With one it follows esmini's speed profile of constant
-accelerations: straight to the final speed when that arrives on time (linear), else first
-towards an apex speed and then straight down (convex) or up (concave) to the final speed, or,
-when even the apex would be negative, braking to a stop, waiting and starting again. A steady
-state (``TargetDistanceSteadyState``/``TargetTimeSteadyState``, a time taken as distance at the
-final speed at the start) reserves the last stretch to be covered at the final speed: the plan
-aims at its start, and once there (or once time runs short) the actor keeps the final speed. As
-in esmini, the actor's own speed in the apex calculation is its velocity along its road's s-axis
-(near zero for a pedestrian crossing the road), its speed as given elsewhere.
+reference line (its velocity projected on the road's s-axis, forwards or reversing). Without a
+final speed the actor accelerates constantly to arrive on time. With one it follows esmini's speed
+profile of constant accelerations: straight to the final speed when that arrives on time (linear),
+else first towards an apex speed and then straight down (convex) or up (concave) to the final
+speed, or, when even the apex would be negative, braking to a stop, waiting and starting again. A
+steady state (``TargetDistanceSteadyState``/``TargetTimeSteadyState``, a time taken as distance at
+the final speed at the start) reserves the last stretch to be covered at the final speed: the plan
+aims at its start, and once there (or once time runs short) the actor keeps the final speed. As in
+esmini, the actor's own speed in the apex calculation is its velocity along its road's s-axis (near
+zero for a pedestrian crossing the road), its speed as given elsewhere.
 """
 
 from __future__ import annotations
@@ -125,7 +125,10 @@ class SynchronizeRun(Run):
         dist = max(dist - self._tolerance, SMALL)
         master_dist = max(master_dist - self._tolerance_master, SMALL)
         time_left = LARGE
-        master_speed = _speed_along_road(world, seen.x, seen.y, seen.heading, seen.speed)
+        # how fast the master gets along the road, whichever way it faces: a master reversing
+        # towards its target (Euro NCAP CPRA_Cm) arrives as surely as one driving there (esmini
+        # starts the pedestrian for it); one moving away ends the action on the growing distance
+        master_speed = abs(_speed_along_road(world, seen.x, seen.y, seen.heading, seen.speed))
         if master_speed > SMALL:
             time_left = master_dist / master_speed
             done = done or time_left < dt

@@ -43,6 +43,7 @@ from simtest_operator.openscenario.model.actions import (
     TransitionDynamics,
 )
 from simtest_operator.openscenario.model.common import (
+    AngleType,
     CoordinateSystem,
     DirectionalDimension,
     Orientation,
@@ -138,6 +139,7 @@ from simtest_operator.openscenario.model.traffic import (
 )
 from simtest_operator.openscenario.model.trigger_conditions import (
     AccelerationCondition,
+    AngleCondition,
     ByEntity,
     ByValue,
     CollisionCondition,
@@ -151,6 +153,7 @@ from simtest_operator.openscenario.model.trigger_conditions import (
     OffRoadCondition,
     ParameterCondition,
     ReachPositionCondition,
+    RelativeAngleCondition,
     RelativeClearanceCondition,
     RelativeDistanceCondition,
     RelativeSpeedCondition,
@@ -183,6 +186,8 @@ __all__ = [
     "ActivateControllerAction",
     "Actors",
     "AddEntityAction",
+    "AngleCondition",
+    "AngleType",
     "AnyAction",
     "AssignControllerAction",
     "AssignRouteAction",
@@ -254,6 +259,7 @@ __all__ = [
     "Property",
     "ReachPositionCondition",
     "ReferenceContext",
+    "RelativeAngleCondition",
     "RelativeClearanceCondition",
     "RelativeDistanceCondition",
     "RelativeDistanceType",

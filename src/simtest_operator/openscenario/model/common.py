@@ -46,6 +46,14 @@ class ReferenceContext(enum.StrEnum):
     ABSOLUTE = "absolute"
 
 
+class AngleType(enum.StrEnum):
+    """Which angle of an entity an angle condition checks (1.3)."""
+
+    HEADING = "heading"
+    PITCH = "pitch"
+    ROLL = "roll"
+
+
 class CoordinateSystem(enum.StrEnum):
     """Coordinate system in which distances are measured (1.1+)."""
 

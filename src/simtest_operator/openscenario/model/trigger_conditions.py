@@ -11,6 +11,7 @@ import dataclasses
 import enum
 
 from simtest_operator.openscenario.model.common import (
+    AngleType,
     CoordinateSystem,
     DirectionalDimension,
     RelativeDistanceType,
@@ -220,6 +221,32 @@ class RelativeClearanceCondition:
     line: int | None = None
 
 
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class AngleCondition:
+    """The triggering entity's heading, pitch or roll is within ``tolerance`` of ``angle``
+    (radians, 1.3); ``road``/``lane`` measure the heading from the road's or lane's direction
+    of increasing s at the entity, ``entity``/``world`` the world angle."""
+
+    angle_type: AngleType
+    angle: float
+    tolerance: float
+    coordinate_system: CoordinateSystem = CoordinateSystem.ENTITY
+    line: int | None = None
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class RelativeAngleCondition:
+    """The triggering entity's angle minus that of ``entity_ref`` is within ``tolerance`` of
+    ``angle`` (1.3), both measured as in :class:`AngleCondition`."""
+
+    entity_ref: str
+    angle_type: AngleType
+    angle: float
+    tolerance: float
+    coordinate_system: CoordinateSystem = CoordinateSystem.ENTITY
+    line: int | None = None
+
+
 EntityCondition = (
     EndOfRoadCondition
     | OffRoadCondition
@@ -235,9 +262,11 @@ EntityCondition = (
     | DistanceCondition
     | RelativeDistanceCondition
     | RelativeClearanceCondition
+    | AngleCondition
+    | RelativeAngleCondition
     | Unsupported
 )
-"""Angle and RelativeAngle conditions arrive as :class:`Unsupported`."""
+"""Conditions the engine cannot evaluate arrive as :class:`Unsupported`."""
 
 
 # --- value conditions -------------------------------------------------------------------------

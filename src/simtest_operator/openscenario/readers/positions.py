@@ -165,9 +165,32 @@ def _trajectory_position(el: Element, ctx: reading.Context) -> p.TrajectoryPosit
     )
 
 
+def _route_orientation(
+    el: Element, in_route: Element, ctx: reading.Context
+) -> m.Orientation | None:
+    """The Orientation of a RoutePosition; one written after InRoutePosition is ignored.
+
+    The schema puts Orientation before InRoutePosition. esmini reads the children in document
+    order and places the entity when it meets InRoutePosition, so a later Orientation never
+    turns it: the Euro NCAP far-side obstruction vehicles (``h="3.14159"`` after the position)
+    face along their lane there. Ignoring it, with a deviation, keeps the placement esmini's.
+    """
+    found = reading.child(el, "Orientation")
+    if found is not None and list(el).index(found) > list(el).index(in_route):
+        ctx.deviation(
+            found,
+            "route-orientation-after-position",
+            "Orientation after InRoutePosition (the schema puts it before) ignored, as esmini "
+            "reads it",
+        )
+        return None
+    return orientation(found, ctx)
+
+
 def _route_position(el: Element, ctx: reading.Context) -> p.RoutePosition:
     route_ref = ctx.require(el, "RouteRef")
-    in_route_el = ctx.choice(ctx.require(el, "InRoutePosition"))
+    in_route_parent = ctx.require(el, "InRoutePosition")
+    in_route_el = ctx.choice(in_route_parent)
     in_route: p.InRoutePosition
     if in_route_el.tag == "FromCurrentEntity":
         in_route = p.FromCurrentEntity(
@@ -191,7 +214,7 @@ def _route_position(el: Element, ctx: reading.Context) -> p.RoutePosition:
     return p.RoutePosition(
         route=route_or_ref(route_ref, ctx),
         in_route=in_route,
-        orientation=_orientation_of(el, ctx),
+        orientation=_route_orientation(el, in_route_parent, ctx),
         line=el.sourceline,
     )
 

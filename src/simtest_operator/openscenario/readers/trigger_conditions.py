@@ -15,10 +15,6 @@ _EntityReader = Callable[[Element, reading.Context], c.EntityCondition]
 _ValueReader = Callable[[Element, reading.Context], c.ValueCondition]
 
 _DISTANCE_ALIASES = {"cartesianDistance": m.RelativeDistanceType.EUCLIDEAN}
-_UNSUPPORTED_ENTITY = {
-    "AngleCondition": "angle conditions are not implemented",
-    "RelativeAngleCondition": "relative angle conditions are not implemented",
-}
 _UNSUPPORTED_VALUE = {
     "TimeOfDayCondition": "time of day is not simulated",
     "UserDefinedValueCondition": "user-defined values have no source in the stand-in",
@@ -142,9 +138,7 @@ def _distance_frame(
 
 def entity_condition(el: Element, ctx: reading.Context) -> c.EntityCondition:
     """Read the chosen child of ``<EntityCondition>``."""
-    return ctx.by_tag(
-        el, _ENTITY_READERS, unknown="unknown entity condition", reasons=_UNSUPPORTED_ENTITY
-    )
+    return ctx.by_tag(el, _ENTITY_READERS, unknown="unknown entity condition")
 
 
 class _DurationKind(Protocol):
@@ -260,6 +254,48 @@ def _relative_clearance(el: Element, ctx: reading.Context) -> c.RelativeClearanc
     )
 
 
+def _angle_frame(
+    el: Element, ctx: reading.Context
+) -> tuple[m.AngleType, m.CoordinateSystem] | m.Unsupported:
+    """Angle type and coordinate system of an angle condition, or why they cannot be measured:
+    the stand-in follows no trajectory frame and knows no road pitch or roll."""
+    kind = ctx.enum(el, "angleType", m.AngleType)
+    system = ctx.opt_enum(el, "coordinateSystem", m.CoordinateSystem) or m.CoordinateSystem.ENTITY
+    if system is m.CoordinateSystem.TRAJECTORY:
+        return ctx.unsupported(el, "angles in the trajectory coordinate system")
+    road_frame = system in (m.CoordinateSystem.ROAD, m.CoordinateSystem.LANE)
+    if road_frame and kind is not m.AngleType.HEADING:
+        return ctx.unsupported(el, f"{kind} angles in the {system} coordinate system")
+    return kind, system
+
+
+def _angle(el: Element, ctx: reading.Context) -> c.AngleCondition | m.Unsupported:
+    frame = _angle_frame(el, ctx)
+    if isinstance(frame, m.Unsupported):
+        return frame
+    return c.AngleCondition(
+        angle_type=frame[0],
+        angle=ctx.double(el, "angle"),
+        tolerance=ctx.double(el, "angleTolerance"),
+        coordinate_system=frame[1],
+        line=el.sourceline,
+    )
+
+
+def _relative_angle(el: Element, ctx: reading.Context) -> c.RelativeAngleCondition | m.Unsupported:
+    frame = _angle_frame(el, ctx)
+    if isinstance(frame, m.Unsupported):
+        return frame
+    return c.RelativeAngleCondition(
+        entity_ref=ctx.string(el, "entityRef"),
+        angle_type=frame[0],
+        angle=ctx.double(el, "angle"),
+        tolerance=ctx.double(el, "angleTolerance"),
+        coordinate_system=frame[1],
+        line=el.sourceline,
+    )
+
+
 def _relative_distance(el: Element, ctx: reading.Context) -> c.RelativeDistanceCondition:
     system, kind, _ = _distance_frame(el, ctx, m.RelativeDistanceType.EUCLIDEAN)
     return c.RelativeDistanceCondition(
@@ -367,8 +403,10 @@ _ENTITY_READERS: Mapping[str, _EntityReader] = {
     "DistanceCondition": _distance,
     "RelativeClearanceCondition": _relative_clearance,
     "RelativeDistanceCondition": _relative_distance,
+    "AngleCondition": _angle,
+    "RelativeAngleCondition": _relative_angle,
 }
-"""Supported ``<EntityCondition>`` children by tag (others: :data:`_UNSUPPORTED_ENTITY`)."""
+"""Supported ``<EntityCondition>`` children by tag (any other is unsupported)."""
 
 _VALUE_READERS: Mapping[str, _ValueReader] = {
     "SimulationTimeCondition": _simulation_time,
