@@ -3,12 +3,16 @@
 Covers (issue 29): a scenario database's bearer token is not sent to another origin a
 redirect leads to (another port of 127.0.0.1 is another origin, as another host is), but still is
 after a redirect within the same origin; a redirect loop and a chain longer than the limit are
-one-line SourceErrors (urllib's was three lines ending in the reason phrase ``Found``).
+one-line SourceErrors (urllib's was three lines ending in the reason phrase ``Found``), and so
+is a malformed answer (http.client's errors were a traceback).
 """
 
 from __future__ import annotations
 
+import contextlib
 import json
+import socket
+import threading
 from pathlib import Path
 
 import pytest
@@ -94,3 +98,26 @@ def test_redirect_loops_and_long_chains_are_one_line(
     assert text.startswith(f"{base}/loop: ") and message in text
     assert "\n" not in text and not text.endswith("Found")
     assert len(routes.requests) <= MAX_REDIRECTS + 1
+
+
+def test_a_malformed_status_line_is_one_line(tmp_path: Path) -> None:
+    """http.client's own errors (here BadStatusLine) were not caught: a traceback."""
+    with socket.create_server(("127.0.0.1", 0)) as listener:
+        listener.settimeout(10)
+
+        def answer() -> None:
+            with contextlib.suppress(OSError):
+                connection, _ = listener.accept()
+                with connection:
+                    connection.recv(65536)
+                    connection.sendall(b"HTTP/1.1 abc\r\n\r\n")
+
+        thread = threading.Thread(target=answer, daemon=True)
+        thread.start()
+        url = f"http://127.0.0.1:{listener.getsockname()[1]}/a.xosc"
+        ctx = FetchContext(base_dir=tmp_path, cache_dir=tmp_path / "cache")
+        with pytest.raises(SourceError) as caught:
+            resolve(HttpSource(url=url), ctx)
+        thread.join(timeout=10)
+    assert str(caught.value).startswith(f"{url}: transfer failed (")
+    assert "\n" not in str(caught.value)
