@@ -79,9 +79,21 @@ def test_env_secrets() -> None:
         env_secrets({})(ref)
 
 
-@pytest.mark.parametrize("stop_signal", [signal.SIGINT, signal.SIGTERM], ids=lambda s: s.name)
+@pytest.mark.parametrize(
+    "signals",
+    [
+        (signal.SIGINT,),
+        (signal.SIGTERM,),
+        # Issue 29: a second SIGTERM 50 ms later aborted (exit 1 "Aborted!", campaign.json stayed
+        # "running"); SIGHUP (a closed terminal, a CI runner's hangup) killed the run (exit 129).
+        (signal.SIGTERM, signal.SIGTERM),
+        (signal.SIGHUP,),
+        (signal.SIGHUP, signal.SIGTERM),
+    ],
+    ids=lambda signals: "-".join(s.name for s in signals),
+)
 def test_stop_signal_stops_cleanly_and_the_same_command_resumes(
-    tmp_path: Path, stop_signal: signal.Signals
+    tmp_path: Path, signals: tuple[signal.Signals, ...]
 ) -> None:
     behaviours = {"a": "pass", **{f"slow{i}": "sleep:1.5" for i in range(5)}}
     manifest = write_campaign(tmp_path, behaviours, batch_size=3)
@@ -98,12 +110,14 @@ def test_stop_signal_stops_cleanly_and_the_same_command_resumes(
         if line.startswith("[1/6]"):
             break
     time.sleep(0.5)
-    process.send_signal(stop_signal)
+    for stop_signal in signals:
+        process.send_signal(stop_signal)
+        time.sleep(0.05)
     rest, _ = process.communicate(timeout=60)
     output = "".join(lines) + rest
     assert process.returncode == 2, output
-    assert f"stopping ({stop_signal.name}): killing workers" in output
-    assert "Traceback" not in output
+    assert f"stopping ({signals[0].name}): killing workers" in output
+    assert "Traceback" not in output and "Aborted" not in output
     assert "interrupted after" in output.rstrip().splitlines()[-1]
     state = json.loads((out / "campaign.json").read_text())
     assert state["state"] == "interrupted"
@@ -116,6 +130,28 @@ def test_stop_signal_stops_cleanly_and_the_same_command_resumes(
     assert again.returncode == 0, again.stdout + again.stderr
     assert "resuming campaign demo:" in again.stdout
     assert again.stdout.rstrip().splitlines()[-1] == "all 6 scenarios passed"
+
+
+def test_a_second_ctrl_c_aborts_with_exit_2(tmp_path: Path) -> None:
+    """A person's second Ctrl-C aborts at once, but never with exit 1 ("the SUT failed")."""
+    manifest = write_campaign(tmp_path, {f"slow{i}": "sleep:1.5" for i in range(4)})
+    args = [sys.executable, "-c", "from simtest_operator.cli.main import main; main()", "run",
+            str(manifest), "-o", str(tmp_path / "out"), "-j", "2", "--engine", "fake",
+            "--plain"]  # fmt: skip
+    env = {**os.environ, "SIMTEST_CACHE_DIR": str(tmp_path / "cache")}
+    process = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env=env,
+                               text=True)  # fmt: skip
+    assert process.stdout is not None
+    for line in process.stdout:
+        if line.startswith("  results"):
+            break
+    time.sleep(0.3)
+    process.send_signal(signal.SIGINT)
+    time.sleep(0.02)
+    process.send_signal(signal.SIGINT)
+    output, _ = process.communicate(timeout=60)
+    assert process.returncode == 2, output
+    assert "Traceback" not in output and "Aborted!" not in output
 
 
 @pytest.mark.slow

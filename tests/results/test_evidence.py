@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import os
 from pathlib import Path
 
 from click.testing import CliRunner
@@ -178,3 +179,87 @@ def test_cli(tmp_path: Path) -> None:
     missing_db = runner.invoke(cli, ["evidence", "export", str(tmp_path / "nothing.sqlite"),
                                      "--out", str(tmp_path / "b3")])  # fmt: skip
     assert missing_db.exit_code == 2 and "no results database at" in missing_db.output
+
+
+# --- hostile bundles (issue 29) ------------------------------------------------------------------
+
+
+def test_links_and_special_files_are_refused(tmp_path: Path) -> None:
+    """A symbolic link whose target has the listed digest was ``verified``: the target is outside
+    what was archived and may change after the check. Links, FIFOs and devices are refused, and
+    verifying never reads through one (a FIFO would hang)."""
+    _, bundle = _export(str(tmp_path / "results.sqlite"), tmp_path)
+    manifest = json.loads((bundle / "manifest.json").read_text())
+    recording = bundle / manifest["scenarios"][0]["items"]["recording"]["path"]
+    outside = tmp_path / "elsewhere"
+    outside.mkdir()
+    (outside / "recording.mcap").write_bytes(recording.read_bytes())
+    recording.unlink()
+    recording.symlink_to(outside / "recording.mcap")  # same digest
+    (outside / "environment").mkdir()
+    for name in ("sut.json", "simulator.json"):
+        (outside / "environment" / name).write_bytes((bundle / "environment" / name).read_bytes())
+        (bundle / "environment" / name).unlink()
+    (bundle / "environment").rmdir()
+    (bundle / "environment").symlink_to(outside / "environment", target_is_directory=True)
+    os.mkfifo(bundle / "scenarios" / "pipe")
+    _, problems = evidence.verify(bundle)
+    link = "is a symbolic link (a bundle holds regular files only)"
+    assert problems == (
+        f"environment/simulator.json: {link}",
+        f"environment/sut.json: {link}",
+        f"scenarios/cut-in.xosc/recording.mcap: {link}",
+        f"environment: {link}",
+        "scenarios/pipe: is not a regular file",
+    )
+    result = CliRunner().invoke(cli, ["evidence", "verify", str(bundle)])
+    assert result.exit_code == 1 and "verified" not in result.output
+    (bundle / "environment").unlink()
+    os.mkfifo(bundle / "environment")  # a listed path that is a FIFO on the way
+    (bundle / "manifest.sha256").unlink()
+    (bundle / "manifest.sha256").symlink_to(outside / "recording.mcap")
+    _, problems = evidence.verify(bundle)
+    assert "manifest.sha256: " + link in problems
+    assert "environment/sut.json: missing" in problems
+    assert "environment: is not a regular file" in problems
+    manifest_file = bundle / "manifest.json"
+    manifest_file.rename(outside / "manifest.json")
+    manifest_file.symlink_to(outside / "manifest.json")
+    refused = CliRunner().invoke(cli, ["evidence", "verify", str(bundle)])
+    assert refused.exit_code == 2
+    assert refused.output == (
+        f"simtest evidence verify: {bundle} is not an evidence bundle: manifest.json {link}\n"
+    )
+
+
+def test_malformed_manifests_are_one_line(tmp_path: Path) -> None:
+    """A manifest nested 100,000 deep was a RecursionError traceback."""
+    bundle = tmp_path / "bundle"
+    bundle.mkdir()
+    deep = "[" * 100_000 + "]" * 100_000
+    shaped = {"format": evidence.FORMAT, "files": {}, "scenarios": []}
+    cases = {
+        deep: "not a simtest-evidence/1 manifest (maximum recursion depth exceeded",
+        json.dumps({**shaped, "files": {"a": json.loads("[" * 50 + "]" * 50)}}): "'files' must",
+        json.dumps({**shaped, "scenarios": [1]}): "'scenarios' must be a list of objects",
+        json.dumps({**shaped, "scenarios": [{"items": {"verdict": "x"}}]}): "'items' are objects",
+        json.dumps([1]): "(not a JSON object)",
+        json.dumps({**shaped, "format": "x" * 10_000}): "format 'xxx",
+    }
+    for text, message in cases.items():
+        (bundle / "manifest.json").write_text(text)
+        result = CliRunner().invoke(cli, ["evidence", "verify", str(bundle)])
+        assert result.exit_code == 2, (message, result.output)
+        assert message in result.output, result.output
+        assert result.output.count("\n") == 1 and len(result.output) < 500
+    verdict = bundle / "scenarios" / "verdict.json"
+    verdict.parent.mkdir()
+    verdict.write_text(deep)
+    listed = {"scenarios/verdict.json": _sha(verdict)}
+    item = {"path": "scenarios/verdict.json", "sha256": _sha(verdict), "included": True}
+    entry = {"id": "a", "verdict": "Passed", "items": {"verdict": item}}
+    (bundle / "manifest.json").write_text(
+        json.dumps({**shaped, "files": listed, "scenarios": [entry]})
+    )
+    _, problems = evidence.verify(bundle)
+    assert problems == ("a: verdict.json says None, the manifest 'Passed'",)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import http.server
 import json
 import threading
@@ -17,6 +18,19 @@ from tests.scenarios.support import Routes
 @pytest.fixture
 def server() -> Iterator[tuple[str, Routes]]:
     """A threaded HTTP server on 127.0.0.1 with programmable routes; yields (base URL, routes)."""
+    with _serving() as served:
+        yield served
+
+
+@pytest.fixture
+def other_server() -> Iterator[tuple[str, Routes]]:
+    """A second server like ``server`` on another port: another origin."""
+    with _serving() as served:
+        yield served
+
+
+@contextlib.contextmanager
+def _serving() -> Iterator[tuple[str, Routes]]:
     routes = Routes()
 
     class Handler(http.server.BaseHTTPRequestHandler):

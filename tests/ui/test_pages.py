@@ -215,6 +215,16 @@ def test_developer_view_data(call: Call) -> None:
         ("/api/history/scenario?id=x", "404 Not Found", "scenario 'x' has no runs"),
         ("/api/coverage?by=colour", "400 Bad Request", "by must be one of category, road"),
         ("/api/runs?page=two", "400 Bad Request", "parameter 'page' must be a whole number"),
+        # Unbounded, these reached the database as offsets past 64 bits: OverflowError, a 500.
+        (
+            "/api/runs?page=99999999999999999999",
+            "400 Bad Request",
+            "'page' must be a whole number from 0 to 20000",
+        ),
+        ("/api/runs?page=-1", "400 Bad Request", "from 0 to 20000"),
+        ("/api/?last=99999999999999999999", "400 Bad Request", "'last' must be a whole number"),
+        ("/api/sets?runs=99999999999999999999", "400 Bad Request", "'runs' must be a whole"),
+        ("/api/history/scenario?id=x&limit=" + "9" * 5000, "400 Bad Request", "'limit' must be"),
         ("/api/sets?axis=moon", "400 Bad Request", "axis must be one of sut"),
         ("/nothing/here", "404 Not Found", "no page /nothing/here"),
         (f"/evaluations?run={SAMPLE_RUN}&other=x", "404 Not Found", "no evaluation 'x' of run"),

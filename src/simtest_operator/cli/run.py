@@ -9,20 +9,22 @@ Every piece of user text (paths, campaign and scenario names, reasons, YAML erro
 through :func:`rich.markup.escape` or is printed with markup off: a scenario called ``[/x]`` once
 crashed the CLI with a MarkupError and exit 1, which CI reads as "the SUT failed" (issue 12).
 
-The first Ctrl-C or SIGTERM (CI cancelling a job, ``timeout``, ``docker stop``) stops the run in
-order (workers killed, unfinished scenarios marked as not run, the campaign ``interrupted``,
-report written; the same command resumes); a second one aborts at once.
+The first Ctrl-C, SIGTERM (CI cancelling a job, ``timeout``, ``docker stop``) or SIGHUP (a closed
+terminal or SSH session) stops the run in order (workers killed, unfinished scenarios marked as
+not run, the campaign ``interrupted``, report written, exit 2; the same command resumes). Further
+SIGTERMs and SIGHUPs do not cut that short (a CI runner may send several); only a second Ctrl-C,
+from a person, aborts at once -- still exit 2, never 1 ("the SUT failed").
 """
 
 from __future__ import annotations
 
+import contextlib
 import datetime
 import os
 import re
 import signal
 import threading
 from collections.abc import Callable, Iterator, Mapping
-from contextlib import contextmanager
 from pathlib import Path
 from types import FrameType
 from typing import Literal, NoReturn
@@ -147,13 +149,18 @@ def run(
     view = _Live(console) if live else _Plain(console)
     stop = threading.Event()
     try:
-        with _graceful_interrupt(stop, errors), view:
-            result = runner.run_campaign(request, on_event=view.event, stop=stop)
+        # The handlers stay until the summary is printed: a signal arriving just after the
+        # clean stop must not take the default action (killed, or "Aborted!" with exit 1).
+        with _graceful_interrupt(stop, errors):
+            with view:
+                result = runner.run_campaign(request, on_event=view.event, stop=stop)
+            _print_summary(console, result)
+    except KeyboardInterrupt:
+        _fail(errors, "aborted by a second Ctrl-C; the same command resumes the campaign")
     except ScenarioError as exc:
         _fail(errors, str(exc))
     except SimtestError as exc:
         _fail(errors, f"{type(exc).__name__}: {exc}")
-    _print_summary(console, result)
     raise SystemExit(result.summary.exit_code)
 
 
@@ -168,20 +175,26 @@ def _fail(errors: Console, reason: str) -> NoReturn:
     raise SystemExit(runner.EXIT_ERROR)
 
 
-_STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+_STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 
 
-@contextmanager
+@contextlib.contextmanager
 def _graceful_interrupt(stop: threading.Event, errors: Console) -> Iterator[None]:
     # SIGTERM's default action killed the process mid-run: campaign.json stayed "running" and no
-    # report was written (issue 12). Both signals now take the same orderly path.
+    # report was written (issue 12); a second SIGTERM 50 ms later then aborted with exit 1, and
+    # SIGHUP still killed it (issue 29). All three now take the same orderly path.
     def handler(signum: int, frame: FrameType | None) -> None:
+        name = signal.Signals(signum).name
         if stop.is_set():
-            raise KeyboardInterrupt
+            if signum == signal.SIGINT:
+                raise KeyboardInterrupt
+            _tell(errors, f"{name} again: already stopping (Ctrl-C to abort at once)")
+            return
         stop.set()
-        errors.print(
-            f"stopping ({signal.Signals(signum).name}): killing workers, marking unfinished "
-            "scenarios as not run (Ctrl-C again to abort at once)"
+        _tell(
+            errors,
+            f"stopping ({name}): killing workers, marking unfinished scenarios as not run "
+            "(Ctrl-C again to abort at once)",
         )
 
     if threading.current_thread() is not threading.main_thread():
@@ -193,6 +206,13 @@ def _graceful_interrupt(stop: threading.Event, errors: Console) -> Iterator[None
     finally:
         for number, action in previous.items():
             signal.signal(number, action)
+
+
+def _tell(errors: Console, message: str) -> None:
+    # After a SIGHUP the terminal may be gone: a failed write must not become an exception
+    # raised wherever the signal interrupted the run.
+    with contextlib.suppress(OSError):
+        errors.print(message, markup=False)
 
 
 class _Counts:

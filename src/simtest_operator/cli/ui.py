@@ -1,4 +1,5 @@
-"""``simtest ui``: serve the results UI from a results database until interrupted."""
+"""``simtest ui``: serve the results UI from a results database until interrupted (waitress:
+threads, idle connections closed, bounded headers; :mod:`simtest_operator.ui.server`)."""
 
 from __future__ import annotations
 
@@ -40,17 +41,14 @@ def ui(database: str | None, host: str, port: int, artifacts: Path | None) -> No
         raise SystemExit(2) from None
     context = views.Context(base_dir=base, read_trajectories=runner.read_recording)
     try:
-        httpd = server.make(server.App(db, context), host=host, port=port)
+        httpd = server.Server(server.App(db, context), host=host, port=port)
     except OSError as exc:
         db.close()
         click.echo(f"simtest ui: cannot listen on {host}:{port}: {exc.strerror}", err=True)
         raise SystemExit(2) from None
-    bound_port = httpd.server_address[1]
-    click.echo(f"simtest ui: serving {db.where} on http://{host}:{bound_port}/", err=True)
+    click.echo(f"simtest ui: serving {db.where} on http://{host}:{httpd.port}/", err=True)
     try:
-        httpd.serve_forever()
-    except KeyboardInterrupt:
-        pass
+        httpd.run()
     finally:
-        httpd.server_close()
+        httpd.close()
         db.close()

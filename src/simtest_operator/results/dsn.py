@@ -21,12 +21,11 @@ import urllib.parse
 from collections.abc import Mapping
 from pathlib import Path
 
+from simtest_operator import redaction
 from simtest_operator.errors import ResultsError
 
 URI_SCHEMES = ("postgresql", "postgres")
 """The URI schemes libpq accepts (``postgresql://`` and ``postgres://``)."""
-MASK = "***"
-"""What a secret is replaced with in text that is shown or stored."""
 _PATH_STARTS = ("/", "./", "../", "~")
 """A target starting like this is a path: no libpq keyword starts with these characters."""
 
@@ -83,9 +82,7 @@ def redact(text: str, dsn: Dsn) -> str:
     """``text`` (an error message, a log line) with every secret of ``dsn`` masked."""
     for whole in (dsn.given, dsn.conninfo):
         text = text.replace(whole, dsn.where)
-    for password in sorted(dsn.passwords, key=len, reverse=True):
-        text = text.replace(password, MASK)
-    return text
+    return redaction.Secrets.of(*dsn.passwords).redact(text)
 
 
 def _parse(conninfo: str, *, given: str) -> Dsn:

@@ -18,15 +18,18 @@ FileHeader ``simtest:tags``), e.g. ``req:UN-R157-5.2.5.2``.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import hashlib
 import json
+import os
 import re
 import shutil
+import stat
 import urllib.parse
-from collections.abc import Iterable, Mapping
-from pathlib import Path
-from typing import Any
+from collections.abc import Iterable, Iterator, Mapping
+from pathlib import Path, PurePosixPath
+from typing import Any, BinaryIO
 
 from simtest_operator.errors import ResultsError
 from simtest_operator.results import details
@@ -269,43 +272,150 @@ def _final_outcomes(db: ReadOnlyDatabase, run_key: str) -> list[dict[str, Any]]:
 
 
 def verify(bundle: Path) -> tuple[str, tuple[str, ...]]:
-    """Recompute every digest of ``bundle``: (manifest sha256, problems); no problems = valid."""
+    """Recompute every digest of ``bundle``: (manifest sha256, problems); no problems = valid.
+
+    A bundle holds regular files only: a symbolic link is refused even when its target has the
+    listed digest (the target lies outside what was archived and may change after the check),
+    and so are FIFOs and devices (reading one would hang)."""
     manifest_path = bundle / MANIFEST
-    if not manifest_path.is_file():
-        raise ResultsError(f"{bundle} is not an evidence bundle: no {MANIFEST}")
-    content = manifest_path.read_bytes()
+    if (why := _not_regular(bundle, MANIFEST)) is not None:
+        raise ResultsError(
+            f"{bundle} is not an evidence bundle: "
+            + (f"no {MANIFEST}" if why == "missing" else f"{MANIFEST} {why}")
+        )
+    content = _read_regular(manifest_path)
     digest = hashlib.sha256(content).hexdigest()
-    problems: list[str] = []
-    stated = bundle / MANIFEST_DIGEST
-    if stated.is_file() and stated.read_text(encoding="utf-8").split()[:1] != [digest]:
-        problems.append(f"{MANIFEST}: digest {digest} differs from {MANIFEST_DIGEST}")
-    try:
-        manifest = json.loads(content)
-        files: dict[str, str] = dict(manifest["files"])
-        scenarios = list(manifest["scenarios"])
-    except (ValueError, KeyError, TypeError) as exc:
-        raise ResultsError(f"{manifest_path}: not a {FORMAT} manifest ({exc})") from None
-    if manifest.get("format") != FORMAT:
-        raise ResultsError(f"{manifest_path}: format {manifest.get('format')!r}, not {FORMAT}")
+    files, scenarios = _parse_manifest(content, manifest_path)
+    found: dict[str, str] = {}
+    if (why := _not_regular(bundle, MANIFEST_DIGEST)) is None:
+        stated = _read_regular(bundle / MANIFEST_DIGEST).decode("utf-8", errors="replace")
+        if stated.split()[:1] != [digest]:
+            found[MANIFEST_DIGEST] = f"{MANIFEST}: digest {digest} differs from {MANIFEST_DIGEST}"
+    elif why != "missing":
+        found[MANIFEST_DIGEST] = f"{MANIFEST_DIGEST}: {why}"
+    verified: set[str] = set()
     for relative, expected in sorted(files.items()):
-        path = bundle / relative
-        if ".." in Path(relative).parts or Path(relative).is_absolute():
-            problems.append(f"{relative}: path leaves the bundle")
-        elif not path.is_file():
-            problems.append(f"{relative}: missing")
-        elif (actual := sha256_file(path)) != expected:
-            problems.append(f"{relative}: sha256 {actual}, manifest says {expected}")
-    present = {p.relative_to(bundle).as_posix() for p in bundle.rglob("*") if p.is_file()} - {
-        MANIFEST,
-        MANIFEST_DIGEST,
-    }
-    problems += [f"{extra}: not listed in the manifest" for extra in sorted(present - set(files))]
+        if (why := _not_regular(bundle, relative)) is not None:
+            found[relative] = f"{relative}: {why}"
+        elif (actual := _sha256_regular(bundle / relative)) != expected:
+            found[relative] = f"{relative}: sha256 {actual}, manifest says {expected}"
+        else:
+            verified.add(relative)
+    for relative, why in _entries(bundle):
+        if relative not in found and relative not in (MANIFEST, MANIFEST_DIGEST):
+            if why is not None:
+                found[relative] = f"{relative}: {why}"
+            elif relative not in files:
+                found[relative] = f"{relative}: not listed in the manifest"
+    problems = list(found.values())
     for entry in scenarios:
-        problems += _check_scenario(bundle, entry, files)
+        problems += _check_scenario(bundle, entry, files, verified)
     return digest, tuple(problems)
 
 
-def _check_scenario(bundle: Path, entry: Mapping[str, Any], files: Mapping[str, str]) -> list[str]:
+def _parse_manifest(content: bytes, where: Path) -> tuple[dict[str, str], list[dict[str, Any]]]:
+    """The manifest's file list and scenario entries; ResultsError (one line) when it
+    is not JSON of the expected shape -- deep nesting included (a 100,000-deep document was a
+    RecursionError traceback)."""
+    try:
+        manifest = json.loads(content)
+    except (ValueError, RecursionError) as exc:
+        raise ResultsError(f"{where}: not a {FORMAT} manifest ({_short(exc)})") from None
+    if not isinstance(manifest, dict):
+        raise ResultsError(f"{where}: not a {FORMAT} manifest (not a JSON object)")
+    if manifest.get("format") != FORMAT:
+        raise ResultsError(f"{where}: format {_short(manifest.get('format'))!r}, not {FORMAT}")
+    files, scenarios = manifest.get("files"), manifest.get("scenarios")
+    shaped = (
+        isinstance(files, dict)
+        and all(isinstance(v, str) for v in files.values())
+        and isinstance(scenarios, list)
+        and all(
+            isinstance(entry, dict)
+            and isinstance(entry.get("items", {}), dict)
+            and all(isinstance(item, dict) for item in entry.get("items", {}).values())
+            for entry in scenarios
+        )
+    )
+    if not shaped:
+        raise ResultsError(
+            f"{where}: not a {FORMAT} manifest ('files' must map paths to digests, 'scenarios' "
+            "must be a list of objects whose 'items' are objects)"
+        )
+    assert isinstance(files, dict) and isinstance(scenarios, list)
+    return files, scenarios
+
+
+def _not_regular(bundle: Path, relative: str) -> str | None:
+    """Why ``relative`` is not a regular file inside ``bundle`` reached without links, or None."""
+    parts = PurePosixPath(relative).parts
+    if not parts or ".." in parts or PurePosixPath(relative).is_absolute():
+        return "path leaves the bundle"
+    path = bundle
+    for index, part in enumerate(parts):
+        path = path / part
+        try:
+            mode = path.lstat().st_mode
+        except OSError:
+            return "missing"
+        if stat.S_ISLNK(mode):
+            return "is a symbolic link (a bundle holds regular files only)"
+        if index < len(parts) - 1 and not stat.S_ISDIR(mode):
+            return "missing"
+    return None if stat.S_ISREG(mode) else "is not a regular file"
+
+
+@contextlib.contextmanager
+def _open_regular(path: Path) -> Iterator[BinaryIO]:
+    """A file checked by :func:`_not_regular`, opened without following a link and refused
+    unless still a regular file (it may have been swapped since the check)."""
+    descriptor = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK)
+    with os.fdopen(descriptor, "rb") as handle:
+        if not stat.S_ISREG(os.fstat(handle.fileno()).st_mode):
+            raise ResultsError(f"{path}: not a regular file")
+        yield handle
+
+
+def _read_regular(path: Path) -> bytes:
+    with _open_regular(path) as handle:
+        return handle.read()
+
+
+def _sha256_regular(path: Path) -> str:
+    digest = hashlib.sha256()
+    with _open_regular(path) as handle:
+        for chunk in iter(lambda: handle.read(1 << 20), b""):
+            digest.update(chunk)
+    return digest.hexdigest()
+
+
+def _entries(bundle: Path) -> Iterator[tuple[str, str | None]]:
+    """Every entry below ``bundle`` that is not a folder, with why it is not a regular file
+    (None when it is); links are reported, never followed."""
+    for folder, folders, names in os.walk(bundle, followlinks=False):
+        here = Path(folder)
+        for name in sorted([*folders, *names]):
+            path = here / name
+            mode = path.lstat().st_mode
+            if stat.S_ISDIR(mode):
+                continue
+            relative = path.relative_to(bundle).as_posix()
+            if stat.S_ISLNK(mode):
+                yield relative, "is a symbolic link (a bundle holds regular files only)"
+            elif not stat.S_ISREG(mode):
+                yield relative, "is not a regular file"
+            else:
+                yield relative, None
+
+
+def _short(value: object) -> str:
+    text = " ".join(str(value).split())
+    return text if len(text) <= 200 else text[:197] + "..."
+
+
+def _check_scenario(
+    bundle: Path, entry: Mapping[str, Any], files: Mapping[str, str], verified: set[str]
+) -> list[str]:
     problems = []
     scenario_id = entry.get("id", "?")
     for item, described in dict(entry.get("items", {})).items():
@@ -321,12 +431,13 @@ def _check_scenario(bundle: Path, entry: Mapping[str, Any], files: Mapping[str, 
                 f"at run time ({recorded})"
             )
     verdict_item = dict(entry.get("items", {})).get("verdict", {})
-    verdict_path = bundle / verdict_item.get("path", "")
-    if verdict_item.get("included") and verdict_path.is_file():
+    relative = verdict_item.get("path", "")
+    if verdict_item.get("included") and relative in verified:
         try:
-            stated = json.loads(verdict_path.read_text(encoding="utf-8")).get("verdict")
-        except ValueError:
-            stated = None
+            loaded = json.loads(_read_regular(bundle / relative))
+        except (ValueError, RecursionError):
+            loaded = None
+        stated = loaded.get("verdict") if isinstance(loaded, dict) else None
         if stated != entry.get("verdict"):
             problems.append(f"{scenario_id}: verdict.json says {stated!r}, the manifest "
                             f"{entry.get('verdict')!r}")  # fmt: skip

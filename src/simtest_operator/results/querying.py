@@ -13,6 +13,7 @@ from __future__ import annotations
 import datetime
 import json
 import sqlite3
+import threading
 from pathlib import Path
 from types import TracebackType
 from typing import Any, Self
@@ -28,10 +29,12 @@ MINIMUM_VERSION = 3
 
 
 class ReadOnlyDatabase:
-    """One read-only connection; each :meth:`query` is its own snapshot."""
+    """One read-only connection; each :meth:`query` is its own snapshot. Threads may share it
+    (the results UI's server threads do): queries take turns."""
 
     def __init__(self, target: str | Path, *, connect_timeout: int = 10) -> None:
         located = dsn.classify(target)
+        self._turn = threading.Lock()
         self._pg: psycopg.Connection[Any] | None = None
         self._dsn = located if isinstance(located, dsn.Dsn) else None
         self._lite: sqlite3.Connection | None = None
@@ -85,11 +88,12 @@ class ReadOnlyDatabase:
     def query(self, sql: str, params: tuple[object, ...] | list[object] = ()) -> list[Row]:
         """Rows of one statement (``?`` placeholders)."""
         try:
-            if self._pg is not None:
-                cursor = self._pg.execute(sql.replace("?", "%s"), tuple(params) or None)
-                return list(cursor.fetchall())
-            assert self._lite is not None
-            return self._lite.execute(sql, tuple(params)).fetchall()
+            with self._turn:
+                if self._pg is not None:
+                    cursor = self._pg.execute(sql.replace("?", "%s"), tuple(params) or None)
+                    return list(cursor.fetchall())
+                assert self._lite is not None
+                return self._lite.execute(sql, tuple(params)).fetchall()
         except (psycopg.Error, sqlite3.Error) as exc:
             text = str(exc) if self._dsn is None else dsn.redact(str(exc), self._dsn)
             reason = " ".join(text.split())

@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any
 from urllib.parse import urlsplit
 
+from simtest_operator import redaction
 from simtest_operator.errors import ResultsError
 
 SCHEME = "s3://"
@@ -97,6 +98,9 @@ class Uploader:
         self.location = location
         self.policy = policy
         self._credentials = credentials
+        self._secrets = redaction.Secrets.of(
+            credentials.secret_access_key, credentials.session_token
+        )
         self._sleep = sleep
         self._remaining = remaining
         self._client: Any = None
@@ -143,19 +147,21 @@ class Uploader:
         import botocore.exceptions
 
         client = self._client or self._connect()
-        try:
-            with path.open("rb") as body:
-                client.put_object(Bucket=self.location.bucket, Key=key, Body=body)
-        except botocore.exceptions.ClientError as exc:
-            error = exc.response.get("Error", {})
-            status = int(exc.response.get("ResponseMetadata", {}).get("HTTPStatusCode", 0))
-            text = f"{error.get('Code', 'error')} {error.get('Message', '')}".strip()
-            if status >= 500 or status in (408, 429):
-                raise _TransientError(f"HTTP {status} {text}") from None
-            bucket = self.location.bucket
-            raise _PermanentError(f"HTTP {status} {text} (bucket {bucket!r})") from None
-        except (botocore.exceptions.BotoCoreError, OSError) as exc:
-            raise _TransientError(f"{type(exc).__name__}: {exc}") from None
+        # The server's message may quote the request (the session token travels in a header).
+        with self._secrets.masking():
+            try:
+                with path.open("rb") as body:
+                    client.put_object(Bucket=self.location.bucket, Key=key, Body=body)
+            except botocore.exceptions.ClientError as exc:
+                error = exc.response.get("Error", {})
+                status = int(exc.response.get("ResponseMetadata", {}).get("HTTPStatusCode", 0))
+                text = f"{error.get('Code', 'error')} {error.get('Message', '')}".strip()
+                if status >= 500 or status in (408, 429):
+                    raise _TransientError(f"HTTP {status} {text}") from None
+                bucket = self.location.bucket
+                raise _PermanentError(f"HTTP {status} {text} (bucket {bucket!r})") from None
+            except (botocore.exceptions.BotoCoreError, OSError) as exc:
+                raise _TransientError(f"{type(exc).__name__}: {exc}") from None
 
     def _connect(self) -> Any:
         import boto3

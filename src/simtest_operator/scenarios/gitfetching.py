@@ -23,6 +23,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import IO
 
+from simtest_operator import redaction
 from simtest_operator.errors import SourceError
 from simtest_operator.scenarios import archives
 from simtest_operator.scenarios.specs import SourceLimits
@@ -70,13 +71,26 @@ def normalise_url(url: str, *, base_dir: Path) -> str:
 
 
 def redact(url: str) -> str:
-    """``url`` without a password or token in its user-info part."""
-    parts = urllib.parse.urlsplit(url)
-    if parts.password is None:
+    """``url`` without a password or token in its user-info part (over http(s) a user name
+    alone is a token: ``https://TOKEN@host/repo``)."""
+    secrets = url_secrets(url)
+    if not secrets.forms:
         return url
-    host = parts.hostname or ""
-    netloc = f"{parts.username}:***@{host}" + (f":{parts.port}" if parts.port else "")
-    return urllib.parse.urlunsplit(parts._replace(netloc=netloc))
+    parts = urllib.parse.urlsplit(url)
+    userinfo, _, hostport = parts.netloc.rpartition("@")
+    user, colon, _ = userinfo.partition(":")
+    shown = f"{user}:{redaction.MASK}" if colon else redaction.MASK
+    return urllib.parse.urlunsplit(parts._replace(netloc=f"{shown}@{hostport}"))
+
+
+def url_secrets(url: str) -> redaction.Secrets:
+    """The secrets in ``url``'s user info: the password, or an http(s) user name alone."""
+    parts = urllib.parse.urlsplit(url)
+    if parts.password is not None:
+        return redaction.Secrets.of(parts.password)
+    if parts.username and parts.scheme in ("http", "https"):
+        return redaction.Secrets.of(parts.username)
+    return redaction.Secrets()
 
 
 def fetch_tree(url: str, revision: str, *, cache: Path, limits: SourceLimits) -> GitTree:
@@ -191,7 +205,8 @@ def _git(
             f"exit code {done.returncode}"
         )
         if url:
-            message = message.replace(url, redact(url))
+            # git quotes the URL as given or re-encoded: mask the whole, then the secret alone.
+            message = url_secrets(url).redact(message.replace(url, redact(url)))
         raise SourceError(f"git failed for {redact(url) or 'the cache'}: {message}")
     return done.stdout.decode() if stdout is None else ""
 

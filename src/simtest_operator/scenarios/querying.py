@@ -7,7 +7,8 @@ the list is the document itself or the one ``items``/``scenarios``/``results``/`
 an object). The response is untrusted like any download (bounded, strictly shaped). A bearer
 token comes from an injected secret provider (a Kubernetes Secret in the operator, the pod's
 ``secretKeyRef`` variable in a simulator pod, an environment variable for ``simtest run``) and
-never appears in an error message.
+never appears in an error message, even one where the server quotes it back
+(:mod:`~simtest_operator.redaction`).
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
+from simtest_operator import redaction
 from simtest_operator.errors import SourceError
 from simtest_operator.scenarios import downloading
 from simtest_operator.scenarios.specs import (
@@ -43,6 +45,8 @@ class DatabaseItem:
     """The .xosc file inline."""
 
 
+MAX_ERROR_TEXT = 500
+"""Characters of a server's error messages quoted in ours (one line)."""
 REST_LIST_FIELDS = ("items", "scenarios", "results", "data")
 """Fields of a REST response object that may hold the item list (exactly one of them must)."""
 
@@ -62,25 +66,32 @@ def query(
     """Ask the database and return its items in response order."""
     where = location(source)
     headers = {"Accept": "application/json"}
+    token = ""
     if source.secret is not None:
         if secrets is None:
             raise SourceError(
                 f"{where}: the source needs Secret {source.secret.name}/"
                 f"{source.secret.key}, but no secret provider is configured"
             )
-        headers["Authorization"] = f"Bearer {secrets(source.secret)}"
+        token = secrets(source.secret)
+        headers["Authorization"] = f"Bearer {token}"
     body: bytes | None = None
     if isinstance(source, GraphqlSource):
         headers["Content-Type"] = "application/json"
         body = json.dumps({"query": source.query, "variables": dict(source.variables)}).encode()
-    raw = downloading.fetch_bytes(where, limits=limits, scratch=scratch, data=body, headers=headers)
-    try:
-        document = json.loads(raw)
-    except (ValueError, UnicodeDecodeError) as exc:
-        raise SourceError(f"{where}: response is not JSON ({exc})") from exc
-    if isinstance(source, RestSource):
-        return parse_items(_rest_list(document, where), endpoint=where, limits=limits)
-    return parse_response(document, endpoint=where, limits=limits)
+    # Everything the server answers may quote the request back (an error echoing the
+    # Authorization header put the token on stdout): the token is masked in any error.
+    with redaction.Secrets.of(token).masking():
+        raw = downloading.fetch_bytes(
+            where, limits=limits, scratch=scratch, data=body, headers=headers
+        )
+        try:
+            document = json.loads(raw)
+        except (ValueError, UnicodeDecodeError, RecursionError) as exc:
+            raise SourceError(f"{where}: response is not JSON ({exc})") from exc
+        if isinstance(source, RestSource):
+            return parse_items(_rest_list(document, where), endpoint=where, limits=limits)
+        return parse_response(document, endpoint=where, limits=limits)
 
 
 def parse_response(
@@ -95,7 +106,10 @@ def parse_response(
             str(e.get("message", e)) if isinstance(e, Mapping) else str(e)
             for e in (errors if isinstance(errors, list) else [errors])
         ]
-        raise SourceError(f"{endpoint}: query failed: {'; '.join(messages[:3])}")
+        summary = " ".join("; ".join(messages[:3]).split())
+        if len(summary) > MAX_ERROR_TEXT:
+            summary = summary[: MAX_ERROR_TEXT - 3] + "..."
+        raise SourceError(f"{endpoint}: query failed: {summary}")
     return parse_items(_the_list(document.get("data"), endpoint), endpoint=endpoint, limits=limits)
 
 

@@ -1,26 +1,33 @@
-"""The results UI's HTTP side: a standard-library WSGI app, jinja2 pages and their JSON twins.
+"""The results UI's HTTP side: a WSGI app of jinja2 pages and their JSON twins, served by waitress.
 
 ``GET /<page>`` renders a page of :data:`views.PAGES`, ``GET /api/<page>`` returns the same
 values as JSON, ``/static/ui.css`` and ``/static/replay.js`` the style and the replay script,
-``/healthz`` answers probes. One read-only database connection serves the requests in turn
-(:mod:`wsgiref`'s server handles one at a time), so nothing here needs locks. Errors become
-one-line pages: 404 for unknown runs and scenarios, 400 for bad parameters, 503 when the
-database cannot answer -- never a traceback.
+``/healthz`` answers probes. Errors become one-line pages: 404 for unknown runs and scenarios,
+400 for bad parameters, 503 when the database cannot answer -- never a traceback.
+
+:class:`Server` serves the app with `waitress <https://docs.pylons.org/projects/waitress/>`_:
+the standard library's ``wsgiref`` answered one request at a time, so one client keeping a
+half-sent request open stopped every page and ``/healthz`` (issue 29) -- in a pod behind a
+Service, an outage. waitress reads requests on one event loop and hands only complete ones to a
+few threads, closes idle connections and bounds headers and bodies (:class:`ServerLimits`). The
+threads share the one read-only database connection, which serialises its queries.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import datetime
 import importlib.resources
 import json
 import math
+import socket
 import sys
 import urllib.parse
 from collections.abc import Callable, Iterable, Mapping
 from typing import Any
-from wsgiref.simple_server import WSGIRequestHandler, WSGIServer, make_server
 
 import jinja2
+from waitress.server import create_server
 
 from simtest_operator.errors import SimtestError
 from simtest_operator.results import plots, reporting
@@ -153,13 +160,67 @@ def _reply(start_response: StartResponse, status: str, kind: str, body: bytes) -
     return [body]
 
 
-class _QuietHandler(WSGIRequestHandler):
-    """One short line per request on stderr, not wsgiref's full access log format."""
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class ServerLimits:
+    """What the UI's server allows a client (waitress's adjustments of the same names)."""
 
-    def log_message(self, format: str, *args: Any) -> None:
-        sys.stderr.write(f"simtest ui: {format % args}\n")
+    threads: int = 4
+    """Requests rendered at once; a slow client never holds one (requests are read first)."""
+    channel_timeout: int = 30
+    """Seconds a connection may stay idle, a half-sent request included, before it is closed
+    (waitress: 120; a page takes well under a second)."""
+    cleanup_interval: int = 5
+    """Seconds between the checks for idle connections."""
+    connection_limit: int = 100
+    """Connections open at once; more wait in the listen backlog."""
+    max_request_header_size: int = 64 * 1024
+    """Bytes of request line and headers (waitress: 256 KiB; the UI's URLs are short)."""
+    max_request_body_size: int = 64 * 1024
+    """Bytes of a request body: the UI answers GET and HEAD only (waitress: 1 GiB)."""
 
 
-def make(app: App, *, host: str = "127.0.0.1", port: int = 8080) -> WSGIServer:
-    """A server bound to ``host:port`` (``port`` 0 picks a free one); call ``serve_forever``."""
-    return make_server(host, port, app, handler_class=_QuietHandler)
+class Server:
+    """``app`` served on ``host:port`` (``port`` 0 picks a free one): listening once made;
+    :meth:`run` serves until interrupted, :meth:`close` releases the socket."""
+
+    def __init__(
+        self, app: App, *, host: str, port: int, limits: ServerLimits = ServerLimits()
+    ) -> None:
+        # Bound here, not by waitress, so a busy port is an OSError before any thread starts.
+        family, _, _, _, address = socket.getaddrinfo(
+            host, port, type=socket.SOCK_STREAM, flags=socket.AI_PASSIVE
+        )[0]
+        listener = socket.socket(family, socket.SOCK_STREAM)
+        try:
+            listener.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            listener.bind(address)
+            self._server = create_server(
+                _logged(app), sockets=[listener], ident="simtest-ui", **dataclasses.asdict(limits)
+            )
+        except BaseException:
+            listener.close()
+            raise
+        self.port: int = listener.getsockname()[1]
+
+    def run(self) -> None:
+        """Serve until SIGINT (waitress stops its loop on KeyboardInterrupt)."""
+        self._server.run()
+
+    def close(self) -> None:
+        """Stop listening and end the worker threads."""
+        self._server.close()
+
+
+def _logged(app: App) -> Callable[[Mapping[str, Any], StartResponse], Iterable[bytes]]:
+    """One short line per request on stderr (waitress writes no access log)."""
+
+    def logged(environ: Mapping[str, Any], start_response: StartResponse) -> Iterable[bytes]:
+        def start(status: str, headers: list[tuple[str, str]]) -> Any:
+            line = f"{environ.get('REQUEST_METHOD')} {environ.get('REQUEST_URI', '')} {status}"
+            printable = "".join(c if c.isprintable() else f"\\x{ord(c):02x}" for c in line)
+            sys.stderr.write(f"simtest ui: {printable}\n")
+            return start_response(status, headers)
+
+        return app(environ, start)
+
+    return logged

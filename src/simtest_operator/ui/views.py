@@ -22,6 +22,9 @@ from simtest_operator.ui import queries
 from simtest_operator.verdicts import Verdict
 
 PAGE_SIZE = 50
+MAX_RUNS = 1_000_000
+"""Upper bound of every run-count parameter (``last``, ``runs``, ``limit``; ``page`` times
+``PAGE_SIZE``): far above any database the UI was measured on (100,000 runs)."""
 
 
 class NotFoundError(SimtestError):
@@ -45,11 +48,16 @@ class Context:
 View = Callable[[ReadOnlyDatabase, Mapping[str, str], Context], dict[str, Any]]
 
 
-def _int(params: Mapping[str, str], name: str, default: int) -> int:
+def _int(params: Mapping[str, str], name: str, default: int, *, maximum: int) -> int:
+    """A whole-number parameter in ``[0, maximum]``: an unbounded one reached the database as an
+    offset past 64 bits (``?page=99999999999999999999``: OverflowError, a 500)."""
     try:
-        return max(0, int(params.get(name, default)))
+        value = int(params.get(name, default))
     except ValueError:
-        raise BadRequestError(f"parameter {name!r} must be a whole number") from None
+        value = -1
+    if not 0 <= value <= maximum:
+        raise BadRequestError(f"parameter {name!r} must be a whole number from 0 to {maximum}")
+    return value
 
 
 def _run_or_newest(db: ReadOnlyDatabase, params: Mapping[str, str]) -> queries.RunRow:
@@ -67,7 +75,7 @@ def _run_or_newest(db: ReadOnlyDatabase, params: Mapping[str, str]) -> queries.R
 
 def overview(db: ReadOnlyDatabase, params: Mapping[str, str], context: Context) -> dict[str, Any]:
     """Totals, the newest run's verdicts and the pass rate of recent runs."""
-    recent = queries.trend(db, limit=_int(params, "last", 30))
+    recent = queries.trend(db, limit=_int(params, "last", 30, maximum=MAX_RUNS))
     newest = recent[-1] if recent else None
     return {
         "runs": queries.run_count(db),
@@ -85,7 +93,7 @@ def overview(db: ReadOnlyDatabase, params: Mapping[str, str], context: Context) 
 
 def runs(db: ReadOnlyDatabase, params: Mapping[str, str], context: Context) -> dict[str, Any]:
     """One page of campaign runs, newest first."""
-    page = _int(params, "page", 0)
+    page = _int(params, "page", 0, maximum=MAX_RUNS // PAGE_SIZE)
     total = queries.run_count(db)
     return {
         "runs": queries.runs(db, limit=PAGE_SIZE, offset=page * PAGE_SIZE),
@@ -299,7 +307,7 @@ def sets(db: ReadOnlyDatabase, params: Mapping[str, str], context: Context) -> d
             f"by one of {', '.join(queries.DIMENSIONS)}"
         )
     columns, rows = queries.metadata_sets(
-        db, axis=axis, dimension=dimension, limit_runs=_int(params, "runs", 1000)
+        db, axis=axis, dimension=dimension, limit_runs=_int(params, "runs", 1000, maximum=MAX_RUNS)
     )
     return {
         "axis": axis,
@@ -328,7 +336,9 @@ def scenario_history(
 ) -> dict[str, Any]:
     """One scenario across runs: each run's verdict, seed and versions; its flakiness."""
     scenario_id = params.get("id", "")
-    found = history.scenario_history(db, scenario_id, limit=_int(params, "limit", 200))
+    found = history.scenario_history(
+        db, scenario_id, limit=_int(params, "limit", 200, maximum=MAX_RUNS)
+    )
     if not found.entries:
         raise NotFoundError(f"scenario {scenario_id!r} has no runs")
     return {
