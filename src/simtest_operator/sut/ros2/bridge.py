@@ -28,6 +28,7 @@ import time
 from collections.abc import Mapping, Sequence
 from typing import Any
 
+from simtest_operator.snapshots import BoundingBox, EntityKind, EntityState
 from simtest_operator.sut import framing, reference
 from simtest_operator.sut.errors import SutError
 from simtest_operator.sut.framing import Kind
@@ -39,6 +40,20 @@ VERSION = "1.0.0"
 DEADLINE_SHARE = 0.8
 """Share of the simulator's step deadline the bridge waits for the stack's command: a stack that
 stays silent then ends the run with the bridge's precise reason, not a bare missed deadline."""
+
+
+_NOWHERE = EntityState(
+    id=0,
+    name="warm-up",
+    kind=EntityKind.VEHICLE,
+    category="car",
+    x=0.0,
+    y=0.0,
+    z=0.0,
+    heading=0.0,
+    speed=0.0,
+    box=BoundingBox(length=1.0, width=1.0, height=1.0),
+)
 
 
 class StackError(ValueError):
@@ -102,6 +117,21 @@ class Endpoints:
         self.command = self.participant.reader(
             topics.command, topics.command_type, config.command_qos
         )
+        self._warm_up()
+
+    def _warm_up(self) -> None:
+        """Encode and decode one message of each type now: rosbags compiles a type's codec on
+        first use (about 0.1 s here), which must not eat into the first step's deadline."""
+        store, m = self.participant.store, self.messages
+        ego = reference.Perceived(state=_NOWHERE, vx=0.0, vy=0.0)
+        for message, ros_type in (
+            (m.clock(0), interfaces.CLOCK),
+            (m.float64(0.0), interfaces.FLOAT64),
+            (m.objects([ego], 0), interfaces.OBJECT_ARRAY),
+            (m.odometry(ego, 0), interfaces.ODOMETRY),
+            (m.command_sample(self.command.ros_type), self.command.ros_type),
+        ):
+            store.deserialize_cdr(store.serialize_cdr(message, ros_type), ros_type)
 
 
 class Run:

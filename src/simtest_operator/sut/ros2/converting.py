@@ -105,6 +105,21 @@ class Messages:
             twist=t["geometry_msgs/msg/TwistWithCovariance"](twist=twist, covariance=np.zeros(36)),
         )
 
+    def command_sample(self, ros_type: str) -> Any:
+        """A zero command of ``ros_type`` (one of :data:`interfaces.COMMAND_TYPES`)."""
+        t = self._t
+        zero = self._vector(0.0, 0.0, 0.0)
+        twist = t[interfaces.TWIST](linear=zero, angular=zero)
+        if ros_type == interfaces.TWIST:
+            return twist
+        header = self.header(0, self.frames.base)
+        if ros_type == interfaces.TWIST_STAMPED:
+            return t[interfaces.TWIST_STAMPED](header=header, twist=twist)
+        drive = t["ackermann_msgs/msg/AckermannDrive"](
+            steering_angle=0.0, steering_angle_velocity=0.0, speed=0.0, acceleration=0.0, jerk=0.0
+        )
+        return t[interfaces.ACKERMANN](header=header, drive=drive)
+
     def objects(self, others: Sequence[Perceived], nanos: int) -> Any:
         """Every other object as a tracked, classified ``derived_object_msgs/Object``."""
         t = self._t
