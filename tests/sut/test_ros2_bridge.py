@@ -136,6 +136,11 @@ def test_a_ros2_stack_drives_the_smoke_campaign_with_the_osi_suts_verdicts(
         k: (v["verdict"], v["reason"]) for k, v in behind_osi.items()
     }
     assert sorted(v["verdict"] for v in behind_ros.values()).count("Failed") == 1
+    timing = ("wallSeconds", "realTimeFactor", "loopRealTimeFactor", "sutRoundTrip")
+    for scenario, result in behind_ros.items():  # min TTC, THW, deceleration, ...: the same
+        expected = behind_osi[scenario]["metrics"]
+        measured = {k: v for k, v in result["metrics"].items() if not k.startswith(timing)}
+        assert measured == {k: v for k, v in expected.items() if not k.startswith(timing)}
     for result in behind_ros.values():
         assert result["versions"]["sut.reported"] == "simtest-ros2-bridge 1.0.0"
         assert result["metrics"]["sutSteps"] > 40
