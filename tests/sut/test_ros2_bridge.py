@@ -276,11 +276,13 @@ def test_the_bytes_on_the_wire_are_what_rosbags_serialises(domain: int, tmp_path
     assert decoded.twist.twist.linear.y == pytest.approx(0.0, abs=1e-12)
 
 
-def run_one(domain: int, *options: str) -> scenario_execution.RunReport:
-    """The hard-braking scenario with the bridge as a local SUT process."""
+def run_one(
+    domain: int, *options: str, module: str = "simtest_operator.sut.ros2"
+) -> scenario_execution.RunReport:
+    """The hard-braking scenario with the bridge (or another SUT module) as a local process."""
     external = ExternalSut(
         launch=Launch.LOCAL,
-        command=(sys.executable, "-m", "simtest_operator.sut.ros2", *options),
+        command=(sys.executable, "-m", module, *options),
         env={"ROS_DOMAIN_ID": str(domain), "CYCLONEDDS_URI": LOOPBACK},
         step_deadline=0.5,
         startup_timeout=30.0,
@@ -315,6 +317,20 @@ def test_a_missing_or_silent_stack_ends_the_run_error_saying_which_topic(domain:
     ), silent_run.outcome.reason
     assert listening.take_raw()  # it did get the odometry
     del silent
+
+
+@pytest.mark.slow
+def test_a_stack_answering_with_unstamped_twists_drives_like_the_osi_sut(
+    domain: int, tmp_path: Path
+) -> None:
+    twist = "geometry_msgs/msg/Twist"
+    behind_osi = run_one(domain, module="simtest_operator.sut.reference")
+    with stack(domain, tmp_path, "--command-type", twist) as log:
+        behind_ros = run_one(domain, "--command-type", twist)
+    assert "Traceback" not in log.read_text()
+    assert behind_ros.outcome.verdict is behind_osi.outcome.verdict, behind_ros.outcome.reason
+    assert behind_ros.outcome.reason == behind_osi.outcome.reason
+    assert behind_ros.outcome.metrics["sutSteps"] == behind_osi.outcome.metrics["sutSteps"] > 50
 
 
 def test_commands_turn_into_speed_and_lateral_motion() -> None:

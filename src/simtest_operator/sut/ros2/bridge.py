@@ -150,7 +150,7 @@ class Run:
             if deadline is not None
             else config.command_timeout
         )
-        endpoints.command.take_raw(1 << 16)  # a previous run's late commands are not this one's
+        endpoints.command.drain()  # a previous run's late commands are not this one's
 
     def target_speed(self, payload: bytes) -> None:
         """A TrafficCommand: the scenario's set speed, latched for the stack."""
@@ -167,7 +167,7 @@ class Run:
         e = self._e
         stamped = e.command.ros_type != interfaces.TWIST
         if not stamped:
-            e.command.take_raw(1 << 16)  # an unstamped command counts only if it comes after
+            e.command.drain()  # an unstamped command counts only if it comes after the inputs
         e.clock.publish(e.messages.clock(nanos))
         e.objects.publish(e.messages.objects([o for o in objects if o is not ego], nanos))
         e.odometry.publish(e.messages.odometry(ego, nanos))

@@ -189,6 +189,11 @@ class Reader:
             raise OSError(f"DDS take on {self.reader.topic.name} failed ({taken})")
         return [bytes(data) for data, info in taken if info.valid_data]
 
+    def drain(self) -> None:
+        """Drop every sample that arrived so far."""
+        while self.take_raw():
+            pass
+
     def take(self, limit: int = 64) -> list[Any]:
         return [self.decode(raw) for raw in self.take_raw(limit)]
 
