@@ -89,6 +89,7 @@ def campaign(tmp_path: Path, name: str, external: Mapping[str, object]) -> Path:
     manifest["spec"]["scenarios"]["sources"] = [{"path": str(REPO / "scenarios" / "smoke")}]
     manifest["spec"]["environment"]["sut"]["external"] = dict(external)
     manifest["spec"]["environment"]["simulator"]["record"] = False
+    manifest["spec"]["execution"]["retries"] = 0  # an Error must show, not be retried away
     path = tmp_path / f"{name}.yaml"
     path.write_text(yaml.safe_dump(manifest), encoding="utf-8")
     return path
