@@ -58,9 +58,11 @@ fi
 
 # --- the project, from the lock ----------------------------------------------------------------
 # --frozen: install exactly uv.lock (never re-resolve); `make lint` checks the lock is current.
-# run mode is --inexact so that it keeps the dev tools a `test` set-up installed.
+# run mode is --inexact so that it keeps the dev tools a `test` set-up installed. The ros2 extra
+# (Cyclone DDS, rosbags: the ROS 2 bridge, docs/sut-interface.md) is part of every set-up, as of
+# the images; only a plain `pip install simtest-operator` leaves it out.
 export UV_PROJECT_ENVIRONMENT="$VENV" UV_PYTHON_DOWNLOADS=never UV_CACHE_DIR="$CACHE_ROOT/uv/cache"
-sync=("$UV" sync --frozen --quiet --python "$PYTHON")
+sync=("$UV" sync --frozen --quiet --extra ros2 --python "$PYTHON")
 if [ "$MODE" = run ]; then sync+=(--no-dev --inexact); fi
 if ! out="$("${sync[@]}" 2>&1)"; then
   echo "$out" >&2; echo "setup: error: uv sync failed (output above)" >&2; exit 1

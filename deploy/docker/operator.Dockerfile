@@ -5,7 +5,8 @@
 #   bash deploy/docker/build.sh operator   # here: buildah, local bases, cached (docs/images.md)
 #
 # Build context: the repository root. Python packages are exactly uv.lock (`uv sync --frozen`,
-# hashes checked). The first two stages are runner.Dockerfile's too (keep them identical: the
+# hashes checked), with the ros2 extra (the ROS 2 bridge runs from the runner image).
+# The first two stages are runner.Dockerfile's too (keep them identical: the
 # two images then share their dependency layer). Pin the bases by digest with
 # --build-arg PYTHON_IMAGE=python:3.11.11-slim-bookworm@sha256:<digest>.
 ARG PYTHON_IMAGE=python:3.11.11-slim-bookworm
@@ -25,7 +26,7 @@ RUN --mount=from=uv,source=/uv,target=/bin/uv \
     cd /opt/simtest \
     && UV_PROJECT_ENVIRONMENT=/opt/simtest/venv UV_PYTHON=python3.11 UV_PYTHON_DOWNLOADS=never \
        UV_LINK_MODE=copy UV_COMPILE_BYTECODE=1 UV_SYSTEM_CERTS=1 UV_CACHE_DIR=/root/.cache/uv \
-       uv sync --frozen --no-dev --no-editable --no-install-project \
+       uv sync --frozen --no-dev --no-editable --extra ros2 --no-install-project \
     && hardlink --ignore-time --quiet /opt/simtest/venv
 
 # The project on top; /out holds only its own files (package, metadata, console scripts), which
@@ -37,7 +38,7 @@ RUN --mount=from=uv,source=/uv,target=/bin/uv \
     cd /src \
     && UV_PROJECT_ENVIRONMENT=/opt/simtest/venv UV_PYTHON=python3.11 UV_PYTHON_DOWNLOADS=never \
        UV_LINK_MODE=copy UV_COMPILE_BYTECODE=1 UV_SYSTEM_CERTS=1 UV_CACHE_DIR=/root/.cache/uv \
-       uv sync --frozen --no-dev --no-editable \
+       uv sync --frozen --no-dev --no-editable --extra ros2 \
     && sp="$(/opt/simtest/venv/bin/python -c 'import sysconfig; print(sysconfig.get_path("purelib"))')" \
     && info="$(echo "$sp"/simtest_operator-*.dist-info)" \
     && mkdir -p "/out$sp" /out/opt/simtest/venv/bin \

@@ -7,7 +7,8 @@
 #   bash deploy/docker/build.sh runner     # here: buildah, local bases, cached (docs/images.md)
 #
 # Build context: the repository root. Python packages are exactly uv.lock (`uv sync --frozen`,
-# hashes checked). The first two stages are operator.Dockerfile's too (keep them identical: the
+# hashes checked), with the ros2 extra (the ROS 2 bridge runs from the runner image).
+# The first two stages are operator.Dockerfile's too (keep them identical: the
 # two images then share their dependency layer). Pin the bases by digest with
 # --build-arg PYTHON_IMAGE=python:3.11.11-slim-bookworm@sha256:<digest>.
 ARG PYTHON_IMAGE=python:3.11.11-slim-bookworm
@@ -27,7 +28,7 @@ RUN --mount=from=uv,source=/uv,target=/bin/uv \
     cd /opt/simtest \
     && UV_PROJECT_ENVIRONMENT=/opt/simtest/venv UV_PYTHON=python3.11 UV_PYTHON_DOWNLOADS=never \
        UV_LINK_MODE=copy UV_COMPILE_BYTECODE=1 UV_SYSTEM_CERTS=1 UV_CACHE_DIR=/root/.cache/uv \
-       uv sync --frozen --no-dev --no-editable --no-install-project \
+       uv sync --frozen --no-dev --no-editable --extra ros2 --no-install-project \
     && hardlink --ignore-time --quiet /opt/simtest/venv
 
 # The project on top; /out holds only its own files (package, metadata, console scripts), which
@@ -39,7 +40,7 @@ RUN --mount=from=uv,source=/uv,target=/bin/uv \
     cd /src \
     && UV_PROJECT_ENVIRONMENT=/opt/simtest/venv UV_PYTHON=python3.11 UV_PYTHON_DOWNLOADS=never \
        UV_LINK_MODE=copy UV_COMPILE_BYTECODE=1 UV_SYSTEM_CERTS=1 UV_CACHE_DIR=/root/.cache/uv \
-       uv sync --frozen --no-dev --no-editable \
+       uv sync --frozen --no-dev --no-editable --extra ros2 \
     && sp="$(/opt/simtest/venv/bin/python -c 'import sysconfig; print(sysconfig.get_path("purelib"))')" \
     && info="$(echo "$sp"/simtest_operator-*.dist-info)" \
     && mkdir -p "/out$sp" /out/opt/simtest/venv/bin \
@@ -80,7 +81,7 @@ ENV PATH=/opt/simtest/venv/bin:$PATH \
 # Fail the build, not the first scenario, when SUMO cannot load (writes nothing).
 RUN python -c "import libsumo, sumolib, traci" \
     && sumo --version >/dev/null && netconvert --version >/dev/null \
-    && simtest-runner --help >/dev/null
+    && simtest-runner --help >/dev/null && simtest-ros2-bridge --help >/dev/null
 # Matches the runAsUser of the rendered simulator pod (restricted Pod Security profile); the pod
 # mounts /tmp and /artifacts, the root filesystem stays read-only.
 USER 65532:65532

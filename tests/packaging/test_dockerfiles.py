@@ -233,11 +233,20 @@ def _locked() -> tuple[dict[str, list[dict[str, Any]]], dict[str, Any]]:
     return packages, project
 
 
+def _image_extras() -> list[str]:
+    """The project's extras the images install (`uv sync --extra NAME` in the Dockerfile)."""
+    dockerfile = (REPO / "deploy" / "docker" / "runner.Dockerfile").read_text()
+    return sorted(set(re.findall(r"--extra ([\w-]+)", dockerfile)))
+
+
 def _lock_closure() -> dict[str, Version]:
-    """What `uv sync --frozen --no-dev` installs on this platform (markers evaluated here)."""
+    """What `uv sync --frozen --no-dev` with the images' extras installs on this platform
+    (markers evaluated here)."""
     packages, project = _locked()
     installed: dict[str, Version] = {}
     stack = [(dep, "") for dep in project["dependencies"]]
+    for extra in _image_extras():
+        stack += [(dep, "") for dep in project["optional-dependencies"][extra]]
     while stack:
         dep, extra = stack.pop()
         marker = dep.get("marker")
@@ -271,9 +280,13 @@ file); listed so the gap is visible in every run, and the test fails again once 
 
 
 def _runtime_closure() -> set[str]:
-    """Distributions `pip install .` brings in: pyproject's dependencies and their requirements
-    (markers evaluated for this platform, extras followed), read from the installed metadata."""
-    dependencies = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]["dependencies"]
+    """Distributions the images install: pyproject's dependencies, those of the extras the
+    Dockerfiles' `uv sync --extra` names, and their requirements (markers evaluated for this
+    platform, extras followed), read from the installed metadata."""
+    project = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]
+    dependencies = list(project["dependencies"])
+    for extra in _image_extras():
+        dependencies += project["optional-dependencies"][extra]
     seen: dict[str, set[str]] = {}
     stack = [Requirement(d) for d in dependencies]
     while stack:

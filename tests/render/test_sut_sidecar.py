@@ -87,3 +87,30 @@ def test_the_runner_gets_the_sidecar_settings_in_domain_units() -> None:
     assert external.startup_timeout == 30.0
     assert dict(external.config) == {"mode": "urban"}
     assert external.port == 7600
+
+
+def test_in_the_ros2_template_the_sidecar_joins_the_stacks_dds_domain() -> None:
+    """The ROS 2 bridge as the sidecar gets the stack's ROS_DOMAIN_ID and a Cyclone DDS
+    configuration with the stack's Services as unicast peers (what the K8s-ROS chart gives the
+    stack), ahead of the campaign's env; the default template adds neither."""
+    bridge = {
+        "name": "acme-stack",
+        "version": "3.1.0",
+        "external": {
+            "image": "ghcr.io/simtest-dev/simtest-runner:0.1.0",
+            "command": ["simtest-ros2-bridge", "--port", "{port}"],
+        },
+    }
+    spec = rendered(bridge, "ros2")["spec"]
+    (sidecar,) = spec["initContainers"]
+    env = {item["name"]: item["value"] for item in sidecar["env"]}
+    domain = {item["name"]: item.get("value") for item in spec["containers"][0]["env"]}
+    assert env["ROS_DOMAIN_ID"] == domain["ROS_DOMAIN_ID"]
+    uri = env["CYCLONEDDS_URI"]
+    assert "<AllowMulticast>false</AllowMulticast>" in uri
+    assert "<ParticipantIndex>auto</ParticipantIndex>" in uri
+    environment = rendered(bridge, "ros2")["metadata"]["name"]  # the releases derive from it
+    for component in ("control", "evaluator", "perception", "planning"):
+        assert f'<Peer Address="{environment}-{component}"/>' in uri
+    plain = rendered(bridge, "default")["spec"]["initContainers"][0]["env"]
+    assert not {"ROS_DOMAIN_ID", "CYCLONEDDS_URI"} & {item["name"] for item in plain}

@@ -46,6 +46,12 @@ class Perceived:
     state: EntityState
     vx: float
     vy: float
+    ax: float = 0.0
+    ay: float = 0.0
+    object_type: int = 0
+    """OSI ``MovingObject.Type`` (2 vehicle, 3 pedestrian, 4 animal, 1 other)."""
+    vehicle_class: int = 0
+    """OSI ``VehicleClassification.Type`` of a vehicle (4 car, 7 heavy truck, ...)."""
 
 
 def parse_sensor_view(payload: bytes) -> tuple[int, int, list[Perceived]]:
@@ -74,9 +80,11 @@ def parse_sensor_view(payload: bytes) -> tuple[int, int, list[Perceived]]:
         b = pw.message_fields(base)
         length, width, height = pw.vector(pw.sub_message(b, 1)) or (0.0, 0.0, 0.0)
         x, y, z = pw.vector(pw.sub_message(b, 2)) or (0.0, 0.0, 0.0)
-        _, _, yaw = pw.vector(pw.sub_message(b, 3)) or (0.0, 0.0, 0.0)
+        roll, pitch, yaw = pw.vector(pw.sub_message(b, 3)) or (0.0, 0.0, 0.0)
         vx, vy, _ = pw.vector(pw.sub_message(b, 4)) or (0.0, 0.0, 0.0)
+        ax, ay, _ = pw.vector(pw.sub_message(b, 5)) or (0.0, 0.0, 0.0)
         object_id = pw.integer(pw.message_fields(ident), 1, 0)
+        classification = pw.sub_message(moving, 6)
         state = EntityState(
             id=object_id,
             name=str(object_id),
@@ -86,10 +94,26 @@ def parse_sensor_view(payload: bytes) -> tuple[int, int, list[Perceived]]:
             y=y,
             z=z,
             heading=yaw,
+            roll=roll,
+            pitch=pitch,
             speed=math.hypot(vx, vy),
             box=BoundingBox(length=length, width=width, height=height),
         )
-        objects.append(Perceived(state=state, vx=vx, vy=vy))
+        objects.append(
+            Perceived(
+                state=state,
+                vx=vx,
+                vy=vy,
+                ax=ax,
+                ay=ay,
+                object_type=pw.integer(moving, 3, 0),
+                vehicle_class=(
+                    pw.integer(pw.message_fields(classification), 1, 0)
+                    if classification is not None
+                    else 0
+                ),
+            )
+        )
     return nanos, host_id, objects
 
 

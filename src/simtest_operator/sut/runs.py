@@ -41,6 +41,11 @@ def hello(
         "sut": {"name": sut.name, "version": sut.version},
         "config": dict(external.config) if external is not None else {},
         "driverModel": driver_model(sut),
+        **(
+            {"stepDeadlineMilliseconds": round(external.step_deadline * 1000, 3)}
+            if external is not None
+            else {}
+        ),
     }
 
 
