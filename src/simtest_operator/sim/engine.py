@@ -16,6 +16,8 @@ completions propagate through the storyboard, the backend is synchronised, and a
 
 from __future__ import annotations
 
+import math
+
 from simtest_operator.drivermodel import DriverModel, SutConfig, Takeover
 from simtest_operator.errors import ScenarioError
 from simtest_operator.opendrive import RoadNetwork
@@ -302,8 +304,17 @@ class Simulation:
             and self._pilot is None
             and actor.mode is Mode.ROAD
         ):
-            # lane keeping of the in-process model (an external SUT steers through its order)
-            actor.offset = driver.lateral_offset(actor.offset, dt)
+            # lane keeping of the in-process model (an external SUT steers through its order):
+            # the lateral motion is part of the distance driven, at a heading it can steer
+            heading = driver.steer(
+                offset=actor.offset,
+                heading=motion.relative_heading(actor, speed_before),
+                speed=actor.speed,
+                dt=dt,
+                steering=actor.steering,
+            )
+            actor.offset += actor.speed * math.sin(heading) * dt
+            actor.lane_changing = True
         # A trajectory placed the actor for the end of this step (also when it just ended and
         # the actor rejoined its lane): it must not move a second time.
         # An actor teleported by an action started this step stays where it was put until the
