@@ -260,3 +260,80 @@ def run(
             overrides=overrides or {},
         )
     )
+
+
+TOWN01_LANE_Y = 199.14
+"""CARLA-frame y of the centre of lane -1 of Town01 road 12 (OpenDRIVE y -199.14, along +x)."""
+
+
+def traveled(entity: str, metres: float, name: str = "Traveled") -> str:
+    return f"""
+              <StartTrigger><ConditionGroup><Condition name="{name}" delay="0" conditionEdge="rising">
+                <ByEntityCondition>
+                  <TriggeringEntities triggeringEntitiesRule="any"><EntityRef entityRef="{entity}"/></TriggeringEntities>
+                  <EntityCondition><TraveledDistanceCondition value="{metres:g}"/></EntityCondition>
+                </ByEntityCondition></Condition></ConditionGroup></StartTrigger>"""  # noqa: E501
+
+
+def town01_drive(
+    *,
+    hero_left: float = 0.0,
+    hero_x: float = 111.42,
+    hero_control: str = HERO_CONTROL,
+    entities: str = "",
+    init: str = "",
+    events: str = "",
+    stop: str | None = None,
+    distance: float = 40.0,
+) -> str:
+    """A CARLA-frame drive on Town01 road 12: the hero ``hero_left`` metres left of the centre
+    of lane -1 (a WorldPosition with y negated, as ScenarioRunner's authors write them), at rest;
+    the story ends once the hero drove ``distance`` metres."""
+    stop_groups = stop if stop is not None else criteria(*ALL_CRITERIA, distance=distance / 2)
+    return f"""<?xml version="1.0" encoding="UTF-8"?>
+<OpenSCENARIO>
+  <FileHeader revMajor="1" revMinor="0" date="2024-01-01T00:00:00" description="CARLA:Town01Drive" author=""/>
+  <ParameterDeclarations/>
+  <CatalogLocations/>
+  <RoadNetwork><LogicFile filepath="Town01"/><SceneGraphFile filepath=""/></RoadNetwork>
+  <Entities>{vehicle("hero", "ego_vehicle")}{entities}
+  </Entities>
+  <Storyboard>
+    <Init>
+      <Actions>
+        <Private entityRef="hero">
+          <PrivateAction>
+            <TeleportAction><Position>
+              <WorldPosition x="{hero_x:g}" y="{TOWN01_LANE_Y - hero_left:g}" z="0" h="0"/>
+            </Position></TeleportAction>
+          </PrivateAction>{hero_control}
+        </Private>{init}
+      </Actions>
+    </Init>
+    <Story name="Drive">
+      <Act name="Drive">
+        <ManeuverGroup name="Hero" maximumExecutionCount="1">
+          <Actors selectTriggeringEntities="false"><EntityRef entityRef="hero"/></Actors>
+          <Maneuver name="Drive">
+            <Event name="Arrived" priority="parallel">
+              <Action name="Cruise">
+                <PrivateAction><LongitudinalAction><SpeedAction>
+                  <SpeedActionDynamics dynamicsShape="step" value="0" dynamicsDimension="time"/>
+                  <SpeedActionTarget><AbsoluteTargetSpeed value="8.33"/></SpeedActionTarget>
+                </SpeedAction></LongitudinalAction></PrivateAction>
+              </Action>{traveled("hero", distance)}
+            </Event>{events}
+          </Maneuver>
+        </ManeuverGroup>
+        <StartTrigger><ConditionGroup><Condition name="Start" delay="0" conditionEdge="none">
+          <ByValueCondition><SimulationTimeCondition value="0" rule="greaterThan"/></ByValueCondition>
+        </Condition></ConditionGroup></StartTrigger>
+      </Act>
+    </Story>
+    <StopTrigger>
+      <ConditionGroup>{stop_groups}
+      </ConditionGroup>
+    </StopTrigger>
+  </Storyboard>
+</OpenSCENARIO>
+"""  # noqa: E501
