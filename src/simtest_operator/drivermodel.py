@@ -7,8 +7,8 @@ its threshold. Laterally the model steers back to the lane centre as a vehicle c
 it wants removes the offset with a time constant, and the heading turns towards it no faster
 than a kinematic bicycle with its steering limit and a lane-keeping lateral acceleration allow
 (so an ego off centre at walking speed creeps back instead of swinging round). With lane keeping
-off it follows the lane at its offset. Two configurations therefore produce different behaviour on the same scenario, which is
-the point of testing a SUT.
+off it follows the lane at its offset. Two configurations therefore produce different behaviour
+on the same scenario, which is the point of testing a SUT.
 
 :class:`SutConfig` mirrors the campaign's ``spec.environment.sut.driverModel`` (``api`` converts
 into it), plus how and when the ego is handed to the model (:class:`Takeover`) and where an
@@ -162,19 +162,24 @@ class Command:
 class DriverModel:
     """Longitudinal decision of the SUT for one ego, with AEB latch state."""
 
-    __slots__ = ("_aeb_latched", "config", "set_speed")
+    __slots__ = ("_aeb_latched", "config", "follows_limits", "set_speed")
 
     def __init__(self, config: SutConfig, *, set_speed: float) -> None:
         self.config = config
         self.set_speed = config.desired_speed if config.desired_speed is not None else set_speed
         """Current cruise target; scenario SpeedActions on the ego change it (driver request)."""
+        self.follows_limits = False
+        """Set for CARLA's autopilot: the road's speed limit is the set speed, not requests."""
         self._aeb_latched = False
 
     def command(self, *, speed: float, leader: Leader | None) -> Command:
         """Acceleration for this step given the ego speed and the perceived leader."""
         cfg = self.config
-        desired = max(self.set_speed, 0.1)
-        free = cfg.max_acceleration * (1.0 - (max(speed, 0.0) / desired) ** IDM_DELTA)
+        if self.set_speed > 0.0:
+            free = cfg.max_acceleration * (1.0 - (max(speed, 0.0) / self.set_speed) ** IDM_DELTA)
+        else:
+            # A set speed of 0 asks the driver to stop (comfortably) and stay stopped.
+            free = -cfg.comfortable_deceleration if speed > 0.0 else 0.0
         acceleration = free
         if leader is not None and cfg.acc:
             closing = speed - leader.speed
@@ -185,11 +190,7 @@ class DriverModel:
                 * closing
                 / (2.0 * math.sqrt(cfg.max_acceleration * cfg.comfortable_deceleration)),
             )
-            acceleration = cfg.max_acceleration * (
-                1.0
-                - (max(speed, 0.0) / desired) ** IDM_DELTA
-                - (wanted / max(leader.gap, 0.1)) ** 2
-            )
+            acceleration = free - cfg.max_acceleration * (wanted / max(leader.gap, 0.1)) ** 2
         acceleration = max(acceleration, -cfg.max_deceleration)
         aeb = self._aeb(speed=speed, leader=leader)
         if aeb:

@@ -66,6 +66,17 @@ HERO_CONTROL = """
             </ControllerAction>
           </PrivateAction>"""
 
+HERO_AUTOPILOT = """
+          <PrivateAction><ControllerAction><AssignControllerAction>
+            <Controller name="Autopilot"><Properties>
+              <Property name="module" value="carla_autopilot"/>
+            </Properties></Controller>
+          </AssignControllerAction></ControllerAction></PrivateAction>"""
+
+HERO_ACTIVATE = """
+          <PrivateAction><ActivateControllerAction longitudinal="true" lateral="true"/>
+          </PrivateAction>"""
+
 ENVIRONMENT = """
         <GlobalAction>
           <EnvironmentAction>

@@ -267,3 +267,23 @@ def test_check_and_run_judge_a_carla_file_alike(tmp_path: Path) -> None:
     assert (checked.verdict, checked.reason) == (recorded.verdict, recorded.reason)
     assert recorded.verdict is Verdict.PASSED, recorded.reason
     assert "evidence: complete" in (out / "run.log").read_text(encoding="utf-8")
+
+
+TOWN01_LIMIT = 25 * 0.44704
+"""m/s: Town01's roads are ``<speed max="25" unit="mph"/>``."""
+
+
+@pytest.mark.parametrize("control", [cs.HERO_AUTOPILOT, cs.HERO_ACTIVATE])
+def test_autopilot_drives_the_hero_at_the_speed_limit(tmp_path: Path, control: str) -> None:
+    # carla_autopilot, or ScenarioRunner's ActivateControllerAction (ChangeAutoPilot), hands the
+    # hero to CARLA's autopilot: from rest up to the road's limit, not creeping at 0.1 m/s; like
+    # the autopilot it takes no SpeedAction (the story's 8.33 m/s is listed as ignored).
+    report = run(cs.write(tmp_path, cs.town01_drive(hero_control=control, distance=80)))
+    outcome = report.outcome
+    assert outcome.verdict is Verdict.PASSED, outcome.reason
+    assert outcome.metrics["drivenDistance"] == pytest.approx(80.0, abs=1.0)
+    assert "DrivenDistanceTest passed (80." in outcome.reason
+    speeds = [sample[4] for sample in report.samples["hero"]]
+    assert speeds[0] == 0.0 and TOWN01_LIMIT - 0.2 < max(speeds) <= TOWN01_LIMIT
+    assert outcome.simulated_seconds < 12.0
+    assert "SpeedAction on the autopilot of hero" in outcome.ignored_elements

@@ -27,6 +27,12 @@ def test_free_road_accelerates_towards_set_speed_and_holds_it() -> None:
     assert model.command(speed=30.0, leader=None).acceleration == pytest.approx(0.0)
 
 
+def test_a_set_speed_of_zero_stops_and_stays_stopped() -> None:
+    model = DriverModel(SutConfig(), set_speed=0.0)
+    assert model.command(speed=0.0, leader=None).acceleration == 0.0
+    assert model.command(speed=5.0, leader=None).acceleration == pytest.approx(-3.0)
+
+
 def test_following_brakes_for_a_close_slow_leader_only_with_acc() -> None:
     close = Leader(gap=10.0, speed=10.0)
     assert (

@@ -8,9 +8,11 @@ them; it maps each to what it already has:
   :data:`CRUISE_SPEED` as set speed, because such scenarios wait for the ego to move.
 - ``npc_vehicle_control``, ``vehicle_longitudinal_control``: lane following at the speed the
   SpeedActions ask for -- what the engine does for every scripted vehicle.
-- ``carla_autopilot`` and, in ``CARLA:`` files, ``ActivateControllerAction`` on a non-ego
-  vehicle: CARLA's traffic-manager autopilot, here the driver model (IDM car following, lane
-  keeping, AEB) with the SUT defaults at the vehicle's speed, or :data:`CRUISE_SPEED` from rest.
+- ``carla_autopilot`` and, in ``CARLA:`` files, ``ActivateControllerAction`` (ScenarioRunner's
+  ``ChangeAutoPilot``, on the hero too): CARLA's traffic-manager autopilot, here the driver
+  model (IDM car following, lane keeping, AEB; the SUT's configuration on the hero, the defaults
+  on other vehicles) at the road's OpenDRIVE speed limit, :data:`CRUISE_SPEED` where the map sets
+  none. Like CARLA's autopilot it takes no SpeedActions (listed as ignored).
 
 Anything else is an unknown controller, handled as before (listed as not imitated).
 """
@@ -21,7 +23,8 @@ import enum
 
 from simtest_operator.drivermodel import DriverModel, SutConfig
 from simtest_operator.openscenario import model
-from simtest_operator.sim.actors import Actor
+from simtest_operator.sim.actors import Actor, Mode
+from simtest_operator.sim.world import World
 
 CRUISE_SPEED = 30.0 / 3.6
 """m/s: the urban speed limit of the CARLA towns, which their autopilot and agents drive at."""
@@ -54,14 +57,36 @@ def module_of(controller: model.Controller) -> Module:
     return _MODULES.get(stem, Module.OTHER)
 
 
-def autopilot(actor: Actor, *, on: bool) -> None:
+def autopilot(world: World, actor: Actor, *, on: bool) -> None:
     """Switch the built-in autopilot of a non-ego vehicle on or off."""
     if not on:
         actor.driver = None
     elif actor.driver is None:
         driver = DriverModel(SutConfig(), set_speed=actor.speed)
-        start_moving(driver)
+        engage_autopilot(world, actor, driver)
         actor.driver = driver
+
+
+def engage_autopilot(world: World, actor: Actor, driver: DriverModel) -> None:
+    """Make ``driver`` CARLA's autopilot: it drives at the road's speed limit (the towns' cruise
+    speed where the map sets none) and takes no speed requests from the scenario."""
+    driver.follows_limits = True
+    driver.set_speed = speed_limit(world, actor) or CRUISE_SPEED
+
+
+def keep_to_limit(world: World, actor: Actor, driver: DriverModel) -> None:
+    """An autopilot's set speed where ``actor`` is now (kept on a road without a limit, such as
+    the connecting roads of CARLA's junctions)."""
+    limit = speed_limit(world, actor)
+    if limit is not None:
+        driver.set_speed = limit
+
+
+def speed_limit(world: World, actor: Actor) -> float | None:
+    """The OpenDRIVE speed limit (m/s) of the road ``actor`` follows, if the map sets one."""
+    if world.roads is None or actor.mode is not Mode.ROAD or actor.road_id is None:
+        return None
+    return world.roads.road(actor.road_id).speed_limit(actor.s)
 
 
 def start_moving(driver: DriverModel) -> None:

@@ -263,6 +263,11 @@ class Simulation:
         )
         if external and ego.driver is not None:
             carla.start_moving(ego.driver)
+        autopilot = isinstance(controller, model.Controller) and (
+            carla.module_of(controller) is carla.Module.AUTOPILOT
+        )
+        if autopilot and ego.driver is not None:
+            carla.engage_autopilot(self.world, ego, ego.driver)
 
     def _switch_driver(self, actor: Actor, engage: bool) -> None:
         if self._sut.takeover is Takeover.NEVER or actor.name != self.ego:
@@ -282,6 +287,8 @@ class Simulation:
         longitudinal = runs.get(Domain.LONGITUDINAL)
         lateral = runs.get(Domain.LATERAL)
         driver = actor.driver
+        if driver is not None and driver.follows_limits:
+            carla.keep_to_limit(world, actor, driver)
         if longitudinal is not None:
             longitudinal.step(world, dt)
         elif driver is not None and self._pilot is not None and actor.name == self.ego:
