@@ -151,8 +151,9 @@ def test_damaged_recordings_are_incomplete_evidence(recordings: dict[str, Path])
     moved = read_objects(recordings["following"])
     moved.objects[1].x[40] += 3.0
     jumped = quality.assess(moved, simulated_seconds=end)
-    assert jumped.issues == (
-        f"object 1 jumps 3.00 m against its velocity at t={moved.objects[1].t[40]:.2f} s",
+    (issue,) = jumped.issues
+    assert issue.startswith("object 1 jumps 2.9") and issue.endswith(
+        f"m against its velocity at t={moved.objects[1].t[40]:.2f} s"
     )
     truncated = quality.assess(decoded, simulated_seconds=end + 5.0)
     assert truncated.issues == (
@@ -225,3 +226,14 @@ def test_a_criteria_file_with_a_wrong_field_names_it() -> None:
         kept.base_scenarios[Kind.CUT_IN]
         == reevaluating.DEFAULT_CRITERIA.base_scenarios[Kind.CUT_IN]
     )
+
+
+def test_a_speed_that_steps_between_frames_is_explained(recordings: dict[str, Path]) -> None:
+    # A step SpeedAction (or a start from rest) changes the speed within one frame interval:
+    # the displacement is the new velocity's, not the trapezoid's mean of old and new.
+    decoded = read_objects(recordings["following"])
+    stepped = read_objects(recordings["following"])
+    lead = stepped.objects[1]
+    assert math.hypot(lead.vx[40], lead.vy[40]) > 5.0
+    lead.vx[40] = lead.vy[40] = 0.0
+    assert quality.assess(stepped, simulated_seconds=decoded.frame_times[-1]).issues == ()
