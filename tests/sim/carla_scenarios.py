@@ -294,6 +294,7 @@ def town01_drive(
     entities: str = "",
     init: str = "",
     events: str = "",
+    groups: str = "",
     stop: str | None = None,
     distance: float = 40.0,
 ) -> str:
@@ -335,7 +336,7 @@ def town01_drive(
               </Action>{traveled("hero", distance)}
             </Event>{events}
           </Maneuver>
-        </ManeuverGroup>
+        </ManeuverGroup>{groups}
         <StartTrigger><ConditionGroup><Condition name="Start" delay="0" conditionEdge="none">
           <ByValueCondition><SimulationTimeCondition value="0" rule="greaterThan"/></ByValueCondition>
         </Condition></ConditionGroup></StartTrigger>
@@ -348,3 +349,42 @@ def town01_drive(
   </Storyboard>
 </OpenSCENARIO>
 """  # noqa: E501
+
+
+def walker(name: str, *, width: float = 1.0) -> str:
+    """A pedestrian whose file box (``width`` square) is not CARLA's walker size."""
+    return f"""
+    <ScenarioObject name="{name}">
+      <Pedestrian model="walker.pedestrian.0001" mass="80" name="walker.pedestrian.0001" pedestrianCategory="pedestrian">
+        <ParameterDeclarations/>
+        <BoundingBox><Center x="0" y="0" z="0.9"/><Dimensions width="{width:g}" length="{width:g}" height="1.8"/></BoundingBox>
+        <Properties/>
+      </Pedestrian>
+    </ScenarioObject>"""  # noqa: E501
+
+
+def walker_crossing(*, x: float, speed: float, after: float) -> tuple[str, str, str]:
+    """(entities, init, maneuver group) of a walker on the right sidewalk of Town01 road 12 at
+    ``x``, facing the road (CARLA frame: y and heading negated), who sets off at ``speed`` once
+    the hero drove ``after`` metres."""
+    init = f"""
+        <Private entityRef="walker">
+          <PrivateAction><TeleportAction><Position>
+            <WorldPosition x="{x:g}" y="203.44" z="0" h="-1.5708"/>
+          </Position></TeleportAction></PrivateAction>
+        </Private>"""
+    group = f"""
+        <ManeuverGroup name="Walker" maximumExecutionCount="1">
+          <Actors selectTriggeringEntities="false"><EntityRef entityRef="walker"/></Actors>
+          <Maneuver name="Cross">
+            <Event name="WalkerCrosses" priority="parallel">
+              <Action name="Walk">
+                <PrivateAction><LongitudinalAction><SpeedAction>
+                  <SpeedActionDynamics dynamicsShape="step" value="0" dynamicsDimension="time"/>
+                  <SpeedActionTarget><AbsoluteTargetSpeed value="{speed:g}"/></SpeedActionTarget>
+                </SpeedAction></LongitudinalAction></PrivateAction>
+              </Action>{traveled("hero", after, "HeroNear")}
+            </Event>
+          </Maneuver>
+        </ManeuverGroup>"""
+    return walker("walker"), init, group

@@ -19,6 +19,8 @@ import pytest
 from mcap.reader import make_reader
 
 from simtest_operator.drivermodel import SutConfig, Takeover
+from simtest_operator.settings import SimulationSettings
+from simtest_operator.sim import BackendChoice, open_simulation
 from simtest_operator.verdicts import Verdict
 
 from . import carla_scenarios as cs
@@ -287,3 +289,46 @@ def test_autopilot_drives_the_hero_at_the_speed_limit(tmp_path: Path, control: s
     assert speeds[0] == 0.0 and TOWN01_LIMIT - 0.2 < max(speeds) <= TOWN01_LIMIT
     assert outcome.simulated_seconds < 12.0
     assert "SpeedAction on the autopilot of hero" in outcome.ignored_elements
+
+
+def _crossing(tmp_path: Path, *, description: str = "CARLA:Town01Drive") -> Path:
+    entities, init, group = cs.walker_crossing(x=150, speed=1.5, after=15)
+    text = cs.town01_drive(entities=entities, init=init, groups=group, distance=60)
+    return cs.write(tmp_path, text.replace("CARLA:Town01Drive", description))
+
+
+def test_a_walker_given_a_speed_walks_where_it_faces(tmp_path: Path) -> None:
+    # The walker stands on the sidewalk facing the road; its SpeedAction sends it across the
+    # hero's lane (ScenarioRunner's PedestrianControl), not along the sidewalk.
+    path = _crossing(tmp_path)
+    blind = run(path, sut=SutConfig(acc=False, aeb=False))
+    walker = blind.samples["walker"]
+    assert {sample[1] for sample in walker} == {150.0}
+    assert walker[0][2] == pytest.approx(-203.44) and walker[-1][2] > -199.14
+    assert blind.outcome.verdict is Verdict.FAILED
+    assert blind.outcome.reason.startswith("hero collided with walker")
+    assert blind.outcome.metrics["criteria.CollisionTest"] == 0.0
+    braking = run(path).outcome
+    assert braking.verdict is Verdict.PASSED, braking.reason
+
+
+def test_walkers_have_carla_size(tmp_path: Path) -> None:
+    # ScenarioRunner spawns a walker blueprint, about 0.5 m across, whatever the file's box
+    # (1 m here); a file without ScenarioRunner's conventions keeps its box.
+    def walker_box(path: Path) -> tuple[float, float]:
+        opened = open_simulation(
+            path,
+            sut=SutConfig(),
+            settings=SimulationSettings(),
+            nets_dir=tmp_path / "nets",
+            backend=BackendChoice.MEMORY,
+        )
+        snapshot = opened.simulation.start()
+        opened.simulation.close()
+        (state,) = (e for e in snapshot.entities if e.name == "walker")
+        return state.box.length, state.box.width
+
+    assert walker_box(_crossing(tmp_path)) == (0.5, 0.5)
+    plain = tmp_path / "plain"
+    plain.mkdir()
+    assert walker_box(_crossing(plain, description="Town01Drive")) == (1.0, 1.0)

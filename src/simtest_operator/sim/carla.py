@@ -14,20 +14,32 @@ them; it maps each to what it already has:
   on other vehicles) at the road's OpenDRIVE speed limit, :data:`CRUISE_SPEED` where the map sets
   none. Like CARLA's autopilot it takes no SpeedActions (listed as ignored).
 
+Walkers are CARLA's: 0.5 m across whatever the file's BoundingBox says, and a walker given a
+speed walks where it faces (off the lane, across the road), as ScenarioRunner's
+``PedestrianControl`` steers it, instead of following its lane.
+
 Anything else is an unknown controller, handled as before (listed as not imitated).
 """
 
 from __future__ import annotations
 
 import enum
+from collections.abc import Iterable
 
 from simtest_operator.drivermodel import DriverModel, SutConfig
 from simtest_operator.openscenario import model
 from simtest_operator.sim.actors import Actor, Mode
 from simtest_operator.sim.world import World
+from simtest_operator.snapshots import BoundingBox, EntityKind
 
 CRUISE_SPEED = 30.0 / 3.6
 """m/s: the urban speed limit of the CARLA towns, which their autopilot and agents drive at."""
+
+
+WALKER_BOX = BoundingBox(center_z=0.9, length=0.5, width=0.5, height=1.8)
+"""CARLA's walker blueprints: a capsule about 0.5 m across and 1.8 m tall round the actor's
+location. ScenarioRunner spawns the blueprint; a Pedestrian's BoundingBox in the file is not
+its size in CARLA."""
 
 
 class Module(enum.Enum):
@@ -45,6 +57,19 @@ _MODULES = {
     "vehicle_longitudinal_control": Module.NPC,
     "carla_autopilot": Module.AUTOPILOT,
 }
+
+
+def spawn_walkers(actors: Iterable[Actor]) -> None:
+    """Give the pedestrians of a ScenarioRunner file the size CARLA's walkers have."""
+    for actor in actors:
+        if actor.kind is EntityKind.PEDESTRIAN:
+            actor.box = WALKER_BOX
+
+
+def is_walker(actor: Actor) -> bool:
+    """Whether ``actor`` is one of CARLA's walkers: given a speed it walks where it faces
+    (ScenarioRunner's ``PedestrianControl``), not along a lane."""
+    return actor.kind is EntityKind.PEDESTRIAN
 
 
 def module_of(controller: model.Controller) -> Module:

@@ -281,7 +281,10 @@ class Dispatcher:
         )
         actor.placed = True
         lane = placement.lane
-        if lane is not None and world.roads is not None:
+        walker = self._carla and carla.is_walker(actor)
+        if walker:
+            actor.mode = Mode.FREE  # ScenarioRunner's walkers go where they face, off the lanes
+        elif lane is not None and world.roads is not None:
             world.set_lane(
                 actor, lane.road_id, lane.lane_id, lane.s, lane.offset, direction=lane.direction
             )
@@ -291,7 +294,8 @@ class Dispatcher:
         path = self._active.get(actor.name, {}).get(Domain.LATERAL)
         if isinstance(path, PathRun):
             path.cancel()
-            world.attach(actor)
+            if not walker:
+                world.attach(actor)
 
     def _assign(
         self, actor: Actor, controller: model.Controller, body: model.AssignControllerAction

@@ -109,6 +109,8 @@ class Simulation:
             host=backend.traffic(),
             carla_conventions=scenario_runner,
         )
+        if scenario_runner:
+            carla.spawn_walkers(actors)
         self._conditions = Conditions(
             self.world,
             self._state_query,
