@@ -161,6 +161,11 @@ def test_damaged_recordings_are_incomplete_evidence(recordings: dict[str, Path])
     )
     mapless = quality.assess(dataclasses.replace(decoded, map_xml=None), simulated_seconds=end)
     assert mapless.issues == ("no map (ground_truth_map channel) in the recording",)
+    # A scenario without a road network records no map: nothing is missing then.
+    open_space = quality.assess(
+        dataclasses.replace(decoded, map_xml=None), simulated_seconds=end, map_expected=False
+    )
+    assert open_space.issues == ()
     times = list(decoded.frame_times)
     gap = dataclasses.replace(decoded, frame_times=(*times[:20], *times[25:]))
     assert any("frame gap" in issue for issue in quality.assess(gap, simulated_seconds=end).issues)

@@ -140,15 +140,48 @@ def _consistency_issues(objects: Mapping[int, ObjectColumns], max_error: float) 
     return issues
 
 
+def _content_issues(recorded: RecordedColumns, frames: int, *, map_expected: bool) -> list[str]:
+    """A host vehicle in every frame and a map whose reference matches (when the scenario has
+    a road network: one without records none)."""
+    issues = []
+    host = host_id(recorded)
+    missing_host = sum(1 for h in recorded.host_ids if h is None)
+    if host is None or host not in recorded.objects:
+        issues.append("no host vehicle (ego) in the recording")
+    elif missing_host or len(recorded.objects[host].t) != frames:
+        issues.append(
+            f"host vehicle {host} is in {len(recorded.objects[host].t)} of {frames} frames"
+        )
+    if recorded.map_xml is None:
+        if map_expected:
+            issues.append("no map (ground_truth_map channel) in the recording")
+    elif recorded.map_references and recorded.map_references != {recorded.map_channel_reference}:
+        issues.append(
+            f"map_reference {sorted(recorded.map_references)} does not match the map channel's "
+            f"{recorded.map_channel_reference!r}"
+        )
+    return issues
+
+
 def assess(
-    recorded: RecordedColumns, *, simulated_seconds: float, rules: QualityRules | None = None
+    recorded: RecordedColumns,
+    *,
+    simulated_seconds: float,
+    rules: QualityRules | None = None,
+    map_expected: bool = True,
 ) -> Quality:
-    """Quality metrics of one decoded recording and the issues that make it incomplete."""
+    """Quality metrics of one decoded recording and the issues that make it incomplete;
+    ``map_expected`` False: the run had no road network, so no map channel is due."""
     rules = rules or QualityRules()
     issues: list[str] = []
     times = np.asarray(recorded.frame_times, dtype=np.float64)
     metrics: dict[str, float] = {"frames": float(len(times))}
     if len(times) < 2:
+        if len(times) == 1 and simulated_seconds <= rules.coverage_tolerance:
+            # The run ended before its second frame was due (an empty storyboard): the first
+            # frame covers it, as the coverage rule allows.
+            single = _content_issues(recorded, 1, map_expected=map_expected)
+            return Quality(metrics=metrics, issues=tuple(single))
         return Quality(metrics=metrics, issues=("recording has fewer than two frames",))
     periods = np.diff(times)
     period = median(periods)
@@ -169,21 +202,7 @@ def assess(
         issues.append(
             f"recording ends at t={times[-1]:.2f} s, the run simulated {simulated_seconds:.2f} s"
         )
-    host = host_id(recorded)
-    missing_host = sum(1 for h in recorded.host_ids if h is None)
-    if host is None or host not in recorded.objects:
-        issues.append("no host vehicle (ego) in the recording")
-    elif missing_host or len(recorded.objects[host].t) != len(times):
-        issues.append(
-            f"host vehicle {host} is in {len(recorded.objects[host].t)} of {len(times)} frames"
-        )
-    if recorded.map_xml is None:
-        issues.append("no map (ground_truth_map channel) in the recording")
-    elif recorded.map_references and recorded.map_references != {recorded.map_channel_reference}:
-        issues.append(
-            f"map_reference {sorted(recorded.map_references)} does not match the map channel's "
-            f"{recorded.map_channel_reference!r}"
-        )
+    issues += _content_issues(recorded, len(times), map_expected=map_expected)
     rms = _temporal_completeness(recorded.objects, period)
     good = sum(1 for value in rms if value <= rules.timing_tolerance) if rms else 0
     metrics["temporalCompleteness"] = 100.0 * good / len(rms) if rms else 0.0
