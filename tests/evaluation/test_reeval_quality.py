@@ -166,6 +166,12 @@ def test_damaged_recordings_are_incomplete_evidence(recordings: dict[str, Path])
         dataclasses.replace(decoded, map_xml=None), simulated_seconds=end, map_expected=False
     )
     assert open_space.issues == ()
+    # A scenario of signals only has no ego and no objects: nothing is missing either.
+    empty = dataclasses.replace(decoded, objects={}, host_ids=tuple(None for _ in decoded.host_ids))
+    assert quality.assess(empty, simulated_seconds=end, host_expected=False).issues == ()
+    assert quality.assess(empty, simulated_seconds=end).issues == (
+        "no host vehicle (ego) in the recording",
+    )
     times = list(decoded.frame_times)
     gap = dataclasses.replace(decoded, frame_times=(*times[:20], *times[25:]))
     assert any("frame gap" in issue for issue in quality.assess(gap, simulated_seconds=end).issues)

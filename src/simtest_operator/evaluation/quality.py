@@ -140,13 +140,18 @@ def _consistency_issues(objects: Mapping[int, ObjectColumns], max_error: float) 
     return issues
 
 
-def _content_issues(recorded: RecordedColumns, frames: int, *, map_expected: bool) -> list[str]:
-    """A host vehicle in every frame and a map whose reference matches (when the scenario has
-    a road network: one without records none)."""
+def _content_issues(
+    recorded: RecordedColumns, frames: int, *, map_expected: bool, host_expected: bool
+) -> list[str]:
+    """A host vehicle in every frame (when the scenario has one: a file of signals only has
+    none) and a map whose reference matches (when it has a road network: one without records
+    none)."""
     issues = []
     host = host_id(recorded)
     missing_host = sum(1 for h in recorded.host_ids if h is None)
-    if host is None or host not in recorded.objects:
+    if not host_expected and host is None:
+        pass
+    elif host is None or host not in recorded.objects:
         issues.append("no host vehicle (ego) in the recording")
     elif missing_host or len(recorded.objects[host].t) != frames:
         issues.append(
@@ -169,9 +174,11 @@ def assess(
     simulated_seconds: float,
     rules: QualityRules | None = None,
     map_expected: bool = True,
+    host_expected: bool = True,
 ) -> Quality:
     """Quality metrics of one decoded recording and the issues that make it incomplete;
-    ``map_expected`` False: the run had no road network, so no map channel is due."""
+    ``map_expected`` False: the run had no road network, so no map channel is due;
+    ``host_expected`` False: it had no ego, so no host vehicle is."""
     rules = rules or QualityRules()
     issues: list[str] = []
     times = np.asarray(recorded.frame_times, dtype=np.float64)
@@ -180,7 +187,9 @@ def assess(
         if len(times) == 1 and simulated_seconds <= rules.coverage_tolerance:
             # The run ended before its second frame was due (an empty storyboard): the first
             # frame covers it, as the coverage rule allows.
-            single = _content_issues(recorded, 1, map_expected=map_expected)
+            single = _content_issues(
+                recorded, 1, map_expected=map_expected, host_expected=host_expected
+            )
             return Quality(metrics=metrics, issues=tuple(single))
         return Quality(metrics=metrics, issues=("recording has fewer than two frames",))
     periods = np.diff(times)
@@ -202,10 +211,15 @@ def assess(
         issues.append(
             f"recording ends at t={times[-1]:.2f} s, the run simulated {simulated_seconds:.2f} s"
         )
-    issues += _content_issues(recorded, len(times), map_expected=map_expected)
+    issues += _content_issues(
+        recorded, len(times), map_expected=map_expected, host_expected=host_expected
+    )
     rms = _temporal_completeness(recorded.objects, period)
     good = sum(1 for value in rms if value <= rules.timing_tolerance) if rms else 0
-    metrics["temporalCompleteness"] = 100.0 * good / len(rms) if rms else 0.0
+    # Without any object (a scenario of signals only) no track can be incomplete.
+    metrics["temporalCompleteness"] = (
+        100.0 * good / len(rms) if rms else (0.0 if recorded.objects else 100.0)
+    )
     if metrics["temporalCompleteness"] < rules.min_temporal_completeness:
         issues.append(
             f"temporal completeness {metrics['temporalCompleteness']:.1f} % "

@@ -212,7 +212,10 @@ def run_scenario(request: RunRequest) -> RunReport:
     verdict, reason = judgement.verdict, judgement.reason
     if verdict is Verdict.PASSED and recorder is not None:
         evidence = _evidence(
-            recorder.path, simulated_seconds=simulation.time, map_expected=logic is not None
+            recorder.path,
+            simulated_seconds=simulation.time,
+            map_expected=logic is not None,
+            host_expected=simulation.ego is not None,
         )
         log.append(f"evidence: {'complete' if evidence.complete else evidence.incomplete_reason()}")
         if not evidence.complete:
@@ -285,14 +288,21 @@ def _loop(
         snapshot = simulation.step()
 
 
-def _evidence(path: Path, *, simulated_seconds: float, map_expected: bool) -> quality.Quality:
+def _evidence(
+    path: Path, *, simulated_seconds: float, map_expected: bool, host_expected: bool
+) -> quality.Quality:
     """The recording's evidence quality, as ``simtest evaluate`` judges it: a recording that is
     incomplete or inconsistent cannot make a run ``Passed``."""
     try:
         decoded = objects.read_objects(path)
     except SimtestError as exc:
         return quality.Quality(metrics={}, issues=(f"recording unreadable: {_one_line(exc)}",))
-    return quality.assess(decoded, simulated_seconds=simulated_seconds, map_expected=map_expected)
+    return quality.assess(
+        decoded,
+        simulated_seconds=simulated_seconds,
+        map_expected=map_expected,
+        host_expected=host_expected,
+    )
 
 
 def _ego_id(simulation: Simulation) -> int | None:
