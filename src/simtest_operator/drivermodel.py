@@ -3,9 +3,12 @@
 Longitudinal control is the Intelligent Driver Model (Treiber et al. 2000) when adaptive cruise
 control is on (follow the vehicle ahead with a time gap) and plain cruise control when it is off;
 automatic emergency braking (AEB) overrides both when the in-path time to collision drops below
-its threshold. Laterally the model keeps the lane centre (or, with lane keeping off, holds its
-heading). Two configurations therefore produce different behaviour on the same scenario, which is
-the point of testing a SUT.
+its threshold. Laterally the model steers back to the lane centre as a vehicle can: the heading
+it wants removes the offset with a time constant, and the heading turns towards it no faster
+than a kinematic bicycle with its steering limit and a lane-keeping lateral acceleration allow
+(so an ego off centre at walking speed creeps back instead of swinging round). With lane keeping
+off it follows the lane at its offset. Two configurations therefore produce different behaviour
+on the same scenario, which is the point of testing a SUT.
 
 :class:`SutConfig` mirrors the campaign's ``spec.environment.sut.driverModel`` (``api`` converts
 into it), plus how and when the ego is handed to the model (:class:`Takeover`) and where an
@@ -126,6 +129,28 @@ IDM_DELTA = 4.0
 
 LANE_KEEPING_TIME = 1.0
 """Time constant (s) with which lane keeping removes a lateral offset."""
+LANE_KEEPING_LATERAL_ACCELERATION = 3.0
+"""m/s^2: the most lateral acceleration lane keeping steers with (ISO 11270's limit for lane
+keeping assistance); it caps the yaw rate at speed."""
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Steering:
+    """What the vehicle can steer: a kinematic bicycle with a front-wheel angle limit."""
+
+    wheelbase: float = 2.8
+    """m between the axles (a passenger car's when the file declares no axles)."""
+    max_angle: float = 0.5
+    """rad: the front wheels' largest angle (OpenSCENARIO's usual ``maxSteering``)."""
+
+    def max_yaw_rate(self, speed: float) -> float:
+        """rad/s the vehicle can turn at ``speed``: its tightest circle, and no faster than
+        lane keeping's lateral acceleration allows (0 at standstill: a car turns by moving)."""
+        v = abs(speed)
+        if v <= 0.0:
+            return 0.0
+        geometric = v * math.tan(self.max_angle) / self.wheelbase
+        return min(geometric, LANE_KEEPING_LATERAL_ACCELERATION / v)
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
@@ -149,19 +174,24 @@ class Command:
 class DriverModel:
     """Longitudinal decision of the SUT for one ego, with AEB latch state."""
 
-    __slots__ = ("_aeb_latched", "config", "set_speed")
+    __slots__ = ("_aeb_latched", "config", "follows_limits", "set_speed")
 
     def __init__(self, config: SutConfig, *, set_speed: float) -> None:
         self.config = config
         self.set_speed = config.desired_speed if config.desired_speed is not None else set_speed
         """Current cruise target; scenario SpeedActions on the ego change it (driver request)."""
+        self.follows_limits = False
+        """Set for CARLA's autopilot: the road's speed limit is the set speed, not requests."""
         self._aeb_latched = False
 
     def command(self, *, speed: float, leader: Leader | None) -> Command:
         """Acceleration for this step given the ego speed and the perceived leader."""
         cfg = self.config
-        desired = max(self.set_speed, 0.1)
-        free = cfg.max_acceleration * (1.0 - (max(speed, 0.0) / desired) ** IDM_DELTA)
+        if self.set_speed > 0.0:
+            free = cfg.max_acceleration * (1.0 - (max(speed, 0.0) / self.set_speed) ** IDM_DELTA)
+        else:
+            # A set speed of 0 asks the driver to stop (comfortably) and stay stopped.
+            free = -cfg.comfortable_deceleration if speed > 0.0 else 0.0
         acceleration = free
         if leader is not None and cfg.acc:
             closing = speed - leader.speed
@@ -172,11 +202,7 @@ class DriverModel:
                 * closing
                 / (2.0 * math.sqrt(cfg.max_acceleration * cfg.comfortable_deceleration)),
             )
-            acceleration = cfg.max_acceleration * (
-                1.0
-                - (max(speed, 0.0) / desired) ** IDM_DELTA
-                - (wanted / max(leader.gap, 0.1)) ** 2
-            )
+            acceleration = free - cfg.max_acceleration * (wanted / max(leader.gap, 0.1)) ** 2
         acceleration = max(acceleration, -cfg.max_deceleration)
         aeb = self._aeb(speed=speed, leader=leader)
         if aeb:
@@ -196,8 +222,25 @@ class DriverModel:
             self._aeb_latched = False
         return self._aeb_latched
 
-    def lateral_offset(self, offset: float, dt: float) -> float:
-        """Lane-keeping update of the offset from the lane centre (m)."""
-        if not self.config.lane_keeping:
-            return offset
-        return offset * math.exp(-dt / LANE_KEEPING_TIME)
+    def steer(
+        self, *, offset: float, heading: float, speed: float, dt: float, steering: Steering
+    ) -> float:
+        """Lane keeping: the relative heading (rad, towards +offset) for the step to ``dt``.
+
+        ``offset`` is the distance from the lane centre (m), ``heading`` the vehicle's heading
+        relative to the lane now and ``speed`` its speed over the step; the vehicle moves
+        ``speed * sin(result) * dt`` across the lane. The wish removes the offset with
+        :data:`LANE_KEEPING_TIME` (as fast as the offset decays), never turned more than the
+        vehicle can turn back before the centre; the heading moves towards it no faster than
+        ``steering`` allows at ``speed``. Off: the lane's heading.
+        """
+        if not self.config.lane_keeping or speed <= 0.0 or dt <= 0.0:
+            return 0.0
+        wanted_rate = offset * math.expm1(-dt / LANE_KEEPING_TIME) / dt
+        wanted = math.asin(max(-1.0, min(1.0, wanted_rate / speed)))
+        yaw_rate = steering.max_yaw_rate(speed)
+        # Turning back at yaw_rate from heading h covers about speed * h^2 / (2 yaw_rate) sideways.
+        unwind = math.sqrt(2.0 * yaw_rate * abs(offset) / speed)
+        wanted = max(-unwind, min(unwind, wanted))
+        turn = yaw_rate * dt
+        return heading + max(-turn, min(turn, wanted - heading))

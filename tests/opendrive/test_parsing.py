@@ -103,3 +103,24 @@ def test_without_signals(xodr_dir: Path) -> None:
     stripped = without_signals(original)
     assert b"<signal" not in stripped
     assert len(parse(stripped).roads) == len(parse(original).roads)
+
+
+def test_road_type_speed_limits() -> None:
+    types = (
+        '<type s="0" type="town"><speed max="25" unit="mph"/></type>'
+        '<type s="4" type="rural"><speed max="no limit"/></type>'
+        '<type s="5" type="motorway"><speed max="nan" unit="km/h"/></type>'
+        '<type s="6" type="motorway"><speed max="90" unit="km/h"/></type>'
+        '<type s="8" type="town"><speed max="12"/></type>'
+    )
+    data = single_road(LINE, length=10).replace(b"<planView>", types.encode() + b"<planView>")
+    road = parse(data).roads[0]
+    # A limit nobody can drive at (no limit, NaN) is left out: the previous one stays in force.
+    assert [(limit.s, round(limit.max_speed, 3)) for limit in road.speed_limits] == [
+        (0.0, 11.176),
+        (6.0, 25.0),
+        (8.0, 12.0),
+    ]
+    assert road.speed_limit(5.0) == pytest.approx(11.176)
+    assert road.speed_limit(9.0) == 12.0
+    assert parse(single_road(LINE, length=10)).roads[0].speed_limit(0.0) is None

@@ -4,7 +4,8 @@
 Covers: a sound recording leaves the pass and the log says so; a recording below omega-prime's
 10 Hz minimum turns the pass into ``Error`` with the same ``evidence incomplete: …`` reason
 ``simtest evaluate`` gives (result file too); a failure stays a failure (a violation seen in
-partial evidence is still one); without a recording there is nothing to check.
+partial evidence is still one); a run that keeps no recording (``scenario check``) records to a
+scratch file and is held to the same rule.
 """
 
 from __future__ import annotations
@@ -57,9 +58,19 @@ def test_an_incomplete_recording_cannot_pass(tmp_path: Path) -> None:
 
 
 @pytest.mark.slow
-def test_a_failure_stays_a_failure_and_no_recording_is_not_checked(tmp_path: Path) -> None:
+def test_a_failure_stays_a_failure(tmp_path: Path) -> None:
     failed, _ = _run(tmp_path, FAILING, record_hz=5.0)
     assert failed.outcome.verdict is Verdict.FAILED
+
+
+@pytest.mark.slow
+def test_a_run_that_keeps_no_recording_is_checked_alike(tmp_path: Path) -> None:
+    # ``scenario check`` keeps no recording: the run records to a scratch file anyway, so its
+    # pass meets the same evidence rule, and nothing is left behind.
     unrecorded, out = _run(tmp_path, PASSING, record=False)
     assert unrecorded.outcome.verdict is Verdict.PASSED
-    assert "evidence:" not in (out / "run.log").read_text(encoding="utf-8")
+    assert "evidence: complete" in (out / "run.log").read_text(encoding="utf-8")
+    assert not (out / "recording.mcap").exists() and "recording" not in unrecorded.outcome.artifacts
+    thin, _ = _run(tmp_path, PASSING, record_hz=5.0, record=False)
+    assert thin.outcome.verdict is Verdict.ERROR
+    assert thin.outcome.reason.startswith("evidence incomplete: frame rate 5"), thin.outcome.reason

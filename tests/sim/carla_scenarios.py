@@ -66,6 +66,17 @@ HERO_CONTROL = """
             </ControllerAction>
           </PrivateAction>"""
 
+HERO_AUTOPILOT = """
+          <PrivateAction><ControllerAction><AssignControllerAction>
+            <Controller name="Autopilot"><Properties>
+              <Property name="module" value="carla_autopilot"/>
+            </Properties></Controller>
+          </AssignControllerAction></ControllerAction></PrivateAction>"""
+
+HERO_ACTIVATE = """
+          <PrivateAction><ActivateControllerAction longitudinal="true" lateral="true"/>
+          </PrivateAction>"""
+
 ENVIRONMENT = """
         <GlobalAction>
           <EnvironmentAction>
@@ -361,3 +372,120 @@ def maneuver(
   </Storyboard>
 </OpenSCENARIO>
 """  # noqa: E501
+
+
+TOWN01_LANE_Y = 199.14
+"""CARLA-frame y of the centre of lane -1 of Town01 road 12 (OpenDRIVE y -199.14, along +x)."""
+
+
+def traveled(entity: str, metres: float, name: str = "Traveled") -> str:
+    return f"""
+              <StartTrigger><ConditionGroup><Condition name="{name}" delay="0" conditionEdge="rising">
+                <ByEntityCondition>
+                  <TriggeringEntities triggeringEntitiesRule="any"><EntityRef entityRef="{entity}"/></TriggeringEntities>
+                  <EntityCondition><TraveledDistanceCondition value="{metres:g}"/></EntityCondition>
+                </ByEntityCondition></Condition></ConditionGroup></StartTrigger>"""  # noqa: E501
+
+
+def town01_drive(
+    *,
+    hero_left: float = 0.0,
+    hero_x: float = 111.42,
+    hero_control: str = HERO_CONTROL,
+    entities: str = "",
+    init: str = "",
+    events: str = "",
+    groups: str = "",
+    stop: str | None = None,
+    distance: float = 40.0,
+) -> str:
+    """A CARLA-frame drive on Town01 road 12: the hero ``hero_left`` metres left of the centre
+    of lane -1 (a WorldPosition with y negated, as ScenarioRunner's authors write them), at rest;
+    the story ends once the hero drove ``distance`` metres."""
+    stop_groups = stop if stop is not None else criteria(*ALL_CRITERIA, distance=distance / 2)
+    return f"""<?xml version="1.0" encoding="UTF-8"?>
+<OpenSCENARIO>
+  <FileHeader revMajor="1" revMinor="0" date="2024-01-01T00:00:00" description="CARLA:Town01Drive" author=""/>
+  <ParameterDeclarations/>
+  <CatalogLocations/>
+  <RoadNetwork><LogicFile filepath="Town01"/><SceneGraphFile filepath=""/></RoadNetwork>
+  <Entities>{vehicle("hero", "ego_vehicle")}{entities}
+  </Entities>
+  <Storyboard>
+    <Init>
+      <Actions>
+        <Private entityRef="hero">
+          <PrivateAction>
+            <TeleportAction><Position>
+              <WorldPosition x="{hero_x:g}" y="{TOWN01_LANE_Y - hero_left:g}" z="0" h="0"/>
+            </Position></TeleportAction>
+          </PrivateAction>{hero_control}
+        </Private>{init}
+      </Actions>
+    </Init>
+    <Story name="Drive">
+      <Act name="Drive">
+        <ManeuverGroup name="Hero" maximumExecutionCount="1">
+          <Actors selectTriggeringEntities="false"><EntityRef entityRef="hero"/></Actors>
+          <Maneuver name="Drive">
+            <Event name="Arrived" priority="parallel">
+              <Action name="Cruise">
+                <PrivateAction><LongitudinalAction><SpeedAction>
+                  <SpeedActionDynamics dynamicsShape="step" value="0" dynamicsDimension="time"/>
+                  <SpeedActionTarget><AbsoluteTargetSpeed value="8.33"/></SpeedActionTarget>
+                </SpeedAction></LongitudinalAction></PrivateAction>
+              </Action>{traveled("hero", distance)}
+            </Event>{events}
+          </Maneuver>
+        </ManeuverGroup>{groups}
+        <StartTrigger><ConditionGroup><Condition name="Start" delay="0" conditionEdge="none">
+          <ByValueCondition><SimulationTimeCondition value="0" rule="greaterThan"/></ByValueCondition>
+        </Condition></ConditionGroup></StartTrigger>
+      </Act>
+    </Story>
+    <StopTrigger>
+      <ConditionGroup>{stop_groups}
+      </ConditionGroup>
+    </StopTrigger>
+  </Storyboard>
+</OpenSCENARIO>
+"""  # noqa: E501
+
+
+def walker(name: str, *, width: float = 1.0) -> str:
+    """A pedestrian whose file box (``width`` square) is not CARLA's walker size."""
+    return f"""
+    <ScenarioObject name="{name}">
+      <Pedestrian model="walker.pedestrian.0001" mass="80" name="walker.pedestrian.0001" pedestrianCategory="pedestrian">
+        <ParameterDeclarations/>
+        <BoundingBox><Center x="0" y="0" z="0.9"/><Dimensions width="{width:g}" length="{width:g}" height="1.8"/></BoundingBox>
+        <Properties/>
+      </Pedestrian>
+    </ScenarioObject>"""  # noqa: E501
+
+
+def walker_crossing(*, x: float, speed: float, after: float) -> tuple[str, str, str]:
+    """(entities, init, maneuver group) of a walker on the right sidewalk of Town01 road 12 at
+    ``x``, facing the road (CARLA frame: y and heading negated), who sets off at ``speed`` once
+    the hero drove ``after`` metres."""
+    init = f"""
+        <Private entityRef="walker">
+          <PrivateAction><TeleportAction><Position>
+            <WorldPosition x="{x:g}" y="203.44" z="0" h="-1.5708"/>
+          </Position></TeleportAction></PrivateAction>
+        </Private>"""
+    group = f"""
+        <ManeuverGroup name="Walker" maximumExecutionCount="1">
+          <Actors selectTriggeringEntities="false"><EntityRef entityRef="walker"/></Actors>
+          <Maneuver name="Cross">
+            <Event name="WalkerCrosses" priority="parallel">
+              <Action name="Walk">
+                <PrivateAction><LongitudinalAction><SpeedAction>
+                  <SpeedActionDynamics dynamicsShape="step" value="0" dynamicsDimension="time"/>
+                  <SpeedActionTarget><AbsoluteTargetSpeed value="{speed:g}"/></SpeedActionTarget>
+                </SpeedAction></LongitudinalAction></PrivateAction>
+              </Action>{traveled("hero", after, "HeroNear")}
+            </Event>
+          </Maneuver>
+        </ManeuverGroup>"""
+    return walker("walker"), init, group

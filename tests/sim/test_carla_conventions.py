@@ -7,9 +7,11 @@ storyboard StopTrigger. Covers: the run ends when the stories end and passes wit
 reported; each judged criterion failing on its own (KeepLane, WrongLane, OnSidewalk, Collision,
 DrivenDistance); the external ego must drive for the act to start; ScenarioRunner's rules chosen
 by any of its conventions, esmini's edge rule on the same file without any never starting the
-act; AddEntityAction/DeleteEntityAction at run time and
-an entity absent until added; the built-in autopilot for ``carla_autopilot``; the environment in
-the run log and the recording's metadata.
+act; AddEntityAction/DeleteEntityAction at run time and an entity absent until added; the
+built-in autopilot for ``carla_autopilot`` (also on the hero, at Town01's speed limit); the
+environment in the run log and the recording's metadata; on Town01 in CARLA's frame: a hero
+spawned off centre at walking speed steers back within its lane, ``check`` and ``run`` judge a
+file alike, walkers walk where they face with CARLA's size.
 """
 
 from __future__ import annotations
@@ -20,6 +22,8 @@ import pytest
 from mcap.reader import make_reader
 
 from simtest_operator.drivermodel import SutConfig, Takeover
+from simtest_operator.settings import SimulationSettings
+from simtest_operator.sim import BackendChoice, open_simulation
 from simtest_operator.verdicts import Verdict
 
 from . import carla_scenarios as cs
@@ -219,10 +223,11 @@ def test_carla_autopilot_drives_a_non_ego_vehicle(tmp_path: Path) -> None:
           </AssignControllerAction></ControllerAction></PrivateAction>
         </Private>"""
     report = run(cs.write(tmp_path, cs.follow_leading(adversary_init=adversary)))
-    # The autopilot brings it from rest to the towns' 30 km/h; the SpeedActions of the story
-    # become its set speed, as they do for the SUT.
+    # The autopilot brings it from rest to the towns' 30 km/h (the test street sets no speed
+    # limit); like CARLA's it takes none of the story's SpeedActions.
     speeds = [sample[4] for sample in report.samples["adversary"]]
-    assert speeds[0] == 0.0 and max(speeds) > 4.0
+    assert speeds[0] == 0.0 and max(speeds) == pytest.approx(30.0 / 3.6, abs=0.2)
+    assert "SpeedAction on the autopilot of adversary" in report.outcome.ignored_elements
     assert not any("Autopilot" in label for label in report.intended)
 
 
@@ -272,3 +277,95 @@ def test_town01_scenario(tmp_path: Path) -> None:
     for name in ("CollisionTest", "KeepLaneTest", "WrongLaneTest", "OnSidewalkTest"):
         assert outcome.metrics[f"criteria.{name}"] == 1.0
     assert outcome.metrics["drivenDistance"] >= 50.0
+
+
+@pytest.mark.parametrize("left", [-0.65, 0.75])
+def test_hero_off_centre_at_walking_speed_steers_back_within_its_lane(
+    tmp_path: Path, left: float
+) -> None:
+    # The hero starts at rest 0.65-0.75 m off centre: lane keeping turns it as a car can turn
+    # at that speed, so it creeps back instead of swinging round into the next lane.
+    report = run(cs.write(tmp_path, cs.town01_drive(hero_left=left)))
+    outcome = report.outcome
+    assert outcome.verdict is Verdict.PASSED, outcome.reason
+    assert outcome.metrics["criteria.KeepLaneTest"] == 1.0
+    hero = report.samples["hero"]
+    assert max(abs(sample[3]) for sample in hero) < 0.2  # rad, once per second
+    assert hero[-1][2] == pytest.approx(-cs.TOWN01_LANE_Y, abs=0.05)  # back on the centre
+
+
+def test_check_and_run_judge_a_carla_file_alike(tmp_path: Path) -> None:
+    # Without a kept recording (``scenario check``) the run still records to a scratch file
+    # and a pass meets the evidence checks of ``scenario run``; both agree, and the hero's
+    # box never jumps against its velocity (it used to swing 1.8 m round its rear axle).
+    text = cs.town01_drive(hero_left=-0.65, stop=cs.criteria("CollisionTest", distance=20))
+    path = cs.write(tmp_path, text)
+    checked = run(path).outcome
+    out = tmp_path / "out"
+    recorded = run(path, out=out).outcome
+    assert (checked.verdict, checked.reason) == (recorded.verdict, recorded.reason)
+    assert recorded.verdict is Verdict.PASSED, recorded.reason
+    assert "evidence: complete" in (out / "run.log").read_text(encoding="utf-8")
+
+
+TOWN01_LIMIT = 25 * 0.44704
+"""m/s: Town01's roads are ``<speed max="25" unit="mph"/>``."""
+
+
+@pytest.mark.parametrize("control", [cs.HERO_AUTOPILOT, cs.HERO_ACTIVATE])
+def test_autopilot_drives_the_hero_at_the_speed_limit(tmp_path: Path, control: str) -> None:
+    # carla_autopilot, or ScenarioRunner's ActivateControllerAction (ChangeAutoPilot), hands the
+    # hero to CARLA's autopilot: from rest up to the road's limit, not creeping at 0.1 m/s; like
+    # the autopilot it takes no SpeedAction (the story's 8.33 m/s is listed as ignored).
+    report = run(cs.write(tmp_path, cs.town01_drive(hero_control=control, distance=80)))
+    outcome = report.outcome
+    assert outcome.verdict is Verdict.PASSED, outcome.reason
+    assert outcome.metrics["drivenDistance"] == pytest.approx(80.0, abs=1.0)
+    assert "DrivenDistanceTest passed (80." in outcome.reason
+    speeds = [sample[4] for sample in report.samples["hero"]]
+    assert speeds[0] == 0.0 and TOWN01_LIMIT - 0.2 < max(speeds) <= TOWN01_LIMIT
+    assert outcome.simulated_seconds < 12.0
+    assert "SpeedAction on the autopilot of hero" in outcome.ignored_elements
+
+
+def _crossing(tmp_path: Path, *, description: str = "CARLA:Town01Drive") -> Path:
+    entities, init, group = cs.walker_crossing(x=150, speed=1.5, after=15)
+    text = cs.town01_drive(entities=entities, init=init, groups=group, distance=60)
+    return cs.write(tmp_path, text.replace("CARLA:Town01Drive", description))
+
+
+def test_a_walker_given_a_speed_walks_where_it_faces(tmp_path: Path) -> None:
+    # The walker stands on the sidewalk facing the road; its SpeedAction sends it across the
+    # hero's lane (ScenarioRunner's PedestrianControl), not along the sidewalk.
+    path = _crossing(tmp_path)
+    blind = run(path, sut=SutConfig(acc=False, aeb=False))
+    walker = blind.samples["walker"]
+    assert {sample[1] for sample in walker} == {150.0}
+    assert walker[0][2] == pytest.approx(-203.44) and walker[-1][2] > -199.14
+    assert blind.outcome.verdict is Verdict.FAILED
+    assert blind.outcome.reason.startswith("hero collided with walker")
+    assert blind.outcome.metrics["criteria.CollisionTest"] == 0.0
+    braking = run(path).outcome
+    assert braking.verdict is Verdict.PASSED, braking.reason
+
+
+def test_walkers_have_carla_size(tmp_path: Path) -> None:
+    # ScenarioRunner spawns a walker blueprint, about 0.5 m across, whatever the file's box
+    # (1 m here); a file without ScenarioRunner's conventions keeps its box.
+    def walker_box(path: Path) -> tuple[float, float]:
+        opened = open_simulation(
+            path,
+            sut=SutConfig(),
+            settings=SimulationSettings(),
+            nets_dir=tmp_path / "nets",
+            backend=BackendChoice.MEMORY,
+        )
+        snapshot = opened.simulation.start()
+        opened.simulation.close()
+        (state,) = (e for e in snapshot.entities if e.name == "walker")
+        return state.box.length, state.box.width
+
+    assert walker_box(_crossing(tmp_path)) == (0.5, 0.5)
+    plain = tmp_path / "plain"
+    plain.mkdir()
+    assert walker_box(_crossing(plain, description="Town01Drive")) == (1.0, 1.0)

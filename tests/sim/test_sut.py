@@ -1,15 +1,17 @@
 """The system under test: the IDM/ACC/AEB driver model in isolation (free road towards the set
-speed, following, AEB latching below the TTC threshold and releasing), and end to end: two SUT
+speed, following, AEB latching below the TTC threshold and releasing, lane keeping within what
+the vehicle can steer at its speed), and end to end: two SUT
 configurations give different verdicts on the same hard-braking-lead scenario; with takeover
 ``never`` the ego stays scripted."""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import pytest
 
-from simtest_operator.drivermodel import DriverModel, Leader
+from simtest_operator.drivermodel import LANE_KEEPING_TIME, DriverModel, Leader, Steering
 from simtest_operator.runner import scenario_execution
 from simtest_operator.sim import BackendChoice, SutConfig, Takeover
 from simtest_operator.verdicts import Verdict
@@ -23,6 +25,12 @@ def test_free_road_accelerates_towards_set_speed_and_holds_it() -> None:
         2.0 * (1 - (1 / 3) ** 4)
     )
     assert model.command(speed=30.0, leader=None).acceleration == pytest.approx(0.0)
+
+
+def test_a_set_speed_of_zero_stops_and_stays_stopped() -> None:
+    model = DriverModel(SutConfig(), set_speed=0.0)
+    assert model.command(speed=0.0, leader=None).acceleration == 0.0
+    assert model.command(speed=5.0, leader=None).acceleration == pytest.approx(-3.0)
 
 
 def test_following_brakes_for_a_close_slow_leader_only_with_acc() -> None:
@@ -45,6 +53,49 @@ def test_aeb_latches_below_threshold_and_releases() -> None:
     # still closing, TTC above threshold again: stays latched until no longer closing
     assert model.command(speed=15.0, leader=Leader(gap=12.0, speed=10.0)).aeb_active
     assert not model.command(speed=9.0, leader=Leader(gap=12.0, speed=10.0)).aeb_active
+
+
+def _steer_from_rest(
+    model: DriverModel, *, offset: float, speed: float, steps: int
+) -> tuple[float, list[float]]:
+    """Lane keeping for ``steps`` steps of 0.05 s at ``speed``: the last offset and the headings."""
+    heading, headings = 0.0, []
+    for _ in range(steps):
+        heading = model.steer(
+            offset=offset, heading=heading, speed=speed, dt=0.05, steering=Steering()
+        )
+        offset += speed * math.sin(heading) * 0.05
+        headings.append(heading)
+    return offset, headings
+
+
+def test_lane_keeping_turns_no_faster_than_the_vehicle_can() -> None:
+    model = DriverModel(SutConfig(), set_speed=10.0)
+    # Walking pace, 0.65 m off centre: the wheels at full lock turn the car by v tan(0.5) / L.
+    slow = Steering().max_yaw_rate(0.5)
+    assert slow == pytest.approx(0.5 * math.tan(0.5) / 2.8)
+    offset, headings = _steer_from_rest(model, offset=0.65, speed=0.5, steps=1)
+    assert headings == [pytest.approx(-slow * 0.05)]
+    assert offset == pytest.approx(0.65 - 0.5 * math.sin(slow * 0.05) * 0.05)
+    # At speed, lateral acceleration caps the yaw rate (3 m/s^2 / v).
+    assert Steering().max_yaw_rate(20.0) == pytest.approx(3.0 / 20.0)
+    assert Steering().max_yaw_rate(0.0) == 0.0
+    # Back to the centre without crossing it, the heading unwound on the way.
+    offset, headings = _steer_from_rest(model, offset=0.65, speed=2.0, steps=200)
+    assert 0.0 <= offset < 0.01 and abs(headings[-1]) < 1e-3
+    assert max(abs(b - a) for a, b in zip([0.0, *headings], headings, strict=False)) <= (
+        Steering().max_yaw_rate(2.0) * 0.05 + 1e-12
+    )
+
+
+def test_lane_keeping_within_the_limits_decays_the_offset() -> None:
+    # Small offset at speed: the wished heading is reachable, the offset decays exponentially.
+    model = DriverModel(SutConfig(), set_speed=20.0)
+    heading = model.steer(offset=0.01, heading=-0.0005, speed=20.0, dt=0.05, steering=Steering())
+    moved = 0.01 + 20.0 * math.sin(heading) * 0.05
+    assert moved == pytest.approx(0.01 * math.exp(-0.05 / LANE_KEEPING_TIME))
+    off = DriverModel(SutConfig(lane_keeping=False), set_speed=20.0)
+    assert off.steer(offset=0.5, heading=0.1, speed=20.0, dt=0.05, steering=Steering()) == 0.0
 
 
 def run(sut: SutConfig, tmp_path: Path) -> scenario_execution.RunReport:

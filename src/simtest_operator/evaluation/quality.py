@@ -20,6 +20,7 @@ import math
 from collections.abc import Mapping
 
 import numpy as np
+import numpy.typing as npt
 
 from simtest_operator.evaluation.scenes import ObjectColumns, RecordedColumns, host_id, median
 
@@ -47,7 +48,8 @@ class QualityRules:
     coverage_tolerance: float = 0.25
     """Seconds the recording may end before the run's simulated time (last partial period)."""
     max_position_error: float = 0.5
-    """Metres a position may differ from the previous one moved by the recorded velocity."""
+    """Metres a position may differ from the previous one moved by a mean of the two frames'
+    recorded velocities."""
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
@@ -92,6 +94,26 @@ def _format_consistency(objects: Mapping[int, ObjectColumns]) -> tuple[float, in
     return (100.0 if total == 0 else 100.0 * (total - invalid) / total), invalid
 
 
+def _unexplained(
+    dt: npt.NDArray[np.float64],
+    dx: npt.NDArray[np.float64],
+    dy: npt.NDArray[np.float64],
+    vx: npt.NDArray[np.float64],
+    vy: npt.NDArray[np.float64],
+) -> npt.NDArray[np.float64]:
+    """Per frame interval, how far (m) the displacement lies from every one the recorded
+    velocities explain: a mean velocity between the two frames' (the segment from ``v0 dt`` to
+    ``v1 dt``; the trapezoid rule is its midpoint). A speed that steps within a frame interval
+    (a ``step`` SpeedAction, a start from rest) is explained; a teleport or a box swinging round
+    its reference point is not."""
+    ex, ey = dx - vx[:-1] * dt, dy - vy[:-1] * dt
+    wx, wy = (vx[1:] - vx[:-1]) * dt, (vy[1:] - vy[:-1]) * dt
+    span = wx * wx + wy * wy
+    share = np.divide(ex * wx + ey * wy, span, out=np.zeros_like(span), where=span > 0.0)
+    share = np.clip(share, 0.0, 1.0)
+    return np.asarray(np.hypot(ex - share * wx, ey - share * wy), dtype=np.float64)
+
+
 def _consistency_issues(objects: Mapping[int, ObjectColumns], max_error: float) -> list[str]:
     issues = []
     for object_id, o in sorted(objects.items()):
@@ -107,11 +129,7 @@ def _consistency_issues(objects: Mapping[int, ObjectColumns], max_error: float) 
         if not (np.all(np.isfinite(x)) and np.all(np.isfinite(y))):
             issues.append(f"object {object_id} has non-finite positions")
             continue
-        dt = np.diff(t)
-        # Trapezoid rule: the recorded velocities must explain the displacement.
-        px = x[:-1] + 0.5 * (vx[:-1] + vx[1:]) * dt
-        py = y[:-1] + 0.5 * (vy[:-1] + vy[1:]) * dt
-        error = np.hypot(px - x[1:], py - y[1:])
+        error = _unexplained(np.diff(t), np.diff(x), np.diff(y), vx, vy)
         wrong = np.nonzero(error > max_error)[0]
         if len(wrong):
             first = int(wrong[0])
@@ -122,15 +140,57 @@ def _consistency_issues(objects: Mapping[int, ObjectColumns], max_error: float) 
     return issues
 
 
+def _content_issues(
+    recorded: RecordedColumns, frames: int, *, map_expected: bool, host_expected: bool
+) -> list[str]:
+    """A host vehicle in every frame (when the scenario has one: a file of signals only has
+    none) and a map whose reference matches (when it has a road network: one without records
+    none)."""
+    issues = []
+    host = host_id(recorded)
+    missing_host = sum(1 for h in recorded.host_ids if h is None)
+    if not host_expected and host is None:
+        pass
+    elif host is None or host not in recorded.objects:
+        issues.append("no host vehicle (ego) in the recording")
+    elif missing_host or len(recorded.objects[host].t) != frames:
+        issues.append(
+            f"host vehicle {host} is in {len(recorded.objects[host].t)} of {frames} frames"
+        )
+    if recorded.map_xml is None:
+        if map_expected:
+            issues.append("no map (ground_truth_map channel) in the recording")
+    elif recorded.map_references and recorded.map_references != {recorded.map_channel_reference}:
+        issues.append(
+            f"map_reference {sorted(recorded.map_references)} does not match the map channel's "
+            f"{recorded.map_channel_reference!r}"
+        )
+    return issues
+
+
 def assess(
-    recorded: RecordedColumns, *, simulated_seconds: float, rules: QualityRules | None = None
+    recorded: RecordedColumns,
+    *,
+    simulated_seconds: float,
+    rules: QualityRules | None = None,
+    map_expected: bool = True,
+    host_expected: bool = True,
 ) -> Quality:
-    """Quality metrics of one decoded recording and the issues that make it incomplete."""
+    """Quality metrics of one decoded recording and the issues that make it incomplete;
+    ``map_expected`` False: the run had no road network, so no map channel is due;
+    ``host_expected`` False: it had no ego, so no host vehicle is."""
     rules = rules or QualityRules()
     issues: list[str] = []
     times = np.asarray(recorded.frame_times, dtype=np.float64)
     metrics: dict[str, float] = {"frames": float(len(times))}
     if len(times) < 2:
+        if len(times) == 1 and simulated_seconds <= rules.coverage_tolerance:
+            # The run ended before its second frame was due (an empty storyboard): the first
+            # frame covers it, as the coverage rule allows.
+            single = _content_issues(
+                recorded, 1, map_expected=map_expected, host_expected=host_expected
+            )
+            return Quality(metrics=metrics, issues=tuple(single))
         return Quality(metrics=metrics, issues=("recording has fewer than two frames",))
     periods = np.diff(times)
     period = median(periods)
@@ -151,24 +211,15 @@ def assess(
         issues.append(
             f"recording ends at t={times[-1]:.2f} s, the run simulated {simulated_seconds:.2f} s"
         )
-    host = host_id(recorded)
-    missing_host = sum(1 for h in recorded.host_ids if h is None)
-    if host is None or host not in recorded.objects:
-        issues.append("no host vehicle (ego) in the recording")
-    elif missing_host or len(recorded.objects[host].t) != len(times):
-        issues.append(
-            f"host vehicle {host} is in {len(recorded.objects[host].t)} of {len(times)} frames"
-        )
-    if recorded.map_xml is None:
-        issues.append("no map (ground_truth_map channel) in the recording")
-    elif recorded.map_references and recorded.map_references != {recorded.map_channel_reference}:
-        issues.append(
-            f"map_reference {sorted(recorded.map_references)} does not match the map channel's "
-            f"{recorded.map_channel_reference!r}"
-        )
+    issues += _content_issues(
+        recorded, len(times), map_expected=map_expected, host_expected=host_expected
+    )
     rms = _temporal_completeness(recorded.objects, period)
     good = sum(1 for value in rms if value <= rules.timing_tolerance) if rms else 0
-    metrics["temporalCompleteness"] = 100.0 * good / len(rms) if rms else 0.0
+    # Without any object (a scenario of signals only) no track can be incomplete.
+    metrics["temporalCompleteness"] = (
+        100.0 * good / len(rms) if rms else (0.0 if recorded.objects else 100.0)
+    )
     if metrics["temporalCompleteness"] < rules.min_temporal_completeness:
         issues.append(
             f"temporal completeness {metrics['temporalCompleteness']:.1f} % "

@@ -186,6 +186,14 @@ class SignalReference:
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class SpeedLimit:
+    """A road type record's ``<speed max>``: the limit from ``s`` on, in m/s."""
+
+    s: float
+    max_speed: float
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
 class Road:
     """An OpenDRIVE road. ``junction`` is ``"-1"`` for roads outside junctions."""
 
@@ -202,10 +210,21 @@ class Road:
     lane_sections: tuple[LaneSection, ...] = ()
     signals: tuple[Signal, ...] = ()
     signal_references: tuple[SignalReference, ...] = ()
+    speed_limits: tuple[SpeedLimit, ...] = ()
+    """Sorted by ``s``; records without a finite limit (``no limit``) are left out."""
 
     @property
     def in_junction(self) -> bool:
         return self.junction not in ("-1", "")
+
+    def speed_limit(self, s: float) -> float | None:
+        """The limit (m/s) in force at ``s``, or None where the road sets none."""
+        found = None
+        for record in self.speed_limits:
+            if record.s > s + 1e-9:
+                break
+            found = record.max_speed
+        return found
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)

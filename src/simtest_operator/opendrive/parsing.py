@@ -68,6 +68,10 @@ def _local(element: etree._Element) -> str:
     return tag.rsplit("}", 1)[-1]
 
 
+_SPEED_UNITS = {"m/s": 1.0, "km/h": 1.0 / 3.6, "mph": 0.44704}
+"""OpenDRIVE's speed units in m/s (m/s when absent)."""
+
+
 def _children(element: etree._Element, name: str) -> list[etree._Element]:
     return [child for child in element if _local(child) == name]
 
@@ -252,7 +256,28 @@ class _Reader:
             signal_references=tuple(
                 self.signal_reference(child, road_id, length) for child in reference_elements
             ),
+            speed_limits=self.speed_limits(element, length),
         )
+
+    def speed_limits(self, road: etree._Element, length: float) -> tuple[models.SpeedLimit, ...]:
+        """The ``<type><speed>`` limits of a road. A limit the simulator cannot use (``no
+        limit``, an unknown unit, not a positive finite number) is left out rather than refusing
+        the map: drivers then fall back to their own speed."""
+        found = []
+        for record in _children(road, "type"):
+            speed = _child(record, "speed")
+            if speed is None:
+                continue
+            factor = _SPEED_UNITS.get((speed.get("unit") or "m/s").strip())
+            try:
+                value = float((speed.get("max") or "").strip())
+            except ValueError:
+                continue
+            if factor is not None and 0.0 < value < math.inf:
+                found.append(
+                    models.SpeedLimit(s=self._along(record, length), max_speed=value * factor)
+                )
+        return tuple(sorted(found, key=lambda limit: limit.s))
 
     def _count_signals(self, signals: etree._Element | None, count: int) -> None:
         self._signal_count += count

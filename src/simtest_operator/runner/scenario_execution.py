@@ -15,6 +15,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import multiprocessing
+import tempfile
 import time
 from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
@@ -63,6 +64,9 @@ class RunRequest:
     output_dir: Path | None = None
     """Where the recording, log and result file go; None writes nothing."""
     record: bool = True
+    """Keep the recording in ``output_dir``. Without it the run still records (to a temporary
+    file it deletes) and holds a pass to the same evidence checks: every command judges a file
+    alike."""
     wall_clock_limit: float | None = None
     """Seconds of wall time after which the run stops as ``Timeout``."""
     backend: BackendChoice = BackendChoice.SUMO
@@ -173,6 +177,11 @@ def run_scenario(
     startup = 0.0
     link = suts.SutLink(request.sut, processes)
     logic = opened.scenario.road_network.logic_file
+    # A run that keeps no recording still records, to a scratch file, so that a pass meets the
+    # same evidence checks (``scenario check`` judges a file as ``scenario run`` does).
+    keep = out is not None and request.record
+    scratch = None if keep else tempfile.TemporaryDirectory(prefix="simtest-evidence-")
+    recording_path = Path(scratch.name if scratch is not None else str(out)) / "recording.mcap"
     try:
         link.attach(
             simulation,
@@ -182,18 +191,18 @@ def run_scenario(
             versions=versions,
             log=out / SUT_LOG if out is not None else None,
         )
-        if out is not None and request.record:
-            recorder = recording.Recorder(
-                out / "recording.mcap",
-                info=recording.RecordingInfo(
-                    scenario_id=scenario_id, seed=request.simulation.seed, versions=versions
-                ),
-                opendrive=logic.read_bytes() if logic is not None else None,
-                map_reference=logic.name if logic is not None else "map",
-                host_id=_ego_id(simulation),
-                period=1.0 / request.simulation.record_hz,
-            )
-            artifacts["recording"] = str(out / "recording.mcap")
+        recorder = recording.Recorder(
+            recording_path,
+            info=recording.RecordingInfo(
+                scenario_id=scenario_id, seed=request.simulation.seed, versions=versions
+            ),
+            opendrive=logic.read_bytes() if logic is not None else None,
+            map_reference=logic.name if logic is not None else "map",
+            host_id=_ego_id(simulation),
+            period=1.0 / request.simulation.record_hz,
+        )
+        if keep:
+            artifacts["recording"] = str(recording_path)
         snapshot = simulation.start()
         startup = time.perf_counter() - started
         wall_hit = _loop(request, simulation, snapshot, evaluator, samples, recorder, started)
@@ -227,10 +236,17 @@ def run_scenario(
     judgement = evaluation.judge(evaluator, facts)
     verdict, reason = judgement.verdict, judgement.reason
     if verdict is Verdict.PASSED and recorder is not None:
-        evidence = _evidence(recorder.path, simulated_seconds=simulation.time)
+        evidence = _evidence(
+            recorder.path,
+            simulated_seconds=simulation.time,
+            map_expected=logic is not None,
+            host_expected=simulation.ego is not None,
+        )
         log.append(f"evidence: {'complete' if evidence.complete else evidence.incomplete_reason()}")
         if not evidence.complete:
             verdict, reason = Verdict.ERROR, evidence.incomplete_reason()
+    if scratch is not None:
+        scratch.cleanup()
     extra = link.metrics(
         simulated=simulation.time,
         loop_seconds=wall - startup,
@@ -298,14 +314,21 @@ def _loop(
         snapshot = simulation.step()
 
 
-def _evidence(path: Path, *, simulated_seconds: float) -> quality.Quality:
+def _evidence(
+    path: Path, *, simulated_seconds: float, map_expected: bool, host_expected: bool
+) -> quality.Quality:
     """The recording's evidence quality, as ``simtest evaluate`` judges it: a recording that is
     incomplete or inconsistent cannot make a run ``Passed``."""
     try:
         decoded = objects.read_objects(path)
     except SimtestError as exc:
         return quality.Quality(metrics={}, issues=(f"recording unreadable: {_one_line(exc)}",))
-    return quality.assess(decoded, simulated_seconds=simulated_seconds)
+    return quality.assess(
+        decoded,
+        simulated_seconds=simulated_seconds,
+        map_expected=map_expected,
+        host_expected=host_expected,
+    )
 
 
 def _ego_id(simulation: Simulation) -> int | None:

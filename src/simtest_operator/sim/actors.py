@@ -13,7 +13,7 @@ import enum
 import math
 import operator
 
-from simtest_operator.drivermodel import DriverModel
+from simtest_operator.drivermodel import DriverModel, Steering
 from simtest_operator.openscenario import model
 from simtest_operator.snapshots import BoundingBox, EntityKind, EntityState, fast_entity_state
 
@@ -31,6 +31,19 @@ class Domain(enum.StrEnum):
 
     LONGITUDINAL = "longitudinal"
     LATERAL = "lateral"
+
+
+def steering_of(obj: model.ScenarioObject) -> Steering:
+    """How the object steers: wheelbase and front-wheel limit from its axles, a passenger car's
+    where they are missing or implausible."""
+    axles = obj.axles
+    if axles is None or axles.front is None:
+        return Steering()
+    wheelbase = axles.front.position_x - axles.rear.position_x
+    angle = axles.front.max_steering
+    if not (0.0 < wheelbase < math.inf and 0.0 < angle < math.pi / 2.0):
+        return Steering()
+    return Steering(wheelbase=wheelbase, max_angle=angle)
 
 
 class Actor:
@@ -67,6 +80,7 @@ class Actor:
         "s",
         "speed",
         "standstill_time",
+        "steering",
         "stretch",
         "stuck",
         "x",
@@ -117,6 +131,7 @@ class Actor:
         distance driven (esmini), not added to it."""
         self.driver: DriverModel | None = None
         """Set while the system-under-test driver model controls this actor."""
+        self.steering = steering_of(obj)
         self._state: EntityState | None = None
         self._state_inputs: tuple[object, ...] = ()
 

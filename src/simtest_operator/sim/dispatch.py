@@ -218,7 +218,7 @@ class Dispatcher:
             self.teleported.add(actor.name)
             return Done(actor)
         if isinstance(body, model.ActivateControllerAction):
-            self._activate(actor, body.longitudinal, body.lateral)
+            self._activate(actor, body.longitudinal, body.lateral, autopilot=self._carla)
             return Done(actor)
         if isinstance(body, model.AssignControllerAction):
             controller = body.controller
@@ -251,6 +251,10 @@ class Dispatcher:
             self._ignore(f"{type(body).__name__} on the externally controlled {actor.name}")
             return self._watch("waypoints", IgnoredLateral(actor, body))
         if actor.driver is not None:
+            if isinstance(body, model.SpeedAction) and actor.driver.follows_limits:
+                # CARLA's autopilot takes no speed requests (ScenarioRunner's CarlaAutopilot).
+                self._ignore(f"SpeedAction on the autopilot of {actor.name}")
+                return Done(actor)
             if isinstance(body, model.SpeedAction):
                 actor.driver.set_speed = target_speed(world, body.target)
                 if self._carla:
@@ -334,7 +338,10 @@ class Dispatcher:
         )
         actor.placed = True
         lane = placement.lane
-        if lane is not None and world.roads is not None:
+        walker = self._carla and carla.is_walker(actor)
+        if walker:
+            actor.mode = Mode.FREE  # ScenarioRunner's walkers go where they face, off the lanes
+        elif lane is not None and world.roads is not None:
             world.set_lane(
                 actor, lane.road_id, lane.lane_id, lane.s, lane.offset, direction=lane.direction
             )
@@ -344,7 +351,8 @@ class Dispatcher:
         path = self._active.get(actor.name, {}).get(Domain.LATERAL)
         if isinstance(path, PathRun):
             path.cancel()
-            world.attach(actor)
+            if not walker:
+                world.attach(actor)
 
     def _assign(
         self, actor: Actor, controller: model.Controller, body: model.AssignControllerAction
@@ -354,19 +362,27 @@ class Dispatcher:
         if module is carla.Module.NPC and actor.name != self._ego:
             return  # lane following at the SpeedActions' speed: what the engine does anyway
         if module is carla.Module.AUTOPILOT and actor.name != self._ego:
-            carla.autopilot(actor, on=body.activate_longitudinal is not False)
+            carla.autopilot(self._world, actor, on=body.activate_longitudinal is not False)
             return
         self.assigned.setdefault((actor.name, controller.name), None)
         if module is carla.Module.EXTERNAL:
             self._external.add(actor.name)
-        self._activate(actor, body.activate_longitudinal, body.activate_lateral)
+        self._activate(
+            actor,
+            body.activate_longitudinal,
+            body.activate_lateral,
+            autopilot=module is carla.Module.AUTOPILOT,
+        )
         if module is carla.Module.EXTERNAL and actor.driver is not None:
             carla.start_moving(actor.driver)
 
-    def _activate(self, actor: Actor, longitudinal: bool | None, lateral: bool | None) -> None:
+    def _activate(
+        self, actor: Actor, longitudinal: bool | None, lateral: bool | None, *, autopilot: bool
+    ) -> None:
+        """Hand ``actor`` to a built-in driver or take it back; ``autopilot``: CARLA's (the
+        road's speed limit), as ScenarioRunner's ActivateControllerAction switches it."""
         if actor.name != self._ego and self._carla:
-            # ScenarioRunner: ActivateControllerAction switches an actor's CARLA autopilot.
-            carla.autopilot(actor, on=longitudinal is not False or lateral is True)
+            carla.autopilot(self._world, actor, on=longitudinal is not False or lateral is True)
             return
         if actor.name != self._ego:
             controller = actor.obj.controller
@@ -377,6 +393,8 @@ class Dispatcher:
             self._switch(actor, False)
         elif longitudinal is True or lateral is True or (longitudinal is None and lateral is None):
             self._switch(actor, True)
+            if autopilot and actor.driver is not None:
+                carla.engage_autopilot(self._world, actor, actor.driver)
 
     def _route(self, actor: Actor, targets: list[model.Position]) -> None:
         world = self._world

@@ -16,6 +16,8 @@ completions propagate through the storyboard, the backend is synchronised, and a
 
 from __future__ import annotations
 
+import math
+
 from simtest_operator.drivermodel import DriverModel, SutConfig, Takeover
 from simtest_operator.errors import ScenarioError
 from simtest_operator.opendrive import RoadNetwork
@@ -109,6 +111,8 @@ class Simulation:
             host=backend.traffic(),
             carla_conventions=scenario_runner,
         )
+        if scenario_runner:
+            carla.spawn_walkers(actors)
         self._conditions = Conditions(
             self.world,
             self._state_query,
@@ -265,6 +269,11 @@ class Simulation:
         )
         if external and ego.driver is not None:
             carla.start_moving(ego.driver)
+        autopilot = isinstance(controller, model.Controller) and (
+            carla.module_of(controller) is carla.Module.AUTOPILOT
+        )
+        if autopilot and ego.driver is not None:
+            carla.engage_autopilot(self.world, ego, ego.driver)
 
     def _switch_driver(self, actor: Actor, engage: bool) -> None:
         if self._sut.takeover is Takeover.NEVER or actor.name != self.ego:
@@ -284,6 +293,8 @@ class Simulation:
         longitudinal = runs.get(Domain.LONGITUDINAL)
         lateral = runs.get(Domain.LATERAL)
         driver = actor.driver
+        if driver is not None and driver.follows_limits:
+            carla.keep_to_limit(world, actor, driver)
         if longitudinal is not None:
             longitudinal.step(world, dt)
         elif driver is not None and self._pilot is not None and actor.name == self.ego:
@@ -306,8 +317,17 @@ class Simulation:
             and self._pilot is None
             and actor.mode is Mode.ROAD
         ):
-            # lane keeping of the in-process model (an external SUT steers through its order)
-            actor.offset = driver.lateral_offset(actor.offset, dt)
+            # lane keeping of the in-process model (an external SUT steers through its order):
+            # the lateral motion is part of the distance driven, at a heading it can steer
+            heading = driver.steer(
+                offset=actor.offset,
+                heading=motion.relative_heading(actor, speed_before),
+                speed=actor.speed,
+                dt=dt,
+                steering=actor.steering,
+            )
+            actor.offset += actor.speed * math.sin(heading) * dt
+            actor.lane_changing = True
         # A trajectory placed the actor for the end of this step (also when it just ended and
         # the actor rejoined its lane): it must not move a second time.
         # An actor teleported by an action started this step stays where it was put until the

@@ -27,6 +27,14 @@ def lateral_position(world: World, actor: Actor) -> float:
     return world.lane_t(actor.road_id, actor.s, actor.lane_id) + actor.offset
 
 
+def relative_heading(actor: Actor, speed: float) -> float:
+    """A ROAD actor's heading relative to its lane (towards +t) as its last step moved it at
+    ``speed``: the lateral motion of that step over the distance."""
+    if speed <= 0.0:
+        return 0.0
+    return math.asin(max(-1.0, min(1.0, actor.lateral_speed / speed)))
+
+
 def move(
     world: World,
     actor: Actor,
