@@ -9,10 +9,11 @@ them; it maps each to what it already has:
 - ``npc_vehicle_control``, ``vehicle_longitudinal_control``: lane following at the speed the
   SpeedActions ask for -- what the engine does for every scripted vehicle.
 - ``carla_autopilot`` and, under ScenarioRunner's rules, ``ActivateControllerAction``
-  (ScenarioRunner's ``ChangeAutoPilot``, on the hero too): CARLA's traffic-manager autopilot, here the driver
-  model (IDM car following, lane keeping, AEB; the SUT's configuration on the hero, the defaults
-  on other vehicles) at the road's OpenDRIVE speed limit, :data:`CRUISE_SPEED` where the map sets
-  none. Like CARLA's autopilot it takes no SpeedActions (listed as ignored).
+  (ScenarioRunner's ``ChangeAutoPilot``, on the hero too): CARLA's traffic-manager autopilot,
+  here the driver model (IDM car following, lane keeping, AEB; the SUT's configuration on the
+  hero, the defaults on other vehicles) at the road's OpenDRIVE speed limit,
+  :data:`CRUISE_SPEED` where the map sets none. Like CARLA's autopilot it takes no SpeedActions
+  (listed as ignored).
 
 Walkers are CARLA's: 0.5 m across whatever the file's BoundingBox says, and a walker given a
 speed walks where it faces (off the lane, across the road), as ScenarioRunner's
