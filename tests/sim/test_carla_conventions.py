@@ -29,6 +29,8 @@ from simtest_operator.verdicts import Verdict
 from . import carla_scenarios as cs
 from .carla_scenarios import run
 
+CORPUS = Path(__file__).resolve().parents[3] / "shared" / "scenarios-dev"
+
 
 def test_follow_leading_passes_with_each_criterion_reported(tmp_path: Path) -> None:
     report = run(cs.write(tmp_path, cs.follow_leading()))
@@ -96,7 +98,9 @@ def test_without_the_carla_header_its_conventions_choose_the_rules(
         else '<LanePosition roadId="1" laneId="-1" s="20" offset="0"/>',
     )
     path = cs.write(tmp_path, text)
-    report = run(path, sut=SutConfig(takeover=Takeover.AFTER_INIT), time_limit=15.0)
+    # The SUT drives the hero from the start at 8 m/s (a driver with set speed 0 stands still).
+    sut = SutConfig(takeover=Takeover.AFTER_INIT, desired_speed=8.0)
+    report = run(path, sut=sut, time_limit=15.0)
     assert rules in report.rules
     lead_speeds = {s[4] for s in report.samples["adversary"]}
     if rules.startswith("OpenSCENARIO"):
@@ -352,7 +356,7 @@ def test_a_walker_given_a_speed_walks_where_it_faces(tmp_path: Path) -> None:
 def test_walkers_have_carla_size(tmp_path: Path) -> None:
     # ScenarioRunner spawns a walker blueprint, about 0.5 m across, whatever the file's box
     # (1 m here); a file without ScenarioRunner's conventions keeps its box.
-    def walker_box(path: Path) -> tuple[float, float]:
+    def walker_box(path: Path, name: str = "walker") -> tuple[float, float]:
         opened = open_simulation(
             path,
             sut=SutConfig(),
@@ -362,10 +366,15 @@ def test_walkers_have_carla_size(tmp_path: Path) -> None:
         )
         snapshot = opened.simulation.start()
         opened.simulation.close()
-        (state,) = (e for e in snapshot.entities if e.name == "walker")
+        (state,) = (e for e in snapshot.entities if e.name == name)
         return state.box.length, state.box.width
 
     assert walker_box(_crossing(tmp_path)) == (0.5, 0.5)
+    # Without the CARLA: header the file still shows ScenarioRunner's conventions (Town01,
+    # criteria_*, external_control): its rules, and CARLA's walkers.
     plain = tmp_path / "plain"
     plain.mkdir()
-    assert walker_box(_crossing(plain, description="Town01Drive")) == (1.0, 1.0)
+    assert walker_box(_crossing(plain, description="Town01Drive")) == (0.5, 0.5)
+    # A file under esmini's rules keeps its pedestrian's box (0.6 x 0.5 m in its catalog).
+    esmini = CORPUS / "esmini" / "resources" / "xosc" / "pedestrian.xosc"
+    assert walker_box(esmini, "pedestrian_adult") == pytest.approx((0.6, 0.5))
