@@ -161,7 +161,7 @@ def _variables(root: Element, ctx: reading.Context) -> tuple[m.ParameterDeclarat
         if any(value is None for value in values):
             raise ctx.error(decl, "VariableDeclaration needs name, variableType and value")
         kind = ctx.parameter_type(decl, "variableType")
-        entries.append((str(values[0]), kind, str(values[2]), decl.sourceline))
+        entries.append((ctx.declared_name(decl), kind, str(values[2]), decl.sourceline))
     try:
         _, decls = parameters.declare(entries, ctx.scope)
     except ScenarioError as exc:

@@ -329,7 +329,7 @@ class Context:
         """
         entries = [
             (
-                self._plain(decl, "name"),
+                self.declared_name(decl),
                 self.parameter_type(decl, "parameterType"),
                 self._plain(decl, "value"),
                 decl.sourceline,
@@ -356,6 +356,16 @@ class Context:
                 line=exc.line or block.sourceline,
             ) from exc
         return self.with_scope(scope), decls
+
+    def declared_name(self, el: Element) -> str:
+        """The ``name`` of a Parameter/VariableDeclaration. A name written with its reference
+        prefix (``name="$owner"``) is read without it, as esmini does, and reported."""
+        raw = self._plain(el, "name")
+        if not raw.startswith("$") or len(raw) == 1 or raw.startswith("${"):
+            return raw
+        name = raw[1:]
+        self.deviation(el, "parameter-name-with-prefix", f"name {raw!r} read as {name!r}")
+        return name
 
     def parameter_type(self, el: Element, name: str) -> str:
         """The type attribute of a Parameter/VariableDeclaration, with accepted aliases
