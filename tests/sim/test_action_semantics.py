@@ -6,6 +6,8 @@ speed transition over zero time or distance is a step whatever its shape."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import pytest
 
 from simtest_operator.openscenario import model
@@ -51,6 +53,30 @@ def test_relative_target_lane_follows_the_other_entitys_facing() -> None:
     bench.start("Car", _change(model.RelativeTargetLane(entity_ref="Oncoming", value=1)))
     bench.step(round(2.5 / DT))
     assert bench.actor("Car").lane_id == 1
+
+
+@pytest.mark.parametrize(("target_offset", "off_road"), [(0.0, False), (-0.5, True)])
+def test_lane_change_to_a_lane_beyond_the_road_ends_on_its_edge(
+    target_offset: float, off_road: bool
+) -> None:
+    # esmini counts lanes the road does not have as 0 m wide: lane -11's centre is the right
+    # edge (t = -7); a target lane offset past it leaves the road (OffroadCondition sees it)
+    bench = Bench("Car")
+    bench.start("Car", teleport(lane(-1, 100.0)))
+    bench.start("Car", speed(10.0))
+    change = dataclasses.replace(
+        _change(model.RelativeTargetLane(entity_ref="Car", value=-10)),
+        target_lane_offset=target_offset or None,
+    )
+    bench.start("Car", change)
+    bench.step(round(1.0 / DT))
+    car = bench.actor("Car")
+    assert car.y == pytest.approx(-1.75 + (-7.0 + target_offset + 1.75) / 2, abs=1e-6)
+    bench.step(round(1.5 / DT))
+    assert not bench.dispatcher.runs(car)
+    assert car.lane_id == -2
+    assert car.y == pytest.approx(-7.0 + target_offset)
+    assert (car.offroad_time > 0.0) is off_road
 
 
 def _offset(value: float) -> model.LaneOffsetAction:

@@ -36,6 +36,26 @@ def lanes_between(start: int, target: int) -> int:
     return delta
 
 
+def _outermost_lane(world: World, road_id: str, s: float, lane_id: int) -> int | None:
+    """The outermost lane on ``lane_id``'s side when the road has no ``lane_id`` at ``s``
+    (None when it has it, or has no lane on that side)."""
+    assert world.roads is not None
+    ids = [b.lane_id for b in world.roads.lanes_at(road_id, s) if b.lane_id * lane_id > 0]
+    if lane_id in ids or not ids:
+        return None
+    return max(ids, key=abs)
+
+
+def _lane_centre_t(world: World, road_id: str, s: float, lane_id: int) -> float:
+    """t of a lane's centre; for a lane beyond the road's outermost one, the road's outer edge
+    on that side (esmini counts lanes the road does not have as 0 m wide, so a lane change to
+    ``-10`` on a two-lane side ends with the reference point on the edge)."""
+    if world.roads is None or _outermost_lane(world, road_id, s, lane_id) is None:
+        return world.lane_t(road_id, s, lane_id)
+    side = [b for b in world.roads.lanes_at(road_id, s) if b.lane_id * lane_id > 0]
+    return max((b.t_outer for b in side), key=abs)
+
+
 def _require_lane(actor: Actor, element: str) -> str:
     if actor.mode is not Mode.ROAD or actor.road_id is None:
         raise ScenarioError(f"{element} needs {actor.name!r} on a lane", element=element)
@@ -75,7 +95,7 @@ class LaneChangeRun(Run):
         else:
             self._duration = lateral / abs(dynamics.value) if dynamics.value else 0.0
         if self._duration <= 0.0:
-            self._finish()
+            self._finish(world)
 
     def _target_lane(self) -> int:
         assert self.actor is not None
@@ -84,13 +104,24 @@ class LaneChangeRun(Run):
     def _relative_target(self, world: World, road_id: str) -> float:
         assert self.actor is not None
         s = self.actor.s
-        target_t = world.lane_t(road_id, s, self._target_lane()) + self._target_offset
+        target_t = _lane_centre_t(world, road_id, s, self._target_lane()) + self._target_offset
         return target_t - world.lane_t(road_id, s, self.actor.lane_id)
 
-    def _finish(self) -> None:
-        assert self.actor is not None
-        self.actor.lane_id = self._target_lane()
-        self.actor.offset = self._target_offset
+    def _finish(self, world: World) -> None:
+        actor = self.actor
+        assert actor is not None
+        target = self._target_lane()
+        road_id = actor.road_id
+        outermost = None if road_id is None else _outermost_lane(world, road_id, actor.s, target)
+        if road_id is None or outermost is None:
+            actor.lane_id = target
+            actor.offset = self._target_offset
+        else:
+            # A lane beyond the road: the actor ends on the road's edge (the target's centre as
+            # esmini computes it), kept on the outermost lane it has, as esmini re-attaches it.
+            edge = _lane_centre_t(world, road_id, actor.s, target)
+            actor.lane_id = outermost
+            actor.offset = edge - world.lane_t(road_id, actor.s, outermost) + self._target_offset
         self.finished = True
 
     def step(self, world: World, dt: float) -> None:
@@ -101,7 +132,7 @@ class LaneChangeRun(Run):
             return
         self._elapsed += dt
         if self._elapsed >= self._duration:
-            self._finish()
+            self._finish(world)
             return
         target = self._relative_target(world, actor.road_id)
         fraction = shape_fraction(self._shape, self._elapsed / self._duration)
