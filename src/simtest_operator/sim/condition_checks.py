@@ -131,8 +131,9 @@ class Conditions:
             value = actor.lateral_speed if _lateral(condition.direction) else actor.speed
             return compare(value, condition.rule, condition.value)
         if isinstance(condition, model.AccelerationCondition):
-            value = 0.0 if _lateral(condition.direction) else actor.acceleration
-            return compare(value, condition.rule, condition.value)
+            return compare(
+                _acceleration(actor, condition.direction), condition.rule, condition.value
+            )
         if isinstance(condition, model.StandStillCondition):
             return actor.standstill_time >= condition.duration - _EPSILON and actor.speed == 0.0
         if isinstance(condition, model.TraveledDistanceCondition):
@@ -252,6 +253,22 @@ class Conditions:
         if closing <= 0.0:
             return math.inf
         return abs(distance) / closing
+
+
+def _acceleration(actor: Actor, direction: model.DirectionalDimension | None) -> float:
+    """The acceleration an AccelerationCondition reads, as esmini measures it: without a
+    direction the magnitude of the world-frame acceleration (so braking at 5 m/s^2 reads 5, and
+    a curve at constant speed its centripetal part), else its component along (longitudinal)
+    or to the left of (lateral) the heading; the vertical one is 0 (flat motion)."""
+    ax, ay = actor.acceleration_xy
+    if direction is None:
+        return math.hypot(ax, ay)
+    cos_h, sin_h = math.cos(actor.heading), math.sin(actor.heading)
+    if direction is model.DirectionalDimension.LONGITUDINAL:
+        return ax * cos_h + ay * sin_h
+    if direction is model.DirectionalDimension.LATERAL:
+        return -ax * sin_h + ay * cos_h
+    return 0.0
 
 
 def _lateral(direction: model.DirectionalDimension | None) -> bool:

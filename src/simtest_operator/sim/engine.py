@@ -189,6 +189,8 @@ class Simulation:
             self._dispatcher.start_global(global_action)
         self._initial_takeover()
         self._pull_trailers(0.0)
+        for actor in world.actors.values():
+            actor.measure_motion((actor.x, actor.y), 0.0, teleported=True)
         self._backend.start(self._backend_config)
         for actor in world.actors.values():
             self._backend.add(
@@ -279,9 +281,11 @@ class Simulation:
     def _pull_trailers(self, dt: float) -> None:
         """Trailers follow their tow vehicles' new poses (after every tow vehicle moved)."""
         world = self.world
+        before = {name: (a.x, a.y) for name, a in world.actors.items() if world.hitches.towed(name)}
         for trailer in trailers.pull(world.actors, world.hitches):
             world.attach(trailer)
             motion.update_timers(world, trailer, dt, was_stuck=False)
+            trailer.measure_motion(before[trailer.name], dt, teleported=False)
 
     def _advance(self, actor: Actor, dt: float) -> None:
         world = self.world
@@ -329,6 +333,7 @@ class Simulation:
             world.attach(actor)
         motion.move(world, actor, dt, before=before, start=start, placed=placed)
         actor.acceleration = (actor.speed - speed_before) / dt if dt > 0 else 0.0
+        actor.measure_motion(start, dt, teleported=actor.name in self._dispatcher.teleported)
 
     def _sync(self) -> WorldSnapshot:
         """Push poses to the backend, step it, and build the snapshot."""
