@@ -121,3 +121,40 @@ def test_speed_transition_of_zero_time_or_distance_is_a_step(
         "Car", model.SpeedAction(dynamics=dynamics, target=model.AbsoluteTargetSpeed(value=30.0))
     )
     assert bench.actor("Car").speed == 30.0
+
+
+def test_lane_change_over_a_distance_ends_after_that_distance_driven() -> None:
+    # esmini steps a distance-shaped change by the distance gained along the road, so a car
+    # that speeds up from 10 to 20 m/s right after starting a 100 m change ends it about
+    # 100 m on (5 s), not after the 10 s that 100 m at the starting speed would take
+    bench = Bench("Car")
+    bench.start("Car", teleport(lane(-1, 100.0)))
+    bench.start("Car", speed(10.0))
+    dynamics = model.TransitionDynamics(
+        shape=model.DynamicsShape.SINUSOIDAL,
+        dimension=model.DynamicsDimension.DISTANCE,
+        value=100.0,
+    )
+    change = model.LaneChangeAction(
+        dynamics=dynamics, target=model.RelativeTargetLane(entity_ref="Car", value=-1)
+    )
+    bench.start("Car", change)
+    bench.start("Car", speed(20.0))
+    car = bench.actor("Car")
+    bench.step(round(2.5 / DT))  # half way: 50 m driven, half the lateral way
+    assert car.s == pytest.approx(150.0, abs=0.1)
+    assert car.y == pytest.approx(-1.75 - 3.5 / 2, abs=0.05)
+    bench.step(round(2.6 / DT))
+    assert not bench.dispatcher.runs(car)
+    assert car.lane_id == -2 and car.y == pytest.approx(-5.25)
+    assert car.s == pytest.approx(202.0, abs=0.2)
+
+
+def test_lane_change_waits_while_the_car_stands() -> None:
+    bench = Bench("Car")
+    bench.start("Car", teleport(lane(-1, 100.0)))
+    bench.start("Car", _change(model.RelativeTargetLane(entity_ref="Car", value=-1)))
+    bench.step(round(3.0 / DT))
+    car = bench.actor("Car")
+    assert car.lane_id == -1 and car.y == pytest.approx(-1.75)
+    assert bench.dispatcher.runs(car)

@@ -3,8 +3,10 @@
 Both move an actor's offset from its lane centre with a dynamics shape. A lane change keeps the
 actor's logical lane until it completes and measures the target lane centre afresh every step, so
 it follows lanes whose widths change and lanes that continue on the next road; at the end the
-actor belongs to the target lane. Durations come from the dynamics (``time``; ``distance`` /
-speed; lateral ``rate`` in m/s) or, for lane offsets, from the maximum lateral acceleration.
+actor belongs to the target lane. Durations come from the dynamics (``time``; lateral ``rate``
+in m/s) or, for lane offsets, from the maximum lateral acceleration; a lane change shaped over a
+``distance`` progresses with the distance driven along the road (as esmini), and no lane change
+progresses while its actor stands.
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ from simtest_operator.errors import ScenarioError
 from simtest_operator.openscenario import model
 from simtest_operator.sim import placements
 from simtest_operator.sim.actors import Actor, Mode
-from simtest_operator.sim.runs import LATERAL, Run, shape_fraction
+from simtest_operator.sim.runs import LATERAL, Run, shape_fraction, shape_slope
 from simtest_operator.sim.world import World
 
 DEFAULT_MAX_LATERAL_ACCELERATION = 0.5
@@ -65,7 +67,15 @@ def _require_lane(actor: Actor, element: str) -> str:
 class LaneChangeRun(Run):
     """A running LaneChangeAction."""
 
-    __slots__ = ("_delta", "_duration", "_elapsed", "_offset0", "_shape", "_target_offset")
+    __slots__ = (
+        "_by_distance",
+        "_delta",
+        "_duration",
+        "_elapsed",
+        "_offset0",
+        "_shape",
+        "_target_offset",
+    )
 
     def __init__(self, world: World, actor: Actor, action: model.LaneChangeAction) -> None:
         super().__init__(actor, LATERAL)
@@ -84,14 +94,14 @@ class LaneChangeRun(Run):
         self._offset0 = actor.offset
         self._shape = action.dynamics.shape
         self._elapsed = 0.0
+        """Progress: seconds, or for the distance dimension metres driven along the road."""
         dynamics = action.dynamics
+        self._by_distance = dynamics.dimension is model.DynamicsDimension.DISTANCE
         lateral = abs(self._relative_target(world, road_id) - self._offset0)
         if dynamics.shape is model.DynamicsShape.STEP:
             self._duration = 0.0
-        elif dynamics.dimension is model.DynamicsDimension.TIME:
+        elif dynamics.dimension is model.DynamicsDimension.TIME or self._by_distance:
             self._duration = abs(dynamics.value)
-        elif dynamics.dimension is model.DynamicsDimension.DISTANCE:
-            self._duration = abs(dynamics.value) / max(abs(actor.speed), 0.1)
         else:
             self._duration = lateral / abs(dynamics.value) if dynamics.value else 0.0
         if self._duration <= 0.0:
@@ -130,11 +140,20 @@ class LaneChangeRun(Run):
         if actor.mode is not Mode.ROAD or actor.road_id is None:
             self.cancel()
             return
-        self._elapsed += dt
+        if abs(actor.speed) < 1e-9:
+            return  # esmini: no lateral motion while standing, the change waits
+        target = self._relative_target(world, actor.road_id)
+        if self._by_distance:
+            # esmini steps a distance-shaped change by the distance gained along the road:
+            # this step's travel less its lateral part (whatever the speed does meanwhile)
+            slope = shape_slope(self._shape, self._elapsed / self._duration)
+            rate = (target - self._offset0) / self._duration * slope
+            self._elapsed += abs(actor.speed) * dt / math.hypot(1.0, rate)
+        else:
+            self._elapsed += dt
         if self._elapsed >= self._duration:
             self._finish(world)
             return
-        target = self._relative_target(world, actor.road_id)
         fraction = shape_fraction(self._shape, self._elapsed / self._duration)
         actor.offset = self._offset0 + (target - self._offset0) * fraction
         actor.lane_changing = True
