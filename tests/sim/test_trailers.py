@@ -176,3 +176,12 @@ def test_hitched_trailers_follow_the_reference_player(tmp_path: Path) -> None:
     comparison = compare("xosc/trailers.xosc", tmp_path)
     assert comparison.match, comparison
     assert comparison.worst_median < 0.02, comparison
+
+
+def test_trailers_on_a_curve_follow_the_reference_player(tmp_path: Path) -> None:
+    # semi-trailers and a double trailer on an r = 100 m curve, from catalog entries that are
+    # assigned a parameter they do not declare (ignored, as esmini does, with a warning)
+    comparison = compare("distance_with_trailers.xosc", tmp_path)
+    assert comparison.match, comparison
+    assert {"truck1+", "truck2+", "truck2++"} <= {e.name for e in comparison.entities}
+    assert comparison.worst_median < 0.02, comparison
