@@ -11,6 +11,7 @@ import pytest
 
 from simtest_operator.runner import scenario_execution
 from simtest_operator.sim import BackendChoice, SutConfig, Takeover
+from tests.sim.test_reference_match import compare
 
 DATA = Path(__file__).parent / "data"
 
@@ -72,3 +73,13 @@ def test_braking_is_seen(attributes: str, tmp_path: Path) -> None:
 )
 def test_braking_is_not_seen(attributes: str, tmp_path: Path) -> None:
     assert _end_time(tmp_path, attributes) > 8.0
+
+
+def test_a_lane_change_never_reads_exactly_zero(tmp_path: Path) -> None:
+    # cut-in_simple stops 2 s after the cut-in car's acceleration is 0 (and after 10 s): only
+    # when it stands, as in esmini, whose lane change takes the lateral part of a step's travel
+    # at the rate of the step start; measured at the step end instead, a sinusoidal change is
+    # symmetric about its middle and reads 0 there (the run would stop at 10.15 s)
+    comparison = compare("xosc/cut-in_simple.xosc", tmp_path)
+    assert comparison.end_difference == pytest.approx(0.0)
+    assert comparison.match, comparison

@@ -68,6 +68,7 @@ class Actor:
         "s",
         "speed",
         "standstill_time",
+        "steer_rate",
         "stretch",
         "stuck",
         "velocity_xy",
@@ -124,6 +125,9 @@ class Actor:
         self.lane_changing = False
         """Set by a lane change for the coming motion step: its lateral motion is part of the
         distance driven (esmini), not added to it."""
+        self.steer_rate: float | None = None
+        """Lateral speed (m/s) whose part of this step's travel a lane change takes from the
+        longitudinal motion (its rate at the step start, as esmini); None: the measured one."""
         self.driver: DriverModel | None = None
         """Set while the system-under-test driver model controls this actor."""
         self._state: EntityState | None = None

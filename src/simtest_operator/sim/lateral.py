@@ -143,14 +143,19 @@ class LaneChangeRun(Run):
         if abs(actor.speed) < 1e-9:
             return  # esmini: no lateral motion while standing, the change waits
         target = self._relative_target(world, actor.road_id)
+        # esmini takes the lateral part of the step's travel at the rate the shape has at the
+        # start of the step (so the longitudinal motion is not symmetric about the middle)
+        slope = shape_slope(self._shape, self._elapsed / self._duration)
+        rate = (target - self._offset0) / self._duration * slope
         if self._by_distance:
-            # esmini steps a distance-shaped change by the distance gained along the road:
-            # this step's travel less its lateral part (whatever the speed does meanwhile)
-            slope = shape_slope(self._shape, self._elapsed / self._duration)
-            rate = (target - self._offset0) / self._duration * slope
-            self._elapsed += abs(actor.speed) * dt / math.hypot(1.0, rate)
+            # a distance-shaped change progresses by the distance gained along the road: this
+            # step's travel less its lateral part (whatever the speed does meanwhile)
+            along = abs(actor.speed) * dt / math.hypot(1.0, rate)
+            self._elapsed += along
+            actor.steer_rate = rate * along / dt if dt > 0.0 else 0.0
         else:
             self._elapsed += dt
+            actor.steer_rate = rate
         if self._elapsed >= self._duration:
             self._finish(world)
             return
