@@ -158,3 +158,22 @@ def test_lane_change_waits_while_the_car_stands() -> None:
     car = bench.actor("Car")
     assert car.lane_id == -1 and car.y == pytest.approx(-1.75)
     assert bench.dispatcher.runs(car)
+
+
+def test_continuous_lane_offset_ends_at_its_target() -> None:
+    # esmini ends a LaneOffsetAction when its transition is done, continuous or not (so an
+    # endTransition of it can trigger what follows)
+    bench = Bench("Car")
+    bench.start("Car", teleport(lane(-1, 100.0)))
+    bench.start("Car", speed(10.0))
+    offset = model.LaneOffsetAction(
+        continuous=True,
+        shape=model.DynamicsShape.SINUSOIDAL,
+        max_lateral_acc=2.0,
+        target=model.AbsoluteTargetLaneOffset(value=1.0),
+    )
+    bench.start("Car", offset)
+    car = bench.actor("Car")
+    bench.step(round(2.0 / DT))  # pi * sqrt(1 / 4) = 1.57 s
+    assert car.offset == pytest.approx(1.0)
+    assert not bench.dispatcher.runs(car)

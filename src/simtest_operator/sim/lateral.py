@@ -165,7 +165,8 @@ class LaneChangeRun(Run):
 
 
 class LaneOffsetRun(Run):
-    """A running LaneOffsetAction."""
+    """A running LaneOffsetAction; it ends when its transition is done, ``continuous`` or not
+    (esmini 3.6 does, so an endTransition of it can trigger what follows)."""
 
     __slots__ = ("_action", "_duration", "_elapsed", "_offset0")
 
@@ -187,7 +188,7 @@ class LaneOffsetRun(Run):
             self._duration = math.sqrt(6.0 * distance / acc)
         if self._duration <= 0.0:
             actor.offset = self._target(world)
-            self.finished = not action.continuous
+            self.finished = True
 
     def _target(self, world: World) -> float:
         """The offset from the actor's lane centre to aim at. A relative target is ``value``
@@ -212,7 +213,7 @@ class LaneOffsetRun(Run):
         target = self._target(world)
         if elapsed >= self._duration - 1e-9:
             actor.offset = target
-            self.finished = not self._action.continuous
+            self.finished = True
             return
         fraction = shape_fraction(self._action.shape, elapsed / self._duration)
         actor.offset = self._offset0 + (target - self._offset0) * fraction
