@@ -177,3 +177,14 @@ def test_continuous_lane_offset_ends_at_its_target() -> None:
     bench.step(round(2.0 / DT))  # pi * sqrt(1 / 4) = 1.57 s
     assert car.offset == pytest.approx(1.0)
     assert not bench.dispatcher.runs(car)
+
+
+def test_relative_lane_position_past_the_road_is_on_its_edge() -> None:
+    # dLane past the outermost lane: on the edge, as the lane change to such a lane
+    bench = Bench("Car", "Other")
+    bench.start("Car", teleport(lane(-1, 100.0)))
+    beyond = model.RelativeLanePosition(entity_ref="Car", d_lane=-3, ds=10.0, offset=0.5)
+    bench.start("Other", teleport(beyond))
+    other = bench.actor("Other")
+    assert (other.x, other.y) == (pytest.approx(110.0), pytest.approx(-7.0 + 0.5))
+    assert other.lane_id == -2

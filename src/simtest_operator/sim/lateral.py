@@ -38,24 +38,11 @@ def lanes_between(start: int, target: int) -> int:
     return delta
 
 
-def _outermost_lane(world: World, road_id: str, s: float, lane_id: int) -> int | None:
-    """The outermost lane on ``lane_id``'s side when the road has no ``lane_id`` at ``s``
-    (None when it has it, or has no lane on that side)."""
-    assert world.roads is not None
-    ids = [b.lane_id for b in world.roads.lanes_at(road_id, s) if b.lane_id * lane_id > 0]
-    if lane_id in ids or not ids:
-        return None
-    return max(ids, key=abs)
-
-
 def _lane_centre_t(world: World, road_id: str, s: float, lane_id: int) -> float:
     """t of a lane's centre; for a lane beyond the road's outermost one, the road's outer edge
-    on that side (esmini counts lanes the road does not have as 0 m wide, so a lane change to
-    ``-10`` on a two-lane side ends with the reference point on the edge)."""
-    if world.roads is None or _outermost_lane(world, road_id, s, lane_id) is None:
-        return world.lane_t(road_id, s, lane_id)
-    side = [b for b in world.roads.lanes_at(road_id, s) if b.lane_id * lane_id > 0]
-    return max((b.t_outer for b in side), key=abs)
+    on that side (see :func:`placements.lane_beyond`)."""
+    beyond = placements.lane_beyond(world, road_id, s, lane_id) if world.roads else None
+    return world.lane_t(road_id, s, lane_id) if beyond is None else beyond[1]
 
 
 def _require_lane(actor: Actor, element: str) -> str:
@@ -122,14 +109,16 @@ class LaneChangeRun(Run):
         assert actor is not None
         target = self._target_lane()
         road_id = actor.road_id
-        outermost = None if road_id is None else _outermost_lane(world, road_id, actor.s, target)
-        if road_id is None or outermost is None:
+        beyond = None
+        if road_id is not None and world.roads is not None:
+            beyond = placements.lane_beyond(world, road_id, actor.s, target)
+        if road_id is None or beyond is None:
             actor.lane_id = target
             actor.offset = self._target_offset
         else:
             # A lane beyond the road: the actor ends on the road's edge (the target's centre as
             # esmini computes it), kept on the outermost lane it has, as esmini re-attaches it.
-            edge = _lane_centre_t(world, road_id, actor.s, target)
+            outermost, edge = beyond
             actor.lane_id = outermost
             actor.offset = edge - world.lane_t(road_id, actor.s, outermost) + self._target_offset
         self.finished = True
