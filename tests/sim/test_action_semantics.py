@@ -188,3 +188,25 @@ def test_relative_lane_position_past_the_road_is_on_its_edge() -> None:
     other = bench.actor("Other")
     assert (other.x, other.y) == (pytest.approx(110.0), pytest.approx(-7.0 + 0.5))
     assert other.lane_id == -2
+
+
+def test_relative_target_speed_not_continuous_is_sampled_at_the_start() -> None:
+    # esmini reads the reference's speed once for a non-continuous relative target: the car
+    # goes to the lead's 10 m/s (+2), not to the 20 m/s the lead speeds up to meanwhile
+    bench = Bench("Car", "Lead")
+    bench.start("Car", teleport(lane(-1, 100.0)))
+    bench.start("Lead", teleport(lane(-1, 200.0)))
+    bench.start("Lead", speed(10.0))
+    dynamics = model.TransitionDynamics(
+        shape=model.DynamicsShape.LINEAR, dimension=model.DynamicsDimension.TIME, value=2.0
+    )
+    relative = model.RelativeTargetSpeed(
+        entity_ref="Lead",
+        value=2.0,
+        value_type=model.SpeedTargetValueType.DELTA,
+        continuous=False,
+    )
+    bench.start("Car", model.SpeedAction(dynamics=dynamics, target=relative))
+    bench.start("Lead", speed(20.0))
+    bench.step(round(3.0 / DT))
+    assert bench.actor("Car").speed == pytest.approx(12.0)
