@@ -124,3 +124,47 @@ def test_codes_are_kebab_case() -> None:
         deviations.report(Deviation(code="Bad Code", message="m", file="f", element="E", line=1))
     deviations.report(Deviation(code="ok-code", message="m", file="f", element="E", line=None))
     assert deviations.found[0].describe() == "m [ok-code] (f:? <E>)"
+
+
+OWNED_STORY = """<Story name="S">
+  <ParameterDeclarations>
+    <ParameterDeclaration name="$owner" parameterType="string" value="Ego"/>
+  </ParameterDeclarations>
+  <Act name="A">
+    <ManeuverGroup name="G" maximumExecutionCount="1">
+      <Actors selectTriggeringEntities="false"><EntityRef entityRef="$owner"/></Actors>
+    </ManeuverGroup>
+    <StartTrigger/>
+  </Act>
+</Story>"""
+
+
+def test_story_parameter_named_with_its_prefix(write_scenario: ScenarioWriter) -> None:
+    """OpenSCENARIO 1.0 files declare ``name="$owner"`` in a Story and refer to ``$owner``:
+    esmini finds the declaration either way; we read the name without the ``$`` and report it."""
+    path = write_scenario(minor=0, stories=OWNED_STORY)
+    scenario = load_scenario(path)
+    story = scenario.storyboard.stories[0]
+    assert [d.name for d in story.parameters] == ["owner"]
+    assert story.acts[0].maneuver_groups[0].actors.entity_refs == ("Ego",)
+    assert [d.code for d in scenario.deviations] == ["parameter-name-with-prefix"]
+    assert "'$owner' read as 'owner'" in scenario.deviations[0].message
+    with pytest.raises(StrictDeviationError):
+        load_scenario(path, options=STRICT)
+
+
+def test_prefixed_global_and_variable_names(write_scenario: ScenarioWriter) -> None:
+    path = write_scenario(
+        parameters='<ParameterDeclaration name="$Lanes" parameterType="integer" value="3"/>'
+    )
+    text = path.read_text(encoding="utf-8").replace(
+        "<CatalogLocations>",
+        '<VariableDeclarations><VariableDeclaration name="$n" variableType="integer" value="1"/>'
+        "</VariableDeclarations>\n  <CatalogLocations>",
+    )
+    path.write_text(text, encoding="utf-8")
+    scenario = load_scenario(path)
+    lanes, n = scenario.parameter("Lanes"), scenario.variable("n")
+    assert lanes is not None and lanes.value == 3
+    assert n is not None and n.value == 1
+    assert [d.code for d in scenario.deviations] == ["parameter-name-with-prefix"] * 2

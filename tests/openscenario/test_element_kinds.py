@@ -116,6 +116,7 @@ PRIVATE_ACTIONS = [
     "</LightStateAction></AppearanceAction>",
     '<VisibilityAction graphics="true" traffic="true" sensors="false"/>',
     "<TrailerAction><DisconnectTrailerAction/></TrailerAction>",
+    "<RoutingAction><RandomRouteAction/></RoutingAction>",
 ]
 GLOBAL_ACTIONS = [
     '<ParameterAction parameterRef="P"><SetAction value="2"/></ParameterAction>',
@@ -307,14 +308,15 @@ def test_every_action_kind(rich: model.Scenario) -> None:
         "AssignControllerAction",
         "Ignored:LightStateAction",
         "Ignored:VisibilityAction",
-        "Unsupported:TrailerAction",
+        "TrailerAction",
+        "Unsupported:RandomRouteAction",
         "SetValueAction",
         "ModifyValueAction",
         "ModifyValueAction",
         "EnvironmentAction",
         "TrafficSignalStateAction",
     ]
-    speed, distance, sync, modify = bodies[1], bodies[2], bodies[9], bodies[17]
+    speed, distance, sync, modify = bodies[1], bodies[2], bodies[9], bodies[18]
     assert isinstance(speed, model.SpeedAction)
     assert speed.dynamics.following_mode is model.FollowingMode.FOLLOW
     assert speed.target == model.RelativeTargetSpeed(
@@ -350,7 +352,7 @@ def test_every_action_kind(rich: model.Scenario) -> None:
 def test_unsupported_listed_in_place(rich: model.Scenario) -> None:
     listed = {(u.element, u.reason) for u in rich.unsupported()}
     assert listed == {
-        ("TrailerAction", "trailers are not simulated"),
+        ("RandomRouteAction", "random routes are not supported"),
     }
     for node in rich.unsupported():
         assert node.line is not None and node.file == str(rich.path)

@@ -6,6 +6,8 @@ speed transition over zero time or distance is a step whatever its shape."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import pytest
 
 from simtest_operator.openscenario import model
@@ -53,6 +55,30 @@ def test_relative_target_lane_follows_the_other_entitys_facing() -> None:
     assert bench.actor("Car").lane_id == 1
 
 
+@pytest.mark.parametrize(("target_offset", "off_road"), [(0.0, False), (-0.5, True)])
+def test_lane_change_to_a_lane_beyond_the_road_ends_on_its_edge(
+    target_offset: float, off_road: bool
+) -> None:
+    # esmini counts lanes the road does not have as 0 m wide: lane -11's centre is the right
+    # edge (t = -7); a target lane offset past it leaves the road (OffroadCondition sees it)
+    bench = Bench("Car")
+    bench.start("Car", teleport(lane(-1, 100.0)))
+    bench.start("Car", speed(10.0))
+    change = dataclasses.replace(
+        _change(model.RelativeTargetLane(entity_ref="Car", value=-10)),
+        target_lane_offset=target_offset or None,
+    )
+    bench.start("Car", change)
+    bench.step(round(1.0 / DT))
+    car = bench.actor("Car")
+    assert car.y == pytest.approx(-1.75 + (-7.0 + target_offset + 1.75) / 2, abs=1e-6)
+    bench.step(round(1.5 / DT))
+    assert not bench.dispatcher.runs(car)
+    assert car.lane_id == -2
+    assert car.y == pytest.approx(-7.0 + target_offset)
+    assert (car.offroad_time > 0.0) is off_road
+
+
 def _offset(value: float) -> model.LaneOffsetAction:
     return model.LaneOffsetAction(
         continuous=True,
@@ -95,3 +121,92 @@ def test_speed_transition_of_zero_time_or_distance_is_a_step(
         "Car", model.SpeedAction(dynamics=dynamics, target=model.AbsoluteTargetSpeed(value=30.0))
     )
     assert bench.actor("Car").speed == 30.0
+
+
+def test_lane_change_over_a_distance_ends_after_that_distance_driven() -> None:
+    # esmini steps a distance-shaped change by the distance gained along the road, so a car
+    # that speeds up from 10 to 20 m/s right after starting a 100 m change ends it about
+    # 100 m on (5 s), not after the 10 s that 100 m at the starting speed would take
+    bench = Bench("Car")
+    bench.start("Car", teleport(lane(-1, 100.0)))
+    bench.start("Car", speed(10.0))
+    dynamics = model.TransitionDynamics(
+        shape=model.DynamicsShape.SINUSOIDAL,
+        dimension=model.DynamicsDimension.DISTANCE,
+        value=100.0,
+    )
+    change = model.LaneChangeAction(
+        dynamics=dynamics, target=model.RelativeTargetLane(entity_ref="Car", value=-1)
+    )
+    bench.start("Car", change)
+    bench.start("Car", speed(20.0))
+    car = bench.actor("Car")
+    bench.step(round(2.5 / DT))  # half way: 50 m driven, half the lateral way
+    assert car.s == pytest.approx(150.0, abs=0.1)
+    assert car.y == pytest.approx(-1.75 - 3.5 / 2, abs=0.05)
+    bench.step(round(2.6 / DT))
+    assert not bench.dispatcher.runs(car)
+    assert car.lane_id == -2 and car.y == pytest.approx(-5.25)
+    assert car.s == pytest.approx(202.0, abs=0.2)
+
+
+def test_lane_change_waits_while_the_car_stands() -> None:
+    bench = Bench("Car")
+    bench.start("Car", teleport(lane(-1, 100.0)))
+    bench.start("Car", _change(model.RelativeTargetLane(entity_ref="Car", value=-1)))
+    bench.step(round(3.0 / DT))
+    car = bench.actor("Car")
+    assert car.lane_id == -1 and car.y == pytest.approx(-1.75)
+    assert bench.dispatcher.runs(car)
+
+
+def test_continuous_lane_offset_ends_at_its_target() -> None:
+    # esmini ends a LaneOffsetAction when its transition is done, continuous or not (so an
+    # endTransition of it can trigger what follows)
+    bench = Bench("Car")
+    bench.start("Car", teleport(lane(-1, 100.0)))
+    bench.start("Car", speed(10.0))
+    offset = model.LaneOffsetAction(
+        continuous=True,
+        shape=model.DynamicsShape.SINUSOIDAL,
+        max_lateral_acc=2.0,
+        target=model.AbsoluteTargetLaneOffset(value=1.0),
+    )
+    bench.start("Car", offset)
+    car = bench.actor("Car")
+    bench.step(round(2.0 / DT))  # pi * sqrt(1 / 4) = 1.57 s
+    assert car.offset == pytest.approx(1.0)
+    assert not bench.dispatcher.runs(car)
+
+
+def test_relative_lane_position_past_the_road_is_on_its_edge() -> None:
+    # dLane past the outermost lane: on the edge, as the lane change to such a lane
+    bench = Bench("Car", "Other")
+    bench.start("Car", teleport(lane(-1, 100.0)))
+    beyond = model.RelativeLanePosition(entity_ref="Car", d_lane=-3, ds=10.0, offset=0.5)
+    bench.start("Other", teleport(beyond))
+    other = bench.actor("Other")
+    assert (other.x, other.y) == (pytest.approx(110.0), pytest.approx(-7.0 + 0.5))
+    assert other.lane_id == -2
+
+
+def test_relative_target_speed_not_continuous_is_sampled_at_the_start() -> None:
+    # esmini reads the reference's speed once for a non-continuous relative target: the car
+    # goes to the lead's 10 m/s (+2), not to the 20 m/s the lead speeds up to meanwhile
+    bench = Bench("Car", "Lead")
+    bench.start("Car", teleport(lane(-1, 100.0)))
+    bench.start("Lead", teleport(lane(-1, 200.0)))
+    bench.start("Lead", speed(10.0))
+    dynamics = model.TransitionDynamics(
+        shape=model.DynamicsShape.LINEAR, dimension=model.DynamicsDimension.TIME, value=2.0
+    )
+    relative = model.RelativeTargetSpeed(
+        entity_ref="Lead",
+        value=2.0,
+        value_type=model.SpeedTargetValueType.DELTA,
+        continuous=False,
+    )
+    bench.start("Car", model.SpeedAction(dynamics=dynamics, target=relative))
+    bench.start("Lead", speed(20.0))
+    bench.step(round(3.0 / DT))
+    assert bench.actor("Car").speed == pytest.approx(12.0)

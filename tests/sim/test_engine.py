@@ -5,6 +5,7 @@ and a distribution-free run is deterministic."""
 
 from __future__ import annotations
 
+import shutil
 from pathlib import Path
 
 from simtest_operator.evaluation import reference as references
@@ -49,9 +50,29 @@ def test_open_space_scenario_runs(tmp_path: Path) -> None:
 
 
 def test_unsupported_element_is_invalid_with_element_and_line(tmp_path: Path) -> None:
-    outcome = run("trailer_connect.xosc", tmp_path).outcome
+    data = Path(__file__).parent / "data"
+    shutil.copy(data / "straight.xodr", tmp_path / "straight.xodr")
+    text = (data / "hard_braking_lead.xosc").read_text(encoding="utf-8")
+    start = text.index("<PrivateAction><LongitudinalAction><SpeedAction>\n")
+    end = text.index("</PrivateAction>", start) + len("</PrivateAction>")
+    unsupported = (
+        "<PrivateAction><RoutingAction><RandomRouteAction/></RoutingAction></PrivateAction>"
+    )
+    text = text[:start] + unsupported + text[end:]
+    line = text[:start].count("\n") + 1
+    scenario = tmp_path / "random_route.xosc"
+    scenario.write_text(text, encoding="utf-8")
+    outcome = scenario_execution.run_scenario(
+        scenario_execution.RunRequest(
+            scenario=scenario,
+            nets_dir=tmp_path,
+            record=False,
+            backend=BackendChoice.MEMORY,
+            sut=SutConfig(takeover=Takeover.NEVER),
+        )
+    ).outcome
     assert outcome.verdict is Verdict.INVALID
-    assert "<TrailerAction>" in outcome.reason and "line 109" in outcome.reason
+    assert "<RandomRouteAction>" in outcome.reason and f"line {line}" in outcome.reason
 
 
 def test_ignored_elements_are_listed(tmp_path: Path) -> None:

@@ -98,6 +98,24 @@ def test_transition_chain_one_step_per_link() -> None:
     assert times == {"a1": 1.0, "a2": 3.0}  # a1 ends in step 2, its endTransition seen in 3
 
 
+def test_transition_of_an_element_named_with_its_parents() -> None:
+    # two events each with an action called "Action": "Slow::Action" is the second one only
+    fast = b.event("Fast", b.action("Action"))
+    slow = b.event("Slow", b.action("Action"), start=b.trigger((b.sim_time(2.5),)))
+    then = b.event(
+        "Then",
+        b.action("a3"),
+        start=b.trigger((b.state("action", "Slow::Action", "endTransition"),)),
+    )
+    h = Harness(b.storyboard(fast, slow, then), durations={"Action": 1})
+    h.step(6)
+    assert [(t, name) for t, name, _ in h.started] == [
+        (1.0, "Action"),
+        (3.0, "Action"),
+        (4.0, "a3"),  # Slow's action ends in step 3, its endTransition seen in 4
+    ]
+
+
 def test_priority_override_stops_running_event() -> None:
     slow = b.event("Slow", b.action("slow"))
     over = b.event(

@@ -18,6 +18,8 @@ from simtest_operator.evaluation.criteria import Criteria
 from simtest_operator.snapshots import BoundingBox, EntityState, WorldSnapshot
 
 OffRoadCheck = Callable[[EntityState], bool]
+CoupledCheck = Callable[[str, str], bool]
+"""Whether two entities are hitched together (a trailer and its tow vehicle)."""
 """True when the entity's reference point is off the drivable road."""
 
 
@@ -50,6 +52,7 @@ class OnlineEvaluator:
     __slots__ = (
         "_collided",
         "_collisions",
+        "_coupled",
         "_criteria",
         "_ego",
         "_max_decel",
@@ -69,6 +72,7 @@ class OnlineEvaluator:
         *,
         ego: str | None,
         off_road: OffRoadCheck | None = None,
+        coupled: CoupledCheck | None = None,
         scenario_criteria: ScenarioCriteria | None = None,
     ) -> None:
         self._criteria = criteria
@@ -76,6 +80,8 @@ class OnlineEvaluator:
         """The scenario's own tests (CARLA ScenarioRunner ``criteria_*``), judged alongside."""
         self._ego = ego
         self._off_road = off_road
+        self._coupled = coupled
+        """Hitched pairs touch by design: neither a collision nor a distance to keep."""
         self._violations: dict[str, Violation] = {}
         self._collisions: list[Collision] = []
         self._collided: set[tuple[str, str]] = set()
@@ -140,7 +146,7 @@ class OnlineEvaluator:
         ego_x, ego_y, _ = ego.box_center()
         half_width = ego.box.width / 2.0
         for other, radius, centre in zip(entities, radii, centres, strict=True):
-            if other is ego:
+            if other is ego or self._hitched(ego.name, other.name):
                 continue
             other_x, other_y, _ = centre
             centre_gap = math.hypot(other_x - ego_x, other_y - ego_y) - ego_radius - radius
@@ -183,13 +189,18 @@ class OnlineEvaluator:
                     continue  # bounding circles apart: no contact possible
                 first, second = entities[i], entities[j]
                 pair = (first.name, second.name)
-                if pair in self._collided or not geometry.boxes_overlap(first, second):
+                if pair in self._collided or self._hitched(*pair):
+                    continue
+                if not geometry.boxes_overlap(first, second):
                     continue
                 self._collided.add(pair)
                 self._collisions.append(Collision(first=pair[0], second=pair[1], time=time))
                 if self._criteria.collision and self._ego in pair:
                     other = pair[1] if pair[0] == self._ego else pair[0]
                     self._violate("collision", time, f"{self._ego} collided with {other}")
+
+    def _hitched(self, first: str, second: str) -> bool:
+        return self._coupled is not None and self._coupled(first, second)
 
     def _check_thresholds(self, time: float, ego: EntityState) -> None:
         criteria = self._criteria

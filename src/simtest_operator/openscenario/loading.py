@@ -180,7 +180,7 @@ def _variables(root: Element, ctx: reading.Context) -> tuple[m.ParameterDeclarat
         if any(value is None for value in values):
             raise ctx.error(decl, "VariableDeclaration needs name, variableType and value")
         kind = ctx.parameter_type(decl, "variableType")
-        entries.append((str(values[0]), kind, str(values[2]), decl.sourceline))
+        entries.append((ctx.declared_name(decl), kind, str(values[2]), decl.sourceline))
     try:
         _, decls = parameters.declare(entries, ctx.scope)
     except ScenarioError as exc:
@@ -265,8 +265,26 @@ def _entities(el: Element, ctx: reading.Context) -> tuple[e.ScenarioObject, ...]
             ctx.unsupported(node, "entity selections are not supported", name=node.get("name"))
             continue
         obj = entities.scenario_object(node, ctx)
-        if obj.name in seen:
-            raise ctx.error(node, f"duplicate entity name {obj.name!r}")
-        seen.add(obj.name)
-        objects.append(obj)
+        # An inline trailer (and its own, ...) becomes an entity after its tractor, named
+        # ``<tractor>+`` as esmini names it (the Trailer element's own name is not used).
+        chain: e.ScenarioObject | None = obj
+        while chain is not None:
+            towed = chain.inline_trailer
+            if towed is not None:
+                towed = dataclasses.replace(towed, name=f"{chain.name}+")
+                chain = dataclasses.replace(chain, trailer=towed.name, inline_trailer=None)
+            if chain.name in seen:
+                raise ctx.error(node, f"duplicate entity name {chain.name!r}")
+            seen.add(chain.name)
+            objects.append(chain)
+            chain = towed
+    names = {obj.name for obj in objects}
+    for obj in objects:
+        if obj.trailer is not None and obj.trailer not in names:
+            raise ScenarioError(
+                f"trailer {obj.trailer!r} of {obj.name!r} is not an entity",
+                file=ctx.file,
+                element="TrailerRef",
+                line=obj.line,
+            )
     return tuple(objects)

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import enum
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from typing import Protocol, TypeVar
 
 from simtest_operator.errors import ScenarioError
@@ -315,9 +315,20 @@ class Context:
         inner = dataclasses.replace(self, assignments=None) if pending is not None else self
         if block is None:
             if pending:
-                raise self.error(el, f"no parameters declared to assign: {', '.join(pending)}")
+                inner.ignore_assignments(el, pending)
             return inner, ()
         return inner.declare(block, pending, strict_overrides=False)
+
+    def ignore_assignments(self, el: Element, names: Iterable[str]) -> None:
+        """Report catalog ParameterAssignments to parameters the entry does not declare:
+        esmini ignores them (catalogs shared between tools carry assignments only some entries
+        declare), so the entry is read without them."""
+        listed = ", ".join(names)
+        self.deviation(
+            el,
+            "parameter-assignment-undeclared",
+            f"assignment to parameters the entry does not declare ignored: {listed}",
+        )
 
     def declare(
         self,
@@ -334,7 +345,7 @@ class Context:
         """
         entries = [
             (
-                self._plain(decl, "name"),
+                self.declared_name(decl),
                 self.parameter_type(decl, "parameterType"),
                 self._plain(decl, "value"),
                 decl.sourceline,
@@ -342,8 +353,11 @@ class Context:
             for decl in all_children(block, "ParameterDeclaration")
         ]
         unknown = sorted(set(overrides or {}) - {entry[0] for entry in entries})
-        if unknown:
+        if unknown and strict_overrides:
             raise self.error(block, f"assigned parameters are not declared: {', '.join(unknown)}")
+        if unknown:
+            self.ignore_assignments(block, unknown)
+            overrides = {k: v for k, v in (overrides or {}).items() if k not in unknown}
         try:
             scope, decls = parameters.declare(
                 entries,
@@ -361,6 +375,16 @@ class Context:
                 line=exc.line or block.sourceline,
             ) from exc
         return self.with_scope(scope), decls
+
+    def declared_name(self, el: Element) -> str:
+        """The ``name`` of a Parameter/VariableDeclaration. A name written with its reference
+        prefix (``name="$owner"``) is read without it, as esmini does, and reported."""
+        raw = self._plain(el, "name")
+        if not raw.startswith("$") or len(raw) == 1 or raw.startswith("${"):
+            return raw
+        name = raw[1:]
+        self.deviation(el, "parameter-name-with-prefix", f"name {raw!r} read as {name!r}")
+        return name
 
     def parameter_type(self, el: Element, name: str) -> str:
         """The type attribute of a Parameter/VariableDeclaration, with accepted aliases

@@ -165,6 +165,7 @@ def run_scenario(
         request.criteria,
         ego=simulation.ego,
         off_road=simulation.off_road,
+        coupled=simulation.coupled,
         scenario_criteria=evaluation.ScenarioCriteria.of(
             opened.scenario, roads=simulation.world.roads
         ),

@@ -53,6 +53,7 @@ class Actor:
         "_state",
         "_state_inputs",
         "acceleration",
+        "acceleration_xy",
         "box",
         "category",
         "direction",
@@ -80,9 +81,11 @@ class Actor:
         "s",
         "speed",
         "standstill_time",
+        "steer_rate",
         "steering",
         "stretch",
         "stuck",
+        "velocity_xy",
         "x",
         "y",
         "z",
@@ -99,6 +102,13 @@ class Actor:
         self.heading = self.pitch = self.roll = 0.0
         self.speed = 0.0
         self.acceleration = 0.0
+        """Change of speed over the last step (signed, along the heading)."""
+        self.velocity_xy = (0.0, 0.0)
+        """World-frame velocity over the last step: displacement / dt (speed along the heading
+        after a teleport), as esmini measures it."""
+        self.acceleration_xy = (0.0, 0.0)
+        """World-frame acceleration: change of ``velocity_xy`` over the last step (includes the
+        centripetal part in curves; what AccelerationCondition reads)."""
         self.lateral_speed = 0.0
         self.mode = Mode.FREE
         self.road_id: str | None = None
@@ -129,11 +139,31 @@ class Actor:
         self.lane_changing = False
         """Set by a lane change for the coming motion step: its lateral motion is part of the
         distance driven (esmini), not added to it."""
+        self.steer_rate: float | None = None
+        """Lateral speed (m/s) whose part of this step's travel a lane change takes from the
+        longitudinal motion (its rate at the step start, as esmini); None: the measured one."""
         self.driver: DriverModel | None = None
         """Set while the system-under-test driver model controls this actor."""
         self.steering = steering_of(obj)
         self._state: EntityState | None = None
         self._state_inputs: tuple[object, ...] = ()
+
+    def measure_motion(self, start: tuple[float, float], dt: float, *, teleported: bool) -> None:
+        """Update ``velocity_xy`` and ``acceleration_xy`` after a step from ``start`` (or,
+        with ``dt`` 0 or after a teleport, from the speed along the heading)."""
+        if teleported or dt <= 0.0:
+            velocity = (
+                self.speed * math.cos(self.heading),
+                self.speed * math.sin(self.heading),
+            )
+        else:
+            velocity = ((self.x - start[0]) / dt, (self.y - start[1]) / dt)
+        if dt > 0.0:
+            self.acceleration_xy = (
+                (velocity[0] - self.velocity_xy[0]) / dt,
+                (velocity[1] - self.velocity_xy[1]) / dt,
+            )
+        self.velocity_xy = velocity
 
     @property
     def front_offset(self) -> float:

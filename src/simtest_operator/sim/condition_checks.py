@@ -150,8 +150,9 @@ class Conditions:
             value = actor.lateral_speed if _lateral(condition.direction) else actor.speed
             return compare(value, condition.rule, condition.value)
         if isinstance(condition, model.AccelerationCondition):
-            value = 0.0 if _lateral(condition.direction) else actor.acceleration
-            return compare(value, condition.rule, condition.value)
+            return compare(
+                _acceleration(actor, condition.direction), condition.rule, condition.value
+            )
         if isinstance(condition, model.StandStillCondition):
             if self._scenario_runner:
                 return self._slow_for(condition, actor) >= condition.duration - _EPSILON
@@ -164,7 +165,8 @@ class Conditions:
             return actor.offroad_time > 0.0 and actor.offroad_time >= condition.duration - _EPSILON
         if isinstance(condition, model.RelativeSpeedCondition):
             other = world.actor(condition.entity_ref)
-            return compare(actor.speed - other.speed, condition.rule, condition.value)
+            relative = _relative_speed(actor, other, condition.direction)
+            return compare(relative, condition.rule, condition.value)
         if isinstance(condition, model.CollisionCondition):
             return self._collision(actor, condition)
         if isinstance(condition, model.ReachPositionCondition):
@@ -299,6 +301,41 @@ class Conditions:
         if closing <= 0.0:
             return math.inf
         return abs(distance) / closing
+
+
+def _acceleration(actor: Actor, direction: model.DirectionalDimension | None) -> float:
+    """The acceleration an AccelerationCondition reads, as esmini measures it: without a
+    direction the magnitude of the world-frame acceleration (so braking at 5 m/s^2 reads 5, and
+    a curve at constant speed its centripetal part), else its component along (longitudinal)
+    or to the left of (lateral) the heading; the vertical one is 0 (flat motion)."""
+    ax, ay = actor.acceleration_xy
+    if direction is None:
+        return math.hypot(ax, ay)
+    cos_h, sin_h = math.cos(actor.heading), math.sin(actor.heading)
+    if direction is model.DirectionalDimension.LONGITUDINAL:
+        return ax * cos_h + ay * sin_h
+    if direction is model.DirectionalDimension.LATERAL:
+        return -ax * sin_h + ay * cos_h
+    return 0.0
+
+
+def _relative_speed(
+    actor: Actor, reference: Actor, direction: model.DirectionalDimension | None
+) -> float:
+    """A RelativeSpeedCondition's value, as esmini measures it: without a direction the
+    difference of the speeds; with ``longitudinal``/``lateral`` the difference of the two
+    world-frame velocities along/left of the *reference* entity's heading (a car crossing at
+    right angles has no longitudinal speed relative to it); vertical 0 (flat motion)."""
+    if direction is None:
+        return actor.speed - reference.speed
+    cos_h, sin_h = math.cos(reference.heading), math.sin(reference.heading)
+    dvx = actor.velocity_xy[0] - reference.velocity_xy[0]
+    dvy = actor.velocity_xy[1] - reference.velocity_xy[1]
+    if direction is model.DirectionalDimension.LONGITUDINAL:
+        return dvx * cos_h + dvy * sin_h
+    if direction is model.DirectionalDimension.LATERAL:
+        return -dvx * sin_h + dvy * cos_h
+    return 0.0
 
 
 def _lateral(direction: model.DirectionalDimension | None) -> bool:

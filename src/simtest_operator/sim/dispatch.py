@@ -21,7 +21,14 @@ from collections.abc import Callable, Sequence
 
 from simtest_operator.errors import ScenarioError
 from simtest_operator.openscenario import model
-from simtest_operator.sim import carla, placements, positions, route_legs, route_planning
+from simtest_operator.sim import (
+    carla,
+    placements,
+    positions,
+    route_legs,
+    route_planning,
+    trailers,
+)
 from simtest_operator.sim.actors import Actor, Domain, Mode
 from simtest_operator.sim.backends import TrafficHost
 from simtest_operator.sim.following import DistanceRun
@@ -214,8 +221,18 @@ class Dispatcher:
         if actor.obj.unsupported is not None:
             raise placements.unsupported(actor.obj.unsupported)
         if isinstance(body, model.TeleportAction):
+            if world.hitches.towed(actor.name):
+                return Done(actor)  # its tow vehicle places it (esmini)
             self.teleport(actor, positions.resolve(world, body.position))
             self.teleported.add(actor.name)
+            for trailer in trailers.align(world.actors, world.hitches, actor):
+                world.attach(trailer)
+            return Done(actor)
+        if isinstance(body, model.TrailerAction):
+            if body.trailer_ref is None:
+                world.hitches.disconnect(actor.name)
+            else:
+                world.hitches.connect(actor.obj, world.actor(body.trailer_ref).obj)
             return Done(actor)
         if isinstance(body, model.ActivateControllerAction):
             self._activate(actor, body.longitudinal, body.lateral, autopilot=self._carla)

@@ -22,7 +22,7 @@ from simtest_operator.drivermodel import DriverModel, SutConfig, Takeover
 from simtest_operator.errors import ScenarioError
 from simtest_operator.opendrive import RoadNetwork
 from simtest_operator.openscenario import model, rulesets
-from simtest_operator.sim import carla, motion, perception
+from simtest_operator.sim import carla, motion, perception, trailers
 from simtest_operator.sim.actors import Actor, Domain, Mode
 from simtest_operator.sim.backends import ActorSpec, Backend, BackendConfig
 from simtest_operator.sim.condition_checks import Conditions
@@ -158,8 +158,6 @@ class Simulation:
             replaced = obj.name == self.ego and self._sut_engaged
             if isinstance(controller, model.Controller) and not replaced:
                 labels.append(f"controller {controller.name} of {obj.name} not imitated")
-            if obj.trailer is not None:
-                labels.append(f"trailer of {obj.name} not simulated")
         for entity, name in self._dispatcher.assigned:
             label = f"controller {name} of {entity} not imitated"
             replaced = entity == self.ego and self._sut_engaged
@@ -181,6 +179,11 @@ class Simulation:
             return False
         return actor.offroad_time > 0.0
 
+    def coupled(self, first: str, second: str) -> bool:
+        """Whether two entities are hitched together (a trailer's box may overlap its tow
+        vehicle's: that is no collision)."""
+        return self.world.hitches.coupled(first, second)
+
     def start(self) -> WorldSnapshot:
         """Run the Init actions, start the backend and return the snapshot at t = 0."""
         world = self.world
@@ -193,6 +196,9 @@ class Simulation:
         for global_action in init.global_actions:
             self._dispatcher.start_global(global_action)
         self._initial_takeover()
+        self._pull_trailers(0.0)
+        for actor in world.actors.values():
+            actor.measure_motion((actor.x, actor.y), 0.0, teleported=True)
         self._backend.start(self._backend_config)
         for actor in world.actors.values():
             self._backend.add(
@@ -220,8 +226,9 @@ class Simulation:
         # (the reference player moves entities only after all actions stepped).
         world.freeze()
         for actor in world.actors.values():
-            if actor.placed:
+            if actor.placed and not world.hitches.towed(actor.name):
                 self._advance(actor, dt)
+        self._pull_trailers(dt)
         world.refresh()
         for run in self._dispatcher.active():
             run.after_motion(world)
@@ -284,6 +291,15 @@ class Simulation:
             actor.driver = DriverModel(self._sut, set_speed=actor.speed)
             self._sut_engaged = True
 
+    def _pull_trailers(self, dt: float) -> None:
+        """Trailers follow their tow vehicles' new poses (after every tow vehicle moved)."""
+        world = self.world
+        before = {name: (a.x, a.y) for name, a in world.actors.items() if world.hitches.towed(name)}
+        for trailer in trailers.pull(world.actors, world.hitches):
+            world.attach(trailer)
+            motion.update_timers(world, trailer, dt, was_stuck=False)
+            trailer.measure_motion(before[trailer.name], dt, teleported=False)
+
     def _advance(self, actor: Actor, dt: float) -> None:
         world = self.world
         speed_before = actor.speed
@@ -341,6 +357,7 @@ class Simulation:
             world.attach(actor)
         motion.move(world, actor, dt, before=before, start=start, placed=placed)
         actor.acceleration = (actor.speed - speed_before) / dt if dt > 0 else 0.0
+        actor.measure_motion(start, dt, teleported=actor.name in self._dispatcher.teleported)
 
     def _sync(self) -> WorldSnapshot:
         """Push poses to the backend, step it, and build the snapshot."""

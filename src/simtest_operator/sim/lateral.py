@@ -3,8 +3,10 @@
 Both move an actor's offset from its lane centre with a dynamics shape. A lane change keeps the
 actor's logical lane until it completes and measures the target lane centre afresh every step, so
 it follows lanes whose widths change and lanes that continue on the next road; at the end the
-actor belongs to the target lane. Durations come from the dynamics (``time``; ``distance`` /
-speed; lateral ``rate`` in m/s) or, for lane offsets, from the maximum lateral acceleration.
+actor belongs to the target lane. Durations come from the dynamics (``time``; lateral ``rate``
+in m/s) or, for lane offsets, from the maximum lateral acceleration; a lane change shaped over a
+``distance`` progresses with the distance driven along the road (as esmini), and no lane change
+progresses while its actor stands.
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ from simtest_operator.errors import ScenarioError
 from simtest_operator.openscenario import model
 from simtest_operator.sim import placements
 from simtest_operator.sim.actors import Actor, Mode
-from simtest_operator.sim.runs import LATERAL, Run, shape_fraction
+from simtest_operator.sim.runs import LATERAL, Run, shape_fraction, shape_slope
 from simtest_operator.sim.world import World
 
 DEFAULT_MAX_LATERAL_ACCELERATION = 0.5
@@ -36,6 +38,13 @@ def lanes_between(start: int, target: int) -> int:
     return delta
 
 
+def _lane_centre_t(world: World, road_id: str, s: float, lane_id: int) -> float:
+    """t of a lane's centre; for a lane beyond the road's outermost one, the road's outer edge
+    on that side (see :func:`placements.lane_beyond`)."""
+    beyond = placements.lane_beyond(world, road_id, s, lane_id) if world.roads else None
+    return world.lane_t(road_id, s, lane_id) if beyond is None else beyond[1]
+
+
 def _require_lane(actor: Actor, element: str) -> str:
     if actor.mode is not Mode.ROAD or actor.road_id is None:
         raise ScenarioError(f"{element} needs {actor.name!r} on a lane", element=element)
@@ -45,7 +54,15 @@ def _require_lane(actor: Actor, element: str) -> str:
 class LaneChangeRun(Run):
     """A running LaneChangeAction."""
 
-    __slots__ = ("_delta", "_duration", "_elapsed", "_offset0", "_shape", "_target_offset")
+    __slots__ = (
+        "_by_distance",
+        "_delta",
+        "_duration",
+        "_elapsed",
+        "_offset0",
+        "_shape",
+        "_target_offset",
+    )
 
     def __init__(self, world: World, actor: Actor, action: model.LaneChangeAction) -> None:
         super().__init__(actor, LATERAL)
@@ -64,18 +81,18 @@ class LaneChangeRun(Run):
         self._offset0 = actor.offset
         self._shape = action.dynamics.shape
         self._elapsed = 0.0
+        """Progress: seconds, or for the distance dimension metres driven along the road."""
         dynamics = action.dynamics
+        self._by_distance = dynamics.dimension is model.DynamicsDimension.DISTANCE
         lateral = abs(self._relative_target(world, road_id) - self._offset0)
         if dynamics.shape is model.DynamicsShape.STEP:
             self._duration = 0.0
-        elif dynamics.dimension is model.DynamicsDimension.TIME:
+        elif dynamics.dimension is model.DynamicsDimension.TIME or self._by_distance:
             self._duration = abs(dynamics.value)
-        elif dynamics.dimension is model.DynamicsDimension.DISTANCE:
-            self._duration = abs(dynamics.value) / max(abs(actor.speed), 0.1)
         else:
             self._duration = lateral / abs(dynamics.value) if dynamics.value else 0.0
         if self._duration <= 0.0:
-            self._finish()
+            self._finish(world)
 
     def _target_lane(self) -> int:
         assert self.actor is not None
@@ -84,13 +101,26 @@ class LaneChangeRun(Run):
     def _relative_target(self, world: World, road_id: str) -> float:
         assert self.actor is not None
         s = self.actor.s
-        target_t = world.lane_t(road_id, s, self._target_lane()) + self._target_offset
+        target_t = _lane_centre_t(world, road_id, s, self._target_lane()) + self._target_offset
         return target_t - world.lane_t(road_id, s, self.actor.lane_id)
 
-    def _finish(self) -> None:
-        assert self.actor is not None
-        self.actor.lane_id = self._target_lane()
-        self.actor.offset = self._target_offset
+    def _finish(self, world: World) -> None:
+        actor = self.actor
+        assert actor is not None
+        target = self._target_lane()
+        road_id = actor.road_id
+        beyond = None
+        if road_id is not None and world.roads is not None:
+            beyond = placements.lane_beyond(world, road_id, actor.s, target)
+        if road_id is None or beyond is None:
+            actor.lane_id = target
+            actor.offset = self._target_offset
+        else:
+            # A lane beyond the road: the actor ends on the road's edge (the target's centre as
+            # esmini computes it), kept on the outermost lane it has, as esmini re-attaches it.
+            outermost, edge = beyond
+            actor.lane_id = outermost
+            actor.offset = edge - world.lane_t(road_id, actor.s, outermost) + self._target_offset
         self.finished = True
 
     def step(self, world: World, dt: float) -> None:
@@ -99,18 +129,33 @@ class LaneChangeRun(Run):
         if actor.mode is not Mode.ROAD or actor.road_id is None:
             self.cancel()
             return
-        self._elapsed += dt
-        if self._elapsed >= self._duration:
-            self._finish()
-            return
+        if abs(actor.speed) < 1e-9:
+            return  # esmini: no lateral motion while standing, the change waits
         target = self._relative_target(world, actor.road_id)
+        # esmini takes the lateral part of the step's travel at the rate the shape has at the
+        # start of the step (so the longitudinal motion is not symmetric about the middle)
+        slope = shape_slope(self._shape, self._elapsed / self._duration)
+        rate = (target - self._offset0) / self._duration * slope
+        if self._by_distance:
+            # a distance-shaped change progresses by the distance gained along the road: this
+            # step's travel less its lateral part (whatever the speed does meanwhile)
+            along = abs(actor.speed) * dt / math.hypot(1.0, rate)
+            self._elapsed += along
+            actor.steer_rate = rate * along / dt if dt > 0.0 else 0.0
+        else:
+            self._elapsed += dt
+            actor.steer_rate = rate
+        if self._elapsed >= self._duration:
+            self._finish(world)
+            return
         fraction = shape_fraction(self._shape, self._elapsed / self._duration)
         actor.offset = self._offset0 + (target - self._offset0) * fraction
         actor.lane_changing = True
 
 
 class LaneOffsetRun(Run):
-    """A running LaneOffsetAction."""
+    """A running LaneOffsetAction; it ends when its transition is done, ``continuous`` or not
+    (esmini 3.6 does, so an endTransition of it can trigger what follows)."""
 
     __slots__ = ("_action", "_duration", "_elapsed", "_offset0")
 
@@ -132,7 +177,7 @@ class LaneOffsetRun(Run):
             self._duration = math.sqrt(6.0 * distance / acc)
         if self._duration <= 0.0:
             actor.offset = self._target(world)
-            self.finished = not action.continuous
+            self.finished = True
 
     def _target(self, world: World) -> float:
         """The offset from the actor's lane centre to aim at. A relative target is ``value``
@@ -157,7 +202,7 @@ class LaneOffsetRun(Run):
         target = self._target(world)
         if elapsed >= self._duration - 1e-9:
             actor.offset = target
-            self.finished = not self._action.continuous
+            self.finished = True
             return
         fraction = shape_fraction(self._action.shape, elapsed / self._duration)
         actor.offset = self._offset0 + (target - self._offset0) * fraction

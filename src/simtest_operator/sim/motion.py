@@ -64,9 +64,11 @@ def move(
         if actor.lane_changing and lateral_rate != 0.0:
             # A lane change steers: the speed is along the path, so the lateral part of this
             # step's travel is taken from the longitudinal one (esmini's lane change).
-            lateral = min(abs(lateral_rate) * dt, abs(distance))
+            steer = actor.steer_rate if actor.steer_rate is not None else lateral_rate
+            lateral = min(abs(steer) * dt, abs(distance))
             distance = math.copysign(math.sqrt(distance * distance - lateral * lateral), distance)
         actor.lane_changing = False
+        actor.steer_rate = None
         # s per metre driven at the lateral position the last pose found (one step old: the
         # lateral motion within a step changes it by far less than a per mille)
         stretched = distance * actor.stretch

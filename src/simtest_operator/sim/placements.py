@@ -70,6 +70,20 @@ def add_lanes(lane_id: int, delta: int) -> int:
     return target
 
 
+def lane_beyond(world: World, road_id: str, s: float, lane_id: int) -> tuple[int, float] | None:
+    """For a lane past the road's outermost one on its side at ``s``: that outermost lane and
+    the t of the road's outer edge there (None when the road has the lane, or no lane on that
+    side). esmini counts lanes a road does not have as 0 m wide, so such a lane's centre is the
+    edge: relative lanes and lane changes past the road end there."""
+    roads = world.roads
+    assert roads is not None
+    side = [b for b in roads.lanes_at(road_id, s) if b.lane_id * lane_id > 0]
+    if not side or any(b.lane_id == lane_id for b in side):
+        return None
+    outermost = max(side, key=lambda b: abs(b.lane_id))
+    return outermost.lane_id, outermost.t_outer
+
+
 def road_coordinates(world: World, actor: Actor) -> tuple[str, float, float, int]:
     """(road, s, t, direction) of an actor, projecting it onto the roads when not lane-bound."""
     if actor.mode is Mode.ROAD and actor.road_id is not None:

@@ -138,12 +138,18 @@ def _relative_lane(world: World, position: model.RelativeLanePosition) -> placem
             orientation=position.orientation,
             direction=location.direction * (1 if target_s >= s else -1) * direction,
         )
+    offset = position.offset
+    beyond = placements.lane_beyond(world, road_id, target_s, lane_id)
+    if beyond is not None:
+        # dLane past the road: on its edge (esmini: the lanes it lacks are 0 m wide)
+        lane_id, edge = beyond
+        offset += edge - world.lane_t(road_id, target_s, lane_id)
     return placements.lane_placement(
         world,
         road_id,
         lane_id,
         target_s,
-        position.offset,
+        offset,
         orientation=position.orientation,
         direction=direction,
     )

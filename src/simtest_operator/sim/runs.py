@@ -66,6 +66,18 @@ def shape_fraction(shape: model.DynamicsShape, progress: float) -> float:
     return (1.0 - math.cos(math.pi * p)) / 2.0
 
 
+def shape_slope(shape: model.DynamicsShape, progress: float) -> float:
+    """Derivative of :func:`shape_fraction` with respect to progress at ``progress``."""
+    p = min(max(progress, 0.0), 1.0)
+    if shape is model.DynamicsShape.STEP:
+        return 0.0
+    if shape is model.DynamicsShape.LINEAR:
+        return 1.0
+    if shape is model.DynamicsShape.CUBIC:
+        return 6.0 * p * (1.0 - p)
+    return math.pi / 2.0 * math.sin(math.pi * p)
+
+
 def peak_rate_factor(shape: model.DynamicsShape) -> float:
     """Peak rate of a unit transition over unit time, relative to the linear shape."""
     if shape is model.DynamicsShape.CUBIC:

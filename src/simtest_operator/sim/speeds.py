@@ -4,8 +4,9 @@ continuous) and SpeedProfileAction.
 A transition runs from the speed at the action start to the target with the dynamics shape over a
 duration derived from the dimension: ``time`` is the duration, ``distance`` the distance covered
 (duration = distance / mean speed), ``rate`` the mean acceleration (duration = |dv| / rate). A
-relative target is re-read each step, so the transition bends towards a moving target; with
-``continuous`` the action keeps tracking it after the transition and never ends by itself.
+``continuous`` relative target is re-read each step, so the transition bends towards a moving
+target, and the action keeps tracking it after the transition and never ends by itself; a relative
+target that is not continuous is the reference's speed at the action start (as esmini).
 """
 
 from __future__ import annotations
@@ -69,18 +70,22 @@ def transition_duration(
 class SpeedRun(Run):
     """A running SpeedAction on one actor."""
 
-    __slots__ = ("_action", "_duration", "_elapsed", "_v0")
+    __slots__ = ("_action", "_duration", "_elapsed", "_sampled", "_v0")
 
     def __init__(self, world: World, actor: Actor, action: model.SpeedAction) -> None:
         super().__init__(actor, LONGITUDINAL)
         self._action = action
         self._v0 = actor.speed
         self._elapsed = 0.0
+        target = target_speed(world, action.target)
+        self._sampled = None if self._continuous else target
+        """A relative target that is not continuous is the reference's speed at the start
+        (esmini samples it once); absolute targets are fixed anyway."""
         self._duration = transition_duration(
-            action.dynamics, self._v0, target_speed(world, action.target), actor.obj.performance
+            action.dynamics, self._v0, target, actor.obj.performance
         )
         if self._duration <= 0.0:
-            actor.speed = target_speed(world, action.target)
+            actor.speed = target
             self.finished = not self._continuous
 
     @property
@@ -90,7 +95,9 @@ class SpeedRun(Run):
 
     def step(self, world: World, dt: float) -> None:
         assert self.actor is not None
-        target = target_speed(world, self._action.target)
+        target = self._sampled
+        if target is None:
+            target = target_speed(world, self._action.target)
         self._elapsed += dt
         if self._duration <= 0.0 or self._elapsed >= self._duration:
             self.actor.speed = target

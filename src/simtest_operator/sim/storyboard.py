@@ -201,13 +201,13 @@ class Storyboard:
         self._end_with_stories = scenario_runner or not self._stop_defined
         self._complete = False
         self._fired: list[tuple[Node, Node, Node, frozenset[str]]] = []
-        self._visible: set[tuple[Kind, str, Transition]] = set()
-        self._pending: set[tuple[Kind, str, Transition]] = set()
+        self._visible: set[tuple[Node, Transition]] = set()
+        self._pending: set[tuple[Node, Transition]] = set()
         self._by_name: dict[tuple[Kind, str], list[Node]] = {}
         for story in self._stories:
             self._index(story, ())
             story.phase = Phase.RUNNING
-            self._pending.add((Kind.STORY, story.name, Transition.START_TRANSITION))
+            self._pending.add((story, Transition.START_TRANSITION))
 
     def _index(self, node: Node, parents: tuple[str, ...]) -> None:
         """Register ``node`` by its name and by every ``Parent::...::Name`` suffix of its path
@@ -235,10 +235,12 @@ class Storyboard:
         nodes = self._by_name.get((kind, name), ())
         if state in (Transition.STANDBY_STATE, Transition.RUNNING_STATE, Transition.COMPLETE_STATE):
             return any(node.phase.value == state.value for node in nodes)
+        # by node: a reference qualified with its parents (``Event::Action``) names one node of
+        # several that share the plain name
         if self._scenario_runner and state in _ENDINGS:
             # ScenarioRunner knows one end of an element, however it came (its END rule).
-            return any((kind, name, ending) in self._visible for ending in _ENDINGS)
-        return (kind, name, state) in self._visible
+            return any((node, ending) in self._visible for node in nodes for ending in _ENDINGS)
+        return any((node, state) in self._visible for node in nodes)
 
     def known(self, kind: Kind, name: str) -> bool:
         return (kind, name) in self._by_name
@@ -324,7 +326,7 @@ class Storyboard:
             action.runs = tuple(self._start_action(source, action.actors))
 
     def _transition(self, node: Node, transition: Transition) -> None:
-        key = (node.kind, node.name, transition)
+        key = (node, transition)
         self._pending.add(key)
         self._visible.add(key)
 

@@ -17,6 +17,7 @@ from simtest_operator.openscenario import model
 from simtest_operator.sim.actors import Actor, Mode
 from simtest_operator.sim.lanecache import LaneCache
 from simtest_operator.sim.signal_controllers import SignalControllers
+from simtest_operator.sim.trailers import Hitches
 from simtest_operator.snapshots import EntityState
 
 
@@ -29,6 +30,7 @@ class World:
         "actors",
         "dt",
         "environments",
+        "hitches",
         "ignored",
         "parameters",
         "rng",
@@ -54,6 +56,8 @@ class World:
         self.roads = roads
         self._lanes = LaneCache(roads) if roads is not None else None
         self.actors = {actor.name: actor for actor in actors}
+        self.hitches = Hitches(actor.obj for actor in self.actors.values())
+        """Which entity tows which (TrailerActions change it)."""
         self.dt = dt
         self.time = 0.0
         self.rng = random.Random(seed)

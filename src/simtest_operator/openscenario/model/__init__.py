@@ -40,6 +40,7 @@ from simtest_operator.openscenario.model.actions import (
     SynchronizeAction,
     TeleportAction,
     Timing,
+    TrailerAction,
     TransitionDynamics,
 )
 from simtest_operator.openscenario.model.common import (
@@ -313,6 +314,7 @@ __all__ = [
     "TrafficSourceAction",
     "TrafficStopAction",
     "TrafficSwarmAction",
+    "TrailerAction",
     "Trajectory",
     "TrajectoryPosition",
     "TransitionDynamics",

@@ -252,6 +252,15 @@ class TeleportAction:
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class TrailerAction:
+    """1.3 ConnectTrailerAction (``trailer_ref`` set: hitch that entity) or
+    DisconnectTrailerAction (``trailer_ref`` None: unhitch the current trailer)."""
+
+    trailer_ref: str | None
+    line: int | None = None
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
 class AssignRouteAction:
     """Give the entity a route to follow."""
 
@@ -345,10 +354,11 @@ PrivateAction = (
     | SynchronizeAction
     | ActivateControllerAction
     | AssignControllerAction
+    | TrailerAction
     | IgnoredAction
     | Unsupported
 )
-"""Private actions; OverrideControllerValue, RandomRoute and Trailer actions are Unsupported."""
+"""Private actions; OverrideControllerValue and RandomRoute actions are Unsupported."""
 
 GlobalAction = (
     SetValueAction

@@ -111,8 +111,16 @@ class ScenarioObject:
     unsupported: Unsupported | None = None
     """Set when the object itself cannot be simulated (e.g. ExternalObjectReference); the other
     fields then hold defaults."""
-    trailer: Unsupported | None = None
-    """Set when the vehicle declares a Trailer (not simulated; the tractor itself is usable)."""
+    trailer_hitch: float | None = None
+    """``TrailerHitch dx``: where a trailer is pulled, metres ahead of the reference point."""
+    trailer_coupler: float | None = None
+    """``TrailerCoupler dx``: where this (trailer) vehicle is pulled, metres ahead of its
+    reference point."""
+    trailer: str | None = None
+    """Entity towed at the start (``TrailerRef``, or the inline ``Trailer`` that loading adds as
+    the entity ``<name>+``, esmini's name for it)."""
+    inline_trailer: ScenarioObject | None = None
+    """An inline ``Trailer`` as read, before loading adds it to the entities."""
     line: int | None = None
 
     def property(self, name: str) -> str | None:

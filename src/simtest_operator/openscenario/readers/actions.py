@@ -11,7 +11,6 @@ from simtest_operator.openscenario.model import controls as ctl
 from simtest_operator.openscenario.readers import controllers, positions, traffic, world_actions
 from simtest_operator.xmlsafe import Element
 
-_PRIVATE_UNSUPPORTED = {"TrailerAction": "trailers are not simulated"}
 _GLOBAL_UNSUPPORTED = {"SetMonitorAction": "monitors are not supported"}
 
 
@@ -53,7 +52,6 @@ def private(el: Element, ctx: reading.Context) -> a.PrivateAction:
         ctx.choice(el),
         _PRIVATE_READERS,
         unknown="unknown private action",
-        reasons=_PRIVATE_UNSUPPORTED,
     )
 
 
@@ -61,6 +59,15 @@ def _teleport(el: Element, ctx: reading.Context) -> a.TeleportAction:
     return a.TeleportAction(
         position=positions.position(ctx.require(el, "Position"), ctx), line=el.sourceline
     )
+
+
+def _trailer(el: Element, ctx: reading.Context) -> a.TrailerAction:
+    chosen = ctx.choice(el)
+    if chosen.tag == "ConnectTrailerAction":
+        return a.TrailerAction(trailer_ref=ctx.string(chosen, "trailerRef"), line=el.sourceline)
+    if chosen.tag == "DisconnectTrailerAction":
+        return a.TrailerAction(trailer_ref=None, line=el.sourceline)
+    raise ctx.error(chosen, f"unknown trailer action {chosen.tag}")
 
 
 def global_(el: Element, ctx: reading.Context) -> a.GlobalAction:
@@ -378,6 +385,7 @@ _PRIVATE_READERS: Mapping[str, _PrivateReader] = {
     "LongitudinalAction": _one_of(_LONGITUDINAL_READERS, unknown="unknown longitudinal action"),
     "LateralAction": _one_of(_LATERAL_READERS, unknown="unknown lateral action"),
     "TeleportAction": _teleport,
+    "TrailerAction": _trailer,
     "RoutingAction": _one_of(
         _ROUTING_READERS,
         unknown="unknown routing action",
@@ -389,7 +397,7 @@ _PRIVATE_READERS: Mapping[str, _PrivateReader] = {
     "VisibilityAction": _ignored,
     "AppearanceAction": lambda el, ctx: _ignored(ctx.choice(el), ctx),
 }
-"""Supported ``<PrivateAction>`` children by tag (others: :data:`_PRIVATE_UNSUPPORTED`)."""
+"""Supported ``<PrivateAction>`` children by tag."""
 
 _GLOBAL_READERS: Mapping[str, Callable[[Element, reading.Context], a.GlobalAction]] = {
     "EnvironmentAction": world_actions.environment_action,

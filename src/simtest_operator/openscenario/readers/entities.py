@@ -87,9 +87,7 @@ def _object(
             f"vehicleCategory {category!r} is not one of the schema's; kept as written",
         )
     props, _ = controllers.properties(reading.child(el, "Properties"), inner)
-    trailer_el = reading.child(el, "Trailer")
-    if trailer_el is not None and not _has_trailer(trailer_el, inner):
-        trailer_el = None
+    trailer_ref, inline_trailer = _trailer(reading.child(el, "Trailer"), inner)
     return e.ScenarioObject(
         name=name,
         kind=kind,
@@ -105,20 +103,32 @@ def _object(
         controller=owned[0].controller if owned else None,
         object_controller_name=owned[0].name if owned else None,
         object_controllers=owned,
-        trailer=(
-            inner.unsupported(trailer_el, "trailers are not simulated", name=name)
-            if trailer_el is not None
-            else None
-        ),
+        trailer_hitch=_dx(reading.child(el, "TrailerHitch"), inner),
+        trailer_coupler=_dx(reading.child(el, "TrailerCoupler"), inner),
+        trailer=trailer_ref,
+        inline_trailer=inline_trailer,
         line=line,
     )
 
 
-def _has_trailer(el: Element, ctx: reading.Context) -> bool:
-    # Catalog vehicles declare <Trailer><TrailerRef entityRef="$TrailerRef"/> with an empty
-    # default, meaning "no trailer".
+def _dx(el: Element | None, ctx: reading.Context) -> float | None:
+    return ctx.double(el, "dx") if el is not None else None
+
+
+def _trailer(
+    el: Element | None, ctx: reading.Context
+) -> tuple[str | None, e.ScenarioObject | None]:
+    """The towed entity of a ``<Trailer>``: a ``TrailerRef`` name, or an inline trailer (that
+    loading names and adds to the entities)."""
+    if el is None:
+        return None, None
     ref = reading.child(el, "TrailerRef")
-    return ref is None or bool(ctx.string(ref, "entityRef").strip())
+    if ref is not None:
+        # Catalog vehicles declare <TrailerRef entityRef="$TrailerRef"/> with an empty default,
+        # meaning "no trailer".
+        name = ctx.string(ref, "entityRef").strip()
+        return (name or None), None
+    return None, scenario_object(ctx.require(el, "Trailer"), ctx)
 
 
 def _bounding_box(el: Element, ctx: reading.Context) -> BoundingBox:
