@@ -2,7 +2,8 @@
 the real simulator engine: each scenario ends ``Invalid`` at once with the element and line, tried
 once. Before, the 1e12 spiral hung the geometry evaluator until the campaign's timeout (a
 ``Timeout`` verdict, blaming the system under test) and NaN lengths reached netconvert (``Error``,
-retried, with SUMO's stderr)."""
+retried, with SUMO's stderr); so did degenerate roads (issue 29), while a spiral of constant
+curvature, which netconvert could not evaluate, is a line and runs."""
 
 from __future__ import annotations
 
@@ -23,7 +24,14 @@ ROADS = {
     "spiral_extreme_curvend": "<spiral>, line 7",
     "length_nan": "<road>, line 4",
     "width_negative": "<width>, line 14",
+    "parampoly3_point": "<paramPoly3>, line 7",  # issue 29: degenerate roads
+    "width_zero": "<lanes>, line 10",
 }
+
+FLAT_PLAN_VIEW = (
+    '<planView><geometry s="0" x="0" y="0" hdg="0" length="1200">'
+    '<spiral curvStart="0" curvEnd="0"/></geometry>'
+)
 
 
 @pytest.mark.timeout(180)
@@ -36,6 +44,13 @@ def test_hostile_roads_are_invalid_not_timeout_or_error(tmp_path: Path) -> None:
         (suite / f"{name}.xosc").write_text(
             text.replace("../roads/rural_curved.xodr", f"{name}.xodr")
         )
+    # A spiral of constant curvature is a valid line (or arc): it runs (it was an Error).
+    road = (ROOT / "scenarios" / "roads" / "rural_curved.xodr").read_text()
+    plan_view = road[road.index("<planView>") : road.index("</planView>")]
+    (suite / "flat_spiral.xodr").write_text(road.replace(plan_view, FLAT_PLAN_VIEW))
+    (suite / "flat_spiral.xosc").write_text(
+        text.replace("../roads/rural_curved.xodr", "flat_spiral.xodr")
+    )
     manifest = tmp_path / "campaign.yaml"
     manifest.write_text(campaign_manifest(timeout=60, retries=2))
     started = time.monotonic()
@@ -51,7 +66,8 @@ def test_hostile_roads_are_invalid_not_timeout_or_error(tmp_path: Path) -> None:
         json.loads(path.read_text())["scenarioId"]: json.loads(path.read_text())
         for path in (tmp_path / "out" / "scenarios").glob("*/result.json")
     }
-    assert len(results) == len(ROADS)
+    assert len(results) == len(ROADS) + 1
+    assert results["flat_spiral.xosc"]["verdict"] == "Passed", results["flat_spiral.xosc"]
     for name, where in ROADS.items():
         outcome = results[f"{name}.xosc"]
         assert outcome["verdict"] == "Invalid", outcome

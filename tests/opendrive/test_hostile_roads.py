@@ -36,6 +36,12 @@ REFUSED = [
     ("width_cubic_explodes", "width", 14, "width reaches 1e+15 m within 100 m"),
     ("coordinate_huge", "geometry", 6, "x 1e300 is outside"),
     ("parampoly3_overflow", "paramPoly3", 7, "bU 1e+300 moves the curve"),
+    # Degenerate roads (issue 29): were Error (netconvert failed), retried, or put every entity
+    # on one point (a collision at t=0 blamed on the SUT).
+    ("parampoly3_point", "paramPoly3", 7, "every b, c and d coefficient is 0"),
+    ("road_length_zero", "road", 4, "road '1' has length 0 m"),
+    ("planview_hole", "geometry", 9, "road '1' has no geometry from s=0 to s=50"),
+    ("width_zero", "lanes", 10, "road '1' has no lane wider than 1e-09 m"),
 ]
 
 

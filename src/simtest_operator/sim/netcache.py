@@ -6,8 +6,10 @@ netconvert flags and the SUMO version. Files appear atomically (temp file + rena
 converting the same map at the same time are safe: the last rename wins with identical content.
 
 The flags keep SUMO's x/y equal to OpenDRIVE's (no offset normalisation) and annotate every SUMO
-lane with ``origId="<road>_<lane>"``. Known-broken real maps are retried with ``--ignore-errors``
-and then on a copy without ``<signal>`` elements (see notes/sumo-mapping.md).
+lane with ``origId="<road>_<lane>"``. Constant-curvature spirals and straight arcs, which netconvert
+cannot evaluate, are first rewritten as the equivalent arc or line
+(:func:`~simtest_operator.opendrive.flat_curves_rewritten`). Known-broken real maps are retried with
+``--ignore-errors`` and then on a copy without ``<signal>`` elements (see notes/sumo-mapping.md).
 """
 
 from __future__ import annotations
@@ -38,7 +40,7 @@ NETCONVERT_FLAGS: tuple[str, ...] = (
 )
 """Flags of every conversion (part of the cache key)."""
 
-_STRATEGY = "v1: plain, ignore-errors, no-signals, no-signals+ignore-errors"
+_STRATEGY = "v2: flat curves rewritten; plain, ignore-errors, no-signals, no-signals+ignore-errors"
 """Names the fallback sequence; changing it invalidates cached nets."""
 _IGNORE_ERRORS = ("--ignore-errors", "true")
 _STDERR_TAIL = 20
@@ -100,9 +102,14 @@ def _convert(xodr: Path, content: bytes, target: Path, *, timeout: float) -> Non
     with tempfile.TemporaryDirectory(prefix="netconvert-", dir=target.parent) as work:
         work_dir = Path(work)
         stripped: Path | None = None
+        converted = xodr
+        rewritten = opendrive.flat_curves_rewritten(content, source=str(xodr))
+        if rewritten is not None:
+            content, converted = rewritten, work_dir / "curves.xodr"
+            converted.write_bytes(rewritten)
         attempts: list[tuple[str, Path | None, Sequence[str]]] = [
-            ("plain", xodr, ()),
-            ("--ignore-errors", xodr, _IGNORE_ERRORS),
+            ("plain", converted, ()),
+            ("--ignore-errors", converted, _IGNORE_ERRORS),
             ("without signals", None, ()),
             ("without signals, --ignore-errors", None, _IGNORE_ERRORS),
         ]
