@@ -2,8 +2,10 @@
 
 Covers (issue 12 item 7, issue 20 item 11): a double of 1e308 (directly and through a
 parameter), NaN and inf, and a negative maxSpeed/maxDeceleration are ScenarioErrors at the
-element and line; a zero-size bounding box and an unknown vehicleCategory load with a deviation
-(refused in strict mode); an ``r,g,b`` colour Property is plain schema and loads with none.
+element and line; a zero-size bounding box of a CARLA blueprint (read as the blueprint's
+typical size) and an unknown vehicleCategory load with a deviation (refused in strict mode), any
+other box under 1 cm is an error (issue 29); an ``r,g,b`` colour Property is plain schema and
+loads with none.
 """
 
 from __future__ import annotations
@@ -54,9 +56,21 @@ def test_negative_performance_is_an_error(write_scenario: ScenarioWriter, attrib
         load_scenario(write_scenario(entities=car))
 
 
+@pytest.mark.parametrize(("size", "shown"), [("0", "0"), ("1e-9", "1e-09")])
+def test_a_box_that_cannot_collide_is_invalid(
+    write_scenario: ScenarioWriter, size: str, shown: str
+) -> None:
+    # A collision with it was a pass (issue 29).
+    car = CAR.format(name="Ego").replace('width="2"', f'width="{size}"')
+    with pytest.raises(ScenarioError, match=f"bounding box 5 x {shown} m cannot collide") as caught:
+        load_scenario(write_scenario(entities=car))
+    assert caught.value.element == "Dimensions" and caught.value.line is not None
+
+
 def test_carla_tolerances_are_deviations(write_scenario: ScenarioWriter) -> None:
     car = (
         CAR.format(name="Ego")
+        .replace('name="car"', 'name="vehicle.tesla.model3"')
         .replace('width="2" length="5" height="1.5"', 'width="0" length="0" height="0"')
         .replace('vehicleCategory="car"', 'vehicleCategory="sedan"')
         .replace(
@@ -71,7 +85,9 @@ def test_carla_tolerances_are_deviations(write_scenario: ScenarioWriter) -> None
     ]
     ego = scenario.entity("Ego")
     assert ego is not None and ego.category == "sedan"
-    assert ego.bounding_box.length == 0.0
+    # CARLA spawns the blueprint: the box is its typical size, never a point that cannot collide.
+    assert (ego.bounding_box.length, ego.bounding_box.width) == (4.9, 2.1)
+    assert "read as 4.9 x 2.1 x 1.5 m" in scenario.deviations[1].message
     assert [(p.name, p.value) for p in ego.properties] == [("color", "255,0,0")]
     with pytest.raises(StrictDeviationError, match="vehicle-category-unknown"):
         load_scenario(path, options=LoadOptions(strict=True))
