@@ -91,3 +91,75 @@ def test_carla_tolerances_are_deviations(write_scenario: ScenarioWriter) -> None
     assert [(p.name, p.value) for p in ego.properties] == [("color", "255,0,0")]
     with pytest.raises(StrictDeviationError, match="vehicle-category-unknown"):
         load_scenario(path, options=LoadOptions(strict=True))
+
+
+def _private(action: str) -> str:
+    return f'<Private entityRef="Ego"><PrivateAction>{action}</PrivateAction></Private>'
+
+
+def _lane_change(value: str, dimension: str) -> str:
+    return _private(
+        f"""<LateralAction><LaneChangeAction><LaneChangeActionDynamics dynamicsShape="sinusoidal"
+        value="{value}" dynamicsDimension="{dimension}"/><LaneChangeTarget>
+        <RelativeTargetLane entityRef="Ego" value="1"/></LaneChangeTarget></LaneChangeAction>
+        </LateralAction>"""
+    )
+
+
+def _speed(value: str, rate: str = "4") -> str:
+    return _private(
+        f"""<LongitudinalAction><SpeedAction><SpeedActionDynamics dynamicsShape="linear"
+        value="{rate}" dynamicsDimension="rate"/><SpeedActionTarget>
+        <AbsoluteTargetSpeed value="{value}"/></SpeedActionTarget></SpeedAction>
+        </LongitudinalAction>"""
+    )
+
+
+def _stop(condition: str, delay: str = "0") -> str:
+    return f"""<ConditionGroup><Condition name="end" delay="{delay}" conditionEdge="none">
+    {condition}</Condition></ConditionGroup>"""
+
+
+def _entity(condition: str) -> str:
+    return f"""<ByEntityCondition><TriggeringEntities triggeringEntitiesRule="any">
+    <EntityRef entityRef="Ego"/></TriggeringEntities><EntityCondition>{condition}
+    </EntityCondition></ByEntityCondition>"""
+
+
+_TIME = (
+    '<ByValueCondition><SimulationTimeCondition value="5" rule="greaterThan"/></ByValueCondition>'
+)
+
+
+@pytest.mark.parametrize(
+    ("parts", "element", "attribute"),
+    [
+        ({"init": _lane_change("-2.5", "time")}, "LaneChangeActionDynamics", "value"),
+        ({"init": _lane_change("-30", "distance")}, "LaneChangeActionDynamics", "value"),
+        ({"stop": _stop(_TIME, delay="-1")}, "Condition", "delay"),
+        (
+            {"stop": _stop(_entity('<StandStillCondition duration="-2"/>'))},
+            "StandStillCondition",
+            "duration",
+        ),
+        (
+            {"stop": _stop(_entity('<TraveledDistanceCondition value="-5"/>'))},
+            "TraveledDistanceCondition",
+            "value",
+        ),
+    ],
+)
+def test_negative_durations_and_distances_are_invalid(
+    write_scenario: ScenarioWriter, parts: dict[str, str], element: str, attribute: str
+) -> None:
+    # They ran as their absolute value or ended Error (issue 29).
+    below = f"'{attribute}': -[0-9.]+ is below its minimum 0"
+    with pytest.raises(ScenarioError, match=below) as caught:
+        load_scenario(write_scenario(**parts))
+    assert caught.value.element == element and caught.value.line is not None
+
+
+def test_negative_speeds_and_rates_stay_legal(write_scenario: ScenarioWriter) -> None:
+    # A negative target speed reverses (esmini); a rate's sign is implied by the target.
+    scenario = load_scenario(write_scenario(init=_speed("-5", rate="-4"), stop=_stop(_TIME)))
+    assert scenario.deviations == ()
