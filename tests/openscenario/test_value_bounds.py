@@ -14,6 +14,7 @@ import pytest
 
 from simtest_operator.errors import ScenarioError
 from simtest_operator.openscenario import LoadOptions, StrictDeviationError, load_scenario
+from simtest_operator.openscenario.loading import MAX_ENTITIES
 from tests.openscenario.conftest import CAR, ScenarioWriter
 
 
@@ -163,3 +164,16 @@ def test_negative_speeds_and_rates_stay_legal(write_scenario: ScenarioWriter) ->
     # A negative target speed reverses (esmini); a rate's sign is implied by the target.
     scenario = load_scenario(write_scenario(init=_speed("-5", rate="-4"), stop=_stop(_TIME)))
     assert scenario.deviations == ()
+
+
+def test_entity_count_is_bounded(write_scenario: ScenarioWriter) -> None:
+    # 5,000 entities never got past t=0 before the campaign timeout: a Timeout blamed on the SUT
+    # (issue 29). The limit is named; a scenario at the limit loads.
+    def cars(count: int) -> str:
+        return "".join(CAR.format(name=f"Car{i}") for i in range(count))
+
+    path = write_scenario(entities=cars(MAX_ENTITIES + 1))
+    with pytest.raises(ScenarioError, match="501 entities, more than 500") as caught:
+        load_scenario(path)
+    assert caught.value.element == "Entities"
+    assert len(load_scenario(write_scenario(entities=cars(MAX_ENTITIES))).entities) == MAX_ENTITIES
