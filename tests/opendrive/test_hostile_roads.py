@@ -20,7 +20,7 @@ import pytest
 
 from simtest_operator.errors import ScenarioError
 from simtest_operator.opendrive import RoadNetwork, limits, load, models, parse, planview
-from tests.opendrive.conftest import single_road
+from tests.opendrive.conftest import road_grid, single_road
 
 HOSTILE = Path(__file__).resolve().parent / "hostile"
 
@@ -207,3 +207,18 @@ def test_degenerate_evaluators_stay_finite() -> None:
         line = planview.ReferenceLine((geometry,), geometry.length)
         for s in (0.0, 0.5 * geometry.length, geometry.length):
             assert all(math.isfinite(value) for value in line.at(s)), (geometry.kind, s)
+
+
+@pytest.mark.timeout(60)
+def test_a_network_with_too_many_lanes_is_refused_quickly() -> None:
+    # 21,000 roads of 2 x 2 lanes (32 MB): 84,000 lanes took a run to 1.1 GB RSS, above a
+    # simulator pod's 1 GiB (issue 29). Refused at the lane that crosses the limit, before the
+    # rest is read; the end-to-end memory at the limit is measured in tests/cli.
+    data = road_grid(21_000)
+    started = time.perf_counter()
+    with pytest.raises(
+        ScenarioError, match="more than 20,000 lanes in all lane sections"
+    ) as caught:
+        parse(data)
+    assert time.perf_counter() - started < 15
+    assert caught.value.element == "left" and caught.value.line == 5_002  # road 5,001

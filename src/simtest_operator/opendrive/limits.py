@@ -38,6 +38,10 @@ class Limits:
     """Roads per document: each adds at least one search-index segment, whatever its length."""
     max_lanes: int = 100
     """Lanes per side of a lane section: lane queries walk them on every simulation step."""
+    max_total_lanes: int = 20_000
+    """Lanes of all lane sections together (CARLA's largest town: 1,052). SUMO holds about
+    10 KB per lane: 84,000 lanes (21,000 roads) took a run to 1.1 GB, above a simulator pod's
+    1 GiB memory request (issue 29); at this limit a run stays near 600 MB."""
     max_signals: int = 50_000
     """Signals and signal references per document (CARLA's towns: at most 180): each becomes
     stop lines the evaluation checks on every step."""

@@ -82,13 +82,14 @@ def _child(element: etree._Element, name: str) -> etree._Element | None:
 class _Reader:
     """Converts elements, remembering the source for error messages."""
 
-    __slots__ = ("_limits", "_signal_count", "_source", "_total_length")
+    __slots__ = ("_lane_count", "_limits", "_signal_count", "_source", "_total_length")
 
     def __init__(self, source: str, bounds: limits.Limits) -> None:
         self._source = source
         self._limits = bounds
         self._total_length = 0.0
         self._signal_count = 0
+        self._lane_count = 0
 
     def _error(self, element: etree._Element, message: str) -> ScenarioError:
         return ScenarioError(
@@ -496,6 +497,13 @@ class _Reader:
                 raise self._error(
                     container,
                     f"{len(children)} lanes in <{side}>, more than {self._limits.max_lanes}",
+                )
+            self._lane_count += len(children)
+            if self._lane_count > self._limits.max_total_lanes:
+                raise self._error(
+                    container,
+                    f"more than {self._limits.max_total_lanes:,} lanes in all lane sections "
+                    "(the road network limit)",
                 )
             result = [self.lane(child, span) for child in children]
             for lane in result:

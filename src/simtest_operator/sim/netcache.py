@@ -25,7 +25,7 @@ from pathlib import Path
 
 import sumo
 
-from simtest_operator import opendrive
+from simtest_operator import opendrive, xmlsafe
 from simtest_operator.errors import ScenarioError, SimulationError
 
 NETCONVERT_FLAGS: tuple[str, ...] = (
@@ -159,26 +159,42 @@ def _run(
         raise SimulationError(f"cannot run netconvert: {exc}") from exc
 
 
+NET_MAX_BYTES = 1024 * 1024 * 1024
+"""Largest SUMO network read for its lane origins (a 32 MB map converts to 66 MB)."""
+
+
 def lane_origins(net_path: Path) -> Mapping[tuple[str, int], tuple[str, ...]]:
     """OpenDRIVE (road id, lane id) -> SUMO lane ids, from the ``origId`` lane parameters.
 
     Normal lanes of split lane sections map several SUMO lanes to one OpenDRIVE lane (ordered as
     in the net file); junction connecting roads map to internal lanes (``:<junction>_<n>_<i>``).
+    The file is streamed one edge at a time: sumolib's object model of a 21,000-road map took
+    840 MB and 25 s, most of a simulator pod's memory (issue 29).
     """
-    import sumolib  # here, not at the top: it imports numpy, pyproj and lxml (0.2 s)
-
     try:
-        net = sumolib.net.readNet(str(net_path), withInternal=True)
-    except (OSError, ValueError) as exc:
-        raise SimulationError(f"cannot read SUMO network {net_path}: {exc}") from exc
-    mapping: dict[tuple[str, int], list[str]] = {}
-    for edge in net.getEdges(withInternal=True):
-        for lane in edge.getLanes():
-            for origin in (lane.getParam("origId") or "").split():
-                road_id, _, lane_id = origin.rpartition("_")
-                try:
-                    key = (road_id, int(lane_id))
-                except ValueError:
+        data = net_path.read_bytes()
+        mapping: dict[tuple[str, int], list[str]] = {}
+        for element in xmlsafe.stream_children(
+            data, source=str(net_path), max_bytes=NET_MAX_BYTES, what="SUMO network"
+        ):
+            if element.tag != "edge":
+                continue
+            for lane in element:
+                if lane.tag != "lane":
                     continue
-                mapping.setdefault(key, []).append(lane.getID())
+                for param in lane:
+                    if param.tag == "param" and param.get("key") == "origId":
+                        _add_origins(mapping, str(lane.get("id")), param.get("value") or "")
+    except (OSError, ScenarioError) as exc:
+        raise SimulationError(f"cannot read SUMO network {net_path}: {exc}") from exc
     return {key: tuple(value) for key, value in mapping.items()}
+
+
+def _add_origins(mapping: dict[tuple[str, int], list[str]], lane_id: str, origins: str) -> None:
+    for origin in origins.split():
+        road_id, _, lane = origin.rpartition("_")
+        try:
+            key = (road_id, int(lane))
+        except ValueError:
+            continue
+        mapping.setdefault(key, []).append(lane_id)
