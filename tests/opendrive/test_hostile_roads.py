@@ -155,7 +155,7 @@ head, body = road[: road.index("<road ")], road[road.index("<road ") : road.inde
 copies = (body.replace('<road id="1"', f'<road id="{k}"') for k in range(20000))
 data = (head + "".join(copies) + "</OpenDRIVE>").encode()
 before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-document = parse(data, bounds=limits.Limits(max_total_length=1e7))
+document = parse(data, bounds=limits.Limits(max_total_length=1e7, max_total_lanes=10**6))
 grown = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before
 print(len(data), grown * 1024, len(document.roads))
 """
