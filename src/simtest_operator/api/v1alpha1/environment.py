@@ -176,6 +176,16 @@ class SutConfig(ApiModel):
 class SimulatorSettings(ApiModel):
     """Settings of the SUMO-backed simulator stand-in."""
 
+    cel_rules: ClassVar[tuple[dict[str, str], ...]] = (
+        # The API server compares an integer (`stepLength: 0`) with the minimum cast to an
+        # integer (0), so the schema's minimum alone lets 0 through.
+        cel(
+            "!has(self.stepLength) || self.stepLength >= 0.001",
+            "stepLength must be at least 0.001 s",
+            field_path=".stepLength",
+        ),
+    )
+
     image: Annotated[str, StringConstraints(max_length=512)] = (
         "ghcr.io/simtest-dev/simtest-runner:0.1.0"
     )
