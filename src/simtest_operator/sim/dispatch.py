@@ -155,7 +155,7 @@ class Dispatcher:
                 self._ignore(f"AddEntityAction of {actor.name}, which is already in the world")
                 return Done(actor)
             # It comes back with the speed it had (esmini keeps a deleted entity's state).
-            self.teleport(actor, positions.resolve(world, body.position))
+            self.teleport(actor, positions.resolve(world, body.position, placing=True))
             return Done(actor)
         if isinstance(body, model.DeleteEntityAction):
             self.remove(world.actor(body.entity_ref))
@@ -188,7 +188,7 @@ class Dispatcher:
         if actor.obj.unsupported is not None:
             raise placements.unsupported(actor.obj.unsupported)
         if isinstance(body, model.TeleportAction):
-            self.teleport(actor, positions.resolve(world, body.position))
+            self.teleport(actor, positions.resolve(world, body.position, placing=True))
             self.teleported.add(actor.name)
             return Done(actor)
         if isinstance(body, model.ActivateControllerAction):

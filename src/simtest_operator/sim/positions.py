@@ -29,8 +29,9 @@ ROAD_END_TOLERANCE = 1.0
 
 
 def _check_along(world: World, position: model.LanePosition | model.RoadPosition) -> None:
-    """Refuse an ``s`` off its road: clamping it put entities on one point at the road's end, and
-    a collision there was blamed on the system under test (issue 29)."""
+    """Refuse an entity placed at an ``s`` off its road: clamping it put entities on one point at
+    the road's end, and a collision there was blamed on the system under test (issue 29). Other
+    uses (action targets, conditions) clamp, as esmini does with a warning."""
     roads = world.roads
     assert roads is not None
     length = roads.road_length(position.road_id)
@@ -42,8 +43,11 @@ def _check_along(world: World, position: model.LanePosition | model.RoadPosition
         )
 
 
-def resolve(world: World, position: model.Position) -> placements.Placement:
-    """World pose of ``position`` now."""
+def resolve(
+    world: World, position: model.Position, *, placing: bool = False
+) -> placements.Placement:
+    """World pose of ``position`` now; ``placing`` (a TeleportAction) refuses an ``s`` beyond
+    the road's ends instead of clamping it."""
     if isinstance(position, model.Unsupported):
         raise placements.unsupported(position)
     if isinstance(position, model.WorldPosition):
@@ -69,7 +73,8 @@ def resolve(world: World, position: model.Position) -> placements.Placement:
         )
     if isinstance(position, model.LanePosition):
         _require_roads(world, position)
-        _check_along(world, position)
+        if placing:
+            _check_along(world, position)
         return placements.lane_placement(
             world,
             position.road_id,
@@ -81,7 +86,8 @@ def resolve(world: World, position: model.Position) -> placements.Placement:
         )
     if isinstance(position, model.RoadPosition):
         _require_roads(world, position)
-        _check_along(world, position)
+        if placing:
+            _check_along(world, position)
         # A road position faces along the reference line (s), whatever lane it lies in.
         return placements.road_placement(
             world, position.road_id, position.s, position.t, 1, position.orientation
