@@ -19,7 +19,15 @@ from pathlib import Path
 import pytest
 
 from simtest_operator.errors import ScenarioError
-from simtest_operator.opendrive import RoadNetwork, limits, load, models, parse, planview
+from simtest_operator.opendrive import (
+    RoadNetwork,
+    flat_curves_rewritten,
+    limits,
+    load,
+    models,
+    parse,
+    planview,
+)
 from tests.opendrive.conftest import road_grid, single_road
 
 HOSTILE = Path(__file__).resolve().parent / "hostile"
@@ -222,3 +230,18 @@ def test_a_network_with_too_many_lanes_is_refused_quickly() -> None:
         parse(data)
     assert time.perf_counter() - started < 15
     assert caught.value.element == "left" and caught.value.line == 5_002  # road 5,001
+
+
+def test_only_flat_curves_are_rewritten_for_netconvert() -> None:
+    curved = (
+        '<geometry s="0" x="0" y="0" hdg="0" length="100"><spiral curvStart="0" curvEnd="0.01"/>'
+    )
+    assert (
+        flat_curves_rewritten(single_road(curved + "</geometry>", length=100), source="x") is None
+    )
+    flat = (
+        '<geometry s="0" x="0" y="0" hdg="0" length="100"><spiral curvStart="0.01" curvEnd="0.01"/>'
+    )
+    rewritten = flat_curves_rewritten(single_road(flat + "</geometry>", length=100), source="x")
+    assert rewritten is not None and b'<arc curvature="0.01"/>' in rewritten
+    assert b"<spiral" not in rewritten and parse(rewritten).roads[0].lane_sections

@@ -18,6 +18,7 @@ from typing import cast
 from lxml import etree
 
 from simtest_operator import xmlsafe
+from simtest_operator.errors import ScenarioError
 from simtest_operator.opendrive.limits import DEFAULT
 
 FLAT = 1e-12
@@ -26,23 +27,32 @@ FLAT = 1e-12
 
 def flat_curves_rewritten(data: bytes, *, source: str) -> bytes | None:
     """``data`` with every constant-curvature spiral and straight arc rewritten, or None if it
-    has none. Streamed one top-level element at a time, like the parser."""
-    rewritten = 0
+    has none. Streamed one top-level element at a time, like the parser; a first pass stops at
+    the first flat curve, so a map without one costs no copy."""
+    if not any(_rewrite(shape) for element in _stream(data, source)[1] for shape in element.iter()):
+        return None
     output = io.BytesIO()
+    root, elements = _stream(data, source)
+    with etree.xmlfile(output, encoding="UTF-8") as document:
+        document.write_declaration()
+        with document.element(root.tag, dict(root.attrib), nsmap=root.nsmap):
+            for element in elements:
+                for shape in element.iter():
+                    _rewrite(shape)
+                document.write(element)
+    return output.getvalue()
+
+
+def _stream(data: bytes, source: str) -> tuple[etree._Element, Iterator[etree._Element]]:
+    """The root (attributes only) and an iterator over its children, each freed after use."""
     elements = cast(  # the streamed elements are lxml's own
         Iterator[etree._Element],
         xmlsafe.stream_children(data, source=source, max_bytes=DEFAULT.max_bytes, what="OpenDRIVE"),
     )
     root = next(elements, None)
-    if root is None:
-        return None
-    with etree.xmlfile(output, encoding="UTF-8") as document:
-        document.write_declaration()
-        with document.element(root.tag, dict(root.attrib), nsmap=root.nsmap):
-            for element in elements:
-                rewritten += sum(_rewrite(shape) for shape in element.iter())
-                document.write(element)
-    return output.getvalue() if rewritten else None
+    if root is None:  # stream_children raises first; kept total for mypy
+        raise ScenarioError("empty OpenDRIVE document", file=source)
+    return root, elements
 
 
 def _rewrite(shape: etree._Element) -> bool:
