@@ -122,3 +122,14 @@ def test_streamed_children_are_freed_after_use() -> None:
         assert previous is None or (previous not in list(root) and len(previous) == 0)
         previous = child
     assert seen == [("1", 2, 1), ("2", 3, 0)]
+
+
+def test_libxml2_messages_become_one_line() -> None:
+    # libxml2 ends some messages with a newline ("Invalid character: Char 0x0 out of allowed
+    # range\n"): a two-line Invalid reason, found by fuzzing (issue 29).
+    data = b"<?xml version='1.0'?>\n<a>\x00</a>"
+    with pytest.raises(ScenarioError) as caught:
+        xmlsafe.parse_bytes(data, source="bad\nname.xosc")
+    message = str(caught.value)
+    assert "\n" not in message and "Char 0x0 out of allowed range" in message
+    assert message.endswith("(bad\\x0aname.xosc, line 2)")

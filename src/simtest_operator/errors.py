@@ -8,13 +8,23 @@ infrastructure trouble (``SimulationError``, ``ClusterError``) becomes ``Error``
 
 from __future__ import annotations
 
+import re
+
+_BREAK = "[\r\n\v\f\x1c-\x1e\x85\u2028\u2029]"
+_LINE_BREAKS = re.compile(rf"\s*{_BREAK}+\s*")
+_ONE_BREAK = re.compile(_BREAK)
+
 
 class SimtestError(Exception):
     """Root of every error simtest-operator raises on purpose."""
 
 
 class ScenarioError(SimtestError):
-    """A scenario, manifest or source is unusable as written; fix the input, do not retry."""
+    """A scenario, manifest or source is unusable as written; fix the input, do not retry.
+
+    The message is one line, whatever it quotes (libxml2 ends its messages with a newline): it
+    becomes a verdict's reason and the CLI's one-line error (found by fuzzing, issue 29).
+    """
 
     def __init__(
         self,
@@ -30,12 +40,13 @@ class ScenarioError(SimtestError):
         where = ", ".join(
             part
             for part in (
-                file,
+                _ONE_BREAK.sub(lambda match: f"\\x{ord(match.group()):02x}", file or ""),
                 f"<{element}>" if element else None,
                 f"line {line}" if line is not None else None,
             )
             if part
         )
+        message = _LINE_BREAKS.sub(" ", message).strip()
         super().__init__(f"{message} ({where})" if where else message)
 
 

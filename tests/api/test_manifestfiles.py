@@ -87,3 +87,18 @@ def test_every_command_exits_2_with_one_line(tmp_path: Path, command: list[str],
     assert result.exception is None or isinstance(result.exception, SystemExit)
     assert CASES[case][1].split(":")[0] in result.output
     assert result.output.count("\n") == 1, result.output
+
+
+def test_many_unknown_keys_are_named_briefly_and_counted(tmp_path: Path) -> None:
+    # 150,000 unknown top-level keys once made one 3.49 MB error line (issue 29).
+    keys = "".join(f"k{i:05x}: 1\n" for i in range(150_000))  # 1.3 MB
+    path = tmp_path / "m.yaml"
+    path.write_text(BASE + SPEC + keys + "? " + "a" * 5000 + "\n: 1\n")  # a 5,000-character key
+    result = CliRunner().invoke(cli, ["run", str(path), "--engine", "fake"],
+                                env={"SIMTEST_CACHE_DIR": str(tmp_path / "cache")})  # fmt: skip
+    assert result.exit_code == 2, result.output
+    assert result.output.count("\n") == 1 and len(result.output) < 1000, result.output[:2000]
+    assert f"{'a' * 119}…: unknown field; k00000: unknown field; k00001: unknown field;" in (
+        result.output
+    )
+    assert "and 149,996 more (150,001 in all)" in result.output

@@ -57,3 +57,23 @@ def test_a_yaml_error_keeps_its_brackets(tmp_path: Path) -> None:
     assert code == 2, output
     assert "expected ',' or ']'" in output and str(manifest) in output
     assert "MarkupError" not in output
+
+
+CONTROL = "\x1b[2J\r\n\u202eevil\x07"
+"""ESC (clear screen), CR, newline, a right-to-left override and BEL: in a file name (issue 29)."""
+
+
+@pytest.mark.parametrize("live", [False, True])
+def test_control_characters_in_names_are_escaped(tmp_path: Path, live: bool) -> None:
+    manifest = write_campaign(tmp_path, {f"a{CONTROL}": "fail"}, retries=1)
+    result = CliRunner().invoke(
+        cli,
+        ["run", str(manifest), "--engine", "fake", "--plain", "-o", str(tmp_path / "o\x1bx")],
+        env={"SIMTEST_CACHE_DIR": str(tmp_path / "cache"), "TTY_COMPATIBLE": str(int(live))},
+    )
+    assert result.exit_code == 1, result.output
+    escaped = "a\\x1b[2J\\x0d\\x0a\\u202eevil\\x07.xosc"
+    assert escaped in result.output
+    assert "\u202e" not in result.output and "\x07" not in result.output
+    assert "\x1b[2J" not in result.output and "\r" not in result.output
+    assert "o\\x1bx" in result.output

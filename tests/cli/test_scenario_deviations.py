@@ -97,6 +97,21 @@ def test_check_lists_warnings_and_never_reads_markup(tmp_path: Path) -> None:
     shutil.rmtree(folder)
 
 
+def test_check_names_a_folder_with_markup_and_escapes_control_characters(
+    tmp_path: Path,
+) -> None:
+    folder = tmp_path / "s[" / "x]"  # the folder "s[/x]" (issue 29): the table's title
+    folder.mkdir(parents=True)
+    (folder / "b\x1b[2J\u202e.xosc").write_text(OPEN_SPACE, encoding="utf-8")
+    code, output = _invoke(tmp_path, "check", str(folder), "-j", "1")
+    assert code == 0, output
+    assert f"scenarios under {folder}" in output
+    assert "b\\x1b[2J\\u202e.xosc" in output
+    assert "\x1b" not in output and "\u202e" not in output
+    code, output = _invoke(tmp_path, "run", str(folder / "b\x1b[2J\u202e.xosc"), "--no-record")
+    assert code == 0, output
+
+
 def test_size_limit_and_escapes_are_invalid(tmp_path: Path) -> None:
     path = tmp_path / "int.xosc"
     path.write_text(OPEN_SPACE, encoding="utf-8")

@@ -19,8 +19,16 @@ from pathlib import Path
 import pytest
 
 from simtest_operator.errors import ScenarioError
-from simtest_operator.opendrive import RoadNetwork, limits, load, models, parse, planview
-from tests.opendrive.conftest import single_road
+from simtest_operator.opendrive import (
+    RoadNetwork,
+    flat_curves_rewritten,
+    limits,
+    load,
+    models,
+    parse,
+    planview,
+)
+from tests.opendrive.conftest import road_grid, single_road
 
 HOSTILE = Path(__file__).resolve().parent / "hostile"
 
@@ -36,6 +44,12 @@ REFUSED = [
     ("width_cubic_explodes", "width", 14, "width reaches 1e+15 m within 100 m"),
     ("coordinate_huge", "geometry", 6, "x 1e300 is outside"),
     ("parampoly3_overflow", "paramPoly3", 7, "bU 1e+300 moves the curve"),
+    # Degenerate roads (issue 29): were Error (netconvert failed), retried, or put every entity
+    # on one point (a collision at t=0 blamed on the SUT).
+    ("parampoly3_point", "paramPoly3", 7, "every b, c and d coefficient is 0"),
+    ("road_length_zero", "road", 4, "road '1' has length 0 m"),
+    ("planview_hole", "geometry", 9, "road '1' has no geometry from s=0 to s=50"),
+    ("width_zero", "lanes", 10, "road '1' has no lane wider than 1e-09 m"),
 ]
 
 
@@ -149,7 +163,7 @@ head, body = road[: road.index("<road ")], road[road.index("<road ") : road.inde
 copies = (body.replace('<road id="1"', f'<road id="{k}"') for k in range(20000))
 data = (head + "".join(copies) + "</OpenDRIVE>").encode()
 before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-document = parse(data, bounds=limits.Limits(max_total_length=1e7))
+document = parse(data, bounds=limits.Limits(max_total_length=1e7, max_total_lanes=10**6))
 grown = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before
 print(len(data), grown * 1024, len(document.roads))
 """
@@ -201,3 +215,33 @@ def test_degenerate_evaluators_stay_finite() -> None:
         line = planview.ReferenceLine((geometry,), geometry.length)
         for s in (0.0, 0.5 * geometry.length, geometry.length):
             assert all(math.isfinite(value) for value in line.at(s)), (geometry.kind, s)
+
+
+@pytest.mark.timeout(60)
+def test_a_network_with_too_many_lanes_is_refused_quickly() -> None:
+    # 21,000 roads of 2 x 2 lanes (32 MB): 84,000 lanes took a run to 1.1 GB RSS, above a
+    # simulator pod's 1 GiB (issue 29). Refused at the lane that crosses the limit, before the
+    # rest is read; the end-to-end memory at the limit is measured in tests/cli.
+    data = road_grid(21_000)
+    started = time.perf_counter()
+    with pytest.raises(
+        ScenarioError, match="more than 20,000 lanes in all lane sections"
+    ) as caught:
+        parse(data)
+    assert time.perf_counter() - started < 15
+    assert caught.value.element == "left" and caught.value.line == 5_002  # road 5,001
+
+
+def test_only_flat_curves_are_rewritten_for_netconvert() -> None:
+    curved = (
+        '<geometry s="0" x="0" y="0" hdg="0" length="100"><spiral curvStart="0" curvEnd="0.01"/>'
+    )
+    assert (
+        flat_curves_rewritten(single_road(curved + "</geometry>", length=100), source="x") is None
+    )
+    flat = (
+        '<geometry s="0" x="0" y="0" hdg="0" length="100"><spiral curvStart="0.01" curvEnd="0.01"/>'
+    )
+    rewritten = flat_curves_rewritten(single_road(flat + "</geometry>", length=100), source="x")
+    assert rewritten is not None and b'<arc curvature="0.01"/>' in rewritten
+    assert b"<spiral" not in rewritten and parse(rewritten).roads[0].lane_sections

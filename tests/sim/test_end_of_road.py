@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import pytest
 
+from simtest_operator.errors import ScenarioError
 from tests.sim.worlds import DT, Bench, lane, speed, teleport
 
 
@@ -33,3 +34,18 @@ def test_teleport_right_at_the_end_keeps_the_speed() -> None:
     assert not car.stuck
     assert car.s == pytest.approx(11.0)
     assert car.speed == 20.0
+
+
+@pytest.mark.parametrize("s", [1001.5, -2.0, 5000.0])
+def test_a_lane_position_off_its_road_is_invalid(s: float) -> None:
+    # Clamped to the road's end, such positions put entities on one point: a collision at t=0
+    # blamed on the system under test (issue 29).
+    bench = Bench("Car")
+    with pytest.raises(ScenarioError, match=f"s={s:g} is off road '1', which is 1000 m long"):
+        bench.start("Car", teleport(lane(-1, s)))
+
+
+def test_a_lane_position_within_rounding_of_the_end_is_placed_at_the_end() -> None:
+    bench = Bench("Car")
+    bench.start("Car", teleport(lane(-1, 1000.5)))
+    assert bench.actor("Car").s == pytest.approx(1000.0)

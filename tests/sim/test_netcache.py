@@ -89,3 +89,33 @@ def test_lane_origins_map_roads_and_connecting_roads(tmp_path: Path) -> None:
     assert origins[("0", 1)] == ("0_0",)
     # Road 6 is a connecting road of junction 4: it becomes an internal lane.
     assert all(lane.startswith(":4_") for lane in origins[("6", -1)])
+
+
+@pytest.mark.parametrize(
+    ("shape", "end"),
+    [
+        ('<spiral curvStart="0" curvEnd="0"/>', (200.0, -1.75)),  # a line
+        ('<arc curvature="0"/>', (200.0, -1.75)),  # a line; netconvert made it -nan,-nan
+        ('<spiral curvStart="0.005" curvEnd="0.005"/>', (169.76, 90.99)),  # an arc of 1 rad
+    ],
+)
+def test_flat_curves_convert_to_their_shape(
+    tmp_path: Path, shape: str, end: tuple[float, float]
+) -> None:
+    # netconvert cannot evaluate these (issue 29: "No edges loaded" / "-nan,-nan", an Error that
+    # was retried); they reach it as the equivalent line or arc, and this reader agrees.
+    import sumolib
+
+    from simtest_operator.opendrive import RoadNetwork
+    from tests.opendrive.conftest import single_road
+
+    data = single_road(
+        f'<geometry s="0" x="0" y="0" hdg="0" length="200">{shape}</geometry>', length=200
+    )
+    xodr = tmp_path / "flat.xodr"
+    xodr.write_bytes(data)
+    net = netcache.ensure_net(xodr, cache_dir=tmp_path / "nets")
+    edge = sumolib.net.readNet(str(net.path)).getEdge("-r")  # lane -1, along the road
+    assert edge.getShape()[-1] == pytest.approx(end, abs=0.02)
+    pose = RoadNetwork.from_bytes(data).lane_pose("r", 200.0, -1)
+    assert (pose.x, pose.y) == pytest.approx(end, abs=0.02)

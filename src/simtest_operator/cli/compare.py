@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING
 
 import click
 
+from simtest_operator.cli.terminal import printable
 from simtest_operator.errors import SimtestError
 
 if TYPE_CHECKING:
@@ -163,7 +164,7 @@ def compare(
     click.echo(f"base  {base_label}\nother {other_label}\n{comparison.matched} scenarios matched")
     for change in comparison.changes:
         if change.worse_items or any(w < 0 for w in change.worse_by):
-            click.echo(f"  {change.summary()}")
+            click.echo(f"  {printable(change.summary())}")
     click.echo(
         f"verdicts: {len(comparison.regressed)} regressed, {len(comparison.fixed)} fixed, "
         f"{len(comparison.failing)} failing"

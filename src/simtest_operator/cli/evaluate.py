@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING
 
 import click
 
+from simtest_operator.cli.terminal import printable
 from simtest_operator.errors import SimtestError
 from simtest_operator.settings import Settings
 
@@ -117,7 +118,9 @@ def evaluate(
                     f"{b.kind}{'' if b.verdict.value == 'Passed' else ' FAILED'}"
                     for b in run.base_scenarios
                 )
-                click.echo(f"{run.verdict.value:<8} {run.scenario_id}  [{kinds}]  {run.reason}")
+                click.echo(
+                    printable(f"{run.verdict.value:<8} {run.scenario_id}  [{kinds}]  {run.reason}")
+                )
 
         summary = runner.reevaluate(
             runner.EvaluateRequest(

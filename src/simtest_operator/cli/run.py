@@ -6,8 +6,9 @@ line per scenario otherwise), prints the summary and exits 0 (all passed), 1 (so
 2 (errors, invalid input, interrupted) with a one-line reason.
 
 Every piece of user text (paths, campaign and scenario names, reasons, YAML error messages) goes
-through :func:`rich.markup.escape` or is printed with markup off: a scenario called ``[/x]`` once
-crashed the CLI with a MarkupError and exit 1, which CI reads as "the SUT failed" (issue 12).
+through :mod:`~simtest_operator.cli.terminal` (markup escaped, control characters written as
+``\\x1b``): a scenario called ``[/x]`` once crashed the CLI with a MarkupError and exit 1, which CI
+reads as "the SUT failed" (issue 12), and an ESC in a file name reached the terminal (issue 29).
 
 The first Ctrl-C, SIGTERM (CI cancelling a job, ``timeout``, ``docker stop``) or SIGHUP (a closed
 terminal or SSH session) stops the run in order (workers killed, unfinished scenarios marked as
@@ -31,11 +32,11 @@ from typing import Literal, NoReturn
 
 import click
 from rich.console import Console
-from rich.markup import escape
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 from rich.table import Table
 
 from simtest_operator import runner
+from simtest_operator.cli.terminal import markup, printable
 from simtest_operator.errors import ScenarioError, SimtestError, SourceError
 from simtest_operator.scenarios.specs import SecretRef
 from simtest_operator.settings import SECRET_PREFIX, Settings
@@ -171,7 +172,7 @@ def _default_output(manifest: Path | None, rerun_failed: Path | None) -> Path:
 
 
 def _fail(errors: Console, reason: str) -> NoReturn:
-    errors.print(f"[bold red]error:[/] {escape(reason)}", soft_wrap=True)
+    errors.print(f"[bold red]error:[/] {markup(reason)}", soft_wrap=True)
     raise SystemExit(runner.EXIT_ERROR)
 
 
@@ -255,7 +256,8 @@ class _Plain:
         elif isinstance(event, runner.Retrying):
             o = event.outcome
             self.console.print(
-                f"retry   {o.scenario_id} after attempt {o.attempts}: {o.reason}",
+                f"retry   {printable(o.scenario_id)} after attempt {o.attempts}: "
+                f"{printable(o.reason)}",
                 markup=False,
                 soft_wrap=True,
             )
@@ -263,10 +265,12 @@ class _Plain:
             o = event.outcome
             self.counts.add(o.verdict)
             width = len(str(self.total))
-            reason = f"  {o.reason}" if o.reason and o.verdict is not Verdict.PASSED else ""
+            reason = (
+                f"  {printable(o.reason)}" if o.reason and o.verdict is not Verdict.PASSED else ""
+            )
             self.console.print(
                 f"[{self.counts.done:>{width}}/{self.total}] {o.verdict.value:<8} "
-                f"{o.scenario_id} ({o.wall_seconds:.1f} s){reason}",
+                f"{printable(o.scenario_id)} ({o.wall_seconds:.1f} s){reason}",
                 markup=False,
                 soft_wrap=True,
             )
@@ -304,14 +308,14 @@ class _Live(_Plain):
                 self.task,
                 total=event.total,
                 completed=event.finished,
-                description=escape(event.campaign),
+                description=markup(event.campaign),
                 counts=self.counts.line(),
             )
         elif isinstance(event, runner.Retrying):
             o = event.outcome
             self.console.print(
-                f"[yellow]retry[/] {escape(o.scenario_id)} after attempt {o.attempts}: "
-                f"{escape(o.reason)}",
+                f"[yellow]retry[/] {markup(o.scenario_id)} after attempt {o.attempts}: "
+                f"{markup(o.reason)}",
                 soft_wrap=True,
             )
         elif isinstance(event, runner.Finished):
@@ -320,8 +324,8 @@ class _Live(_Plain):
             if o.verdict is not Verdict.PASSED:
                 colour = _COLOURS[o.verdict]
                 self.console.print(
-                    f"[{colour}]{o.verdict.value:<8}[/] {escape(o.scenario_id)}  "
-                    f"{escape(o.reason)}",
+                    f"[{colour}]{o.verdict.value:<8}[/] {markup(o.scenario_id)}  "
+                    f"{markup(o.reason)}",
                     soft_wrap=True,
                 )
             self.progress.update(self.task, advance=1, counts=self.counts.line())
@@ -331,13 +335,13 @@ def _print_prepared(console: Console, event: runner.Prepared) -> None:
     verb = "resuming" if event.resumed else "running"
     todo = event.total - event.finished
     console.print(
-        f"{verb} campaign [bold]{escape(event.campaign)}[/]: {todo} of {event.total} scenarios "
-        f"on {event.parallel} worker process(es)\n  output  {escape(str(event.output))}\n"
-        f"  results {escape(event.store)}",
+        f"{verb} campaign [bold]{markup(event.campaign)}[/]: {todo} of {event.total} scenarios "
+        f"on {event.parallel} worker process(es)\n  output  {markup(str(event.output))}\n"
+        f"  results {markup(event.store)}",
         soft_wrap=True,
     )
     for note in event.notes:
-        console.print(f"  note    {note}", markup=False, soft_wrap=True)
+        console.print(f"  note    {printable(note)}", markup=False, soft_wrap=True)
 
 
 def _print_summary(console: Console, result: runner.LocalRunResult) -> None:
@@ -354,15 +358,16 @@ def _print_summary(console: Console, result: runner.LocalRunResult) -> None:
             listing.add_column(column, overflow="fold")
         for ident, verdict, reason in problems[:LISTED]:
             listing.add_row(
-                escape(ident), f"[{_COLOURS[verdict]}]{verdict.value}[/]", escape(reason)
+                markup(ident), f"[{_COLOURS[verdict]}]{verdict.value}[/]", markup(reason)
             )
         console.print(listing)
         if len(problems) > LISTED:
             console.print(
-                f"... and {len(problems) - LISTED} more (see {result.output})", markup=False
+                f"... and {len(problems) - LISTED} more (see {printable(result.output)})",
+                markup=False,
             )
     for warning in result.warnings:
-        console.print(f"[yellow]warning:[/] {escape(warning)}", soft_wrap=True)
+        console.print(f"[yellow]warning:[/] {markup(warning)}", soft_wrap=True)
     console.print(f"wall time {result.wall_seconds:.1f} s on {result.parallel} worker(s)")
     for label, path in (
         ("output", result.output),
@@ -370,6 +375,6 @@ def _print_summary(console: Console, result: runner.LocalRunResult) -> None:
         ("junit", result.junit),
     ):
         if path is not None:
-            console.print(f"{label:<7}{path}", markup=False, soft_wrap=True)
+            console.print(f"{label:<7}{printable(path)}", markup=False, soft_wrap=True)
     colour = {0: "green", 1: "red"}.get(summary.exit_code, "magenta")
-    console.print(f"[bold {colour}]{escape(summary.reason)}[/]", soft_wrap=True)
+    console.print(f"[bold {colour}]{markup(summary.reason)}[/]", soft_wrap=True)

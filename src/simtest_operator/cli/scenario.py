@@ -19,6 +19,7 @@ import click
 from simtest_operator import runner
 from simtest_operator.cli import options
 from simtest_operator.cli.options import F
+from simtest_operator.cli.terminal import markup, printable
 from simtest_operator.errors import ScenarioError
 from simtest_operator.evaluation import reference as references
 from simtest_operator.openscenario import (
@@ -150,19 +151,19 @@ def run(
     )
     outcome = report.outcome
     click.echo(f"verdict: {outcome.verdict}")
-    click.echo(f"reason: {outcome.reason}")
+    click.echo(f"reason: {printable(outcome.reason)}")
     if report.rules:
         click.echo(f"rules: {report.rules}")
     if "outside the scenario's source root" in outcome.reason:
         click.echo("hint: --root DIR lets the scenario reference files anywhere inside DIR")
     for deviation in report.deviations:
-        click.echo(f"warning: {deviation.describe()}")
+        click.echo(f"warning: {printable(deviation.describe())}")
     for key, value in sorted(outcome.metrics.items()):
         click.echo(f"{key}: {value:g}")
     if outcome.ignored_elements:
-        click.echo(f"ignored: {', '.join(outcome.ignored_elements)}")
+        click.echo(f"ignored: {printable(', '.join(outcome.ignored_elements))}")
     for name, uri in sorted(outcome.artifacts.items()):
-        click.echo(f"{name}: {uri}")
+        click.echo(f"{name}: {printable(uri)}")
     raise SystemExit(
         runner.summarise([outcome.scenario_id], {outcome.scenario_id: outcome}).exit_code
     )
@@ -262,7 +263,6 @@ def check(
     scenarios reference must be inside DIRECTORY (or --root) or come from a map library."""
     # Only `check` prints a table: `scenario run` starts without rich.
     from rich.console import Console
-    from rich.markup import escape
     from rich.table import Table
 
     settings = Settings.from_env()
@@ -272,7 +272,7 @@ def check(
     reports: dict[int, runner.RunReport] = {}
     for index, report in runner.run_many(requests, jobs=jobs or os.cpu_count() or 1):
         reports[index] = report
-    table = Table(title=f"scenarios under {directory}")
+    table = Table(title=f"scenarios under {markup(directory)}")
     columns = ["file", "verdict", "rules", "reason", "warnings", "simulated s", "wall s"]
     if ref is not None:
         columns += ["end Δ s", "median err m", "max err m", "match", "intended differences"]
@@ -283,12 +283,12 @@ def check(
     for index, request in enumerate(requests):
         outcome = reports[index].outcome
         counts[outcome.verdict] += 1
-        row = [
-            outcome.scenario_id,
+        row = [  # user text escaped cell by cell: the warnings cell keeps its line breaks
+            markup(outcome.scenario_id),
             outcome.verdict.value,
             reports[index].rules,
-            outcome.reason,
-            "\n".join(_short(d) for d in reports[index].deviations),
+            markup(outcome.reason),
+            "\n".join(markup(_short(d)) for d in reports[index].deviations),
             f"{outcome.simulated_seconds:.2f}",
             f"{outcome.wall_seconds:.2f}",
         ]
@@ -305,9 +305,9 @@ def check(
                     f"{comparison.worst_median:.2f}",
                     f"{max((e.maximum for e in comparison.entities), default=0.0):.2f}",
                     "yes" if comparison.match else "no",
-                    "; ".join(comparison.intended),
+                    markup("; ".join(comparison.intended)),
                 ]
-        table.add_row(*(escape(cell) for cell in row))
+        table.add_row(*row)
     Console(width=max(Console().width, 200 if ref is not None else 160)).print(table)
     if ref is not None:
         click.echo(f"{matched} of {compared} compared scenarios match the reference")

@@ -22,6 +22,7 @@ from simtest_operator import operator as operating
 from simtest_operator.api import manifestfiles
 from simtest_operator.api.v1alpha1 import ManifestError, parse_campaign
 from simtest_operator.cli import options
+from simtest_operator.cli.terminal import printable
 from simtest_operator.errors import ClusterError, ScenarioError
 from simtest_operator.results import junit, records
 from simtest_operator.verdicts import ScenarioOutcome, Verdict
@@ -100,7 +101,9 @@ def submit(
     phase = str(status.get("phase", ""))
     for result in sorted(results, key=lambda r: str(r["id"])):
         if result.get("verdict") != "Passed":
-            click.echo(f"  {result['verdict']:<8} {result['id']}: {result.get('reason', '')}")
+            click.echo(
+                printable(f"  {result['verdict']:<8} {result['id']}: {result.get('reason', '')}")
+            )
     click.echo(f"{name}: {phase} ({_counts(status)})")
     if phase == "Cancelled":
         click.echo(f"{name}: cancelled: {_complete_reason(status)}", err=True)

@@ -15,6 +15,7 @@ from simtest_operator.opendrive.network import (
     RoadNetwork,
 )
 from simtest_operator.opendrive.parsing import load, parse, without_signals
+from simtest_operator.opendrive.rewriting import flat_curves_rewritten
 from simtest_operator.opendrive.signals import Control, StopLine, TrafficControl, traffic_controls
 from simtest_operator.opendrive.topology import LaneEntry
 
@@ -33,6 +34,7 @@ __all__ = [
     "StopLine",
     "TrafficControl",
     "TrafficRule",
+    "flat_curves_rewritten",
     "load",
     "parse",
     "traffic_controls",

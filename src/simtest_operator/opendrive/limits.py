@@ -38,11 +38,23 @@ class Limits:
     """Roads per document: each adds at least one search-index segment, whatever its length."""
     max_lanes: int = 100
     """Lanes per side of a lane section: lane queries walk them on every simulation step."""
+    max_total_lanes: int = 20_000
+    """Lanes of all lane sections together (CARLA's largest town: 1,052). SUMO holds about
+    10 KB per lane: 84,000 lanes (21,000 roads) took a run to 1.1 GB, above a simulator pod's
+    1 GiB memory request (issue 29); at this limit a run stays near 600 MB."""
     max_signals: int = 50_000
     """Signals and signal references per document (CARLA's towns: at most 180): each becomes
     stop lines the evaluation checks on every step."""
     max_lane_width: float = 1_000.0
     """Width of one lane (or |border|, |laneOffset|) anywhere along its record, metres."""
+    min_road_length: float = 0.001
+    """Shortest road, metres (1 mm): a zero-length road holds no position."""
+    min_road_width: float = 0.01
+    """Widest lane of a road must reach this, metres (1 cm): a road whose lanes are all zero
+    width has no surface, and netconvert drops it ("No edges loaded")."""
+    max_plan_view_gap: float = 1.0
+    """Largest stretch of a road's reference line without a geometry, metres (real maps: 1e-13
+    of rounding; a zero-length element followed by a jump leaves no line to place entities on)."""
 
 
 DEFAULT = Limits()
@@ -66,6 +78,17 @@ def cubic_peak(poly: models.Poly3, span: float) -> float:
         points.append(-c1 / b2)
     start = poly.s
     return max(abs(poly.value(start + x)) for x in points if 0.0 <= x <= points[1])
+
+
+def widest(lane: models.Lane, span: float) -> float:
+    """A lane's greatest width over a lane section of length ``span`` (inf for border lanes)."""
+    if lane.borders and not lane.widths:
+        return math.inf
+    parts = spans([poly.s for poly in lane.widths], span)
+    return max(
+        (cubic_peak(poly, part) for poly, part in zip(lane.widths, parts, strict=True)),
+        default=0.0,
+    )
 
 
 def spans(starts: list[float], end: float) -> list[float]:

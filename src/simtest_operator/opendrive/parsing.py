@@ -86,13 +86,14 @@ def _child(element: etree._Element, name: str) -> etree._Element | None:
 class _Reader:
     """Converts elements, remembering the source for error messages."""
 
-    __slots__ = ("_limits", "_signal_count", "_source", "_total_length")
+    __slots__ = ("_lane_count", "_limits", "_signal_count", "_source", "_total_length")
 
     def __init__(self, source: str, bounds: limits.Limits) -> None:
         self._source = source
         self._limits = bounds
         self._total_length = 0.0
         self._signal_count = 0
+        self._lane_count = 0
 
     def _error(self, element: etree._Element, message: str) -> ScenarioError:
         return ScenarioError(
@@ -206,6 +207,8 @@ class _Reader:
         if plan_view is None:
             raise self._error(element, f"road {road_id!r} has no <planView>")
         length = self._bounded(element, "length", self._limits.max_length, low=0.0)
+        if length < self._limits.min_road_length:
+            raise self._error(element, f"road {road_id!r} has length {length:g} m: no position")
         self._total_length += length
         if self._total_length > self._limits.max_total_length:
             raise self._error(
@@ -216,6 +219,7 @@ class _Reader:
         geometries = tuple(self.geometry(child) for child in _children(plan_view, "geometry"))
         if not geometries:
             raise self._error(plan_view, f"road {road_id!r} has no <geometry>")
+        self._check_coverage(plan_view, road_id, geometries)
         elevation = _child(element, "elevationProfile")
         lanes = _child(element, "lanes")
         if lanes is None:
@@ -224,10 +228,25 @@ class _Reader:
         if not section_elements:
             raise self._error(lanes, f"road {road_id!r} has no <laneSection>")
         starts = sorted(self._float(child, "s") for child in section_elements)
+        spans = [self._section_span(child, starts, length) for child in section_elements]
         sections = tuple(
-            self.lane_section(child, self._section_span(child, starts, length))
-            for child in section_elements
+            self.lane_section(child, span)
+            for child, span in zip(section_elements, spans, strict=True)
         )
+        widest = max(
+            (
+                limits.widest(lane, span)
+                for section, span in zip(sections, spans, strict=True)
+                for lane in (*section.left, *section.right)
+            ),
+            default=0.0,
+        )
+        if widest < self._limits.min_road_width:
+            raise self._error(
+                lanes,
+                f"road {road_id!r} has no lane wider than {widest:g} m "
+                f"(at least {self._limits.min_road_width:g} m): it has no surface",
+            )
         signals = _child(element, "signals")
         signal_elements = _children(signals, "signal") if signals is not None else []
         reference_elements = _children(signals, "signalReference") if signals is not None else []
@@ -278,6 +297,25 @@ class _Reader:
                     models.SpeedLimit(s=self._along(record, length), max_speed=value * factor)
                 )
         return tuple(sorted(found, key=lambda limit: limit.s))
+
+    def _check_coverage(
+        self, plan_view: etree._Element, road_id: str, geometries: tuple[models.Geometry, ...]
+    ) -> None:
+        """Refuse a reference line with a hole: from s=0, each element must start where the
+        line so far ends (a zero-length element is fine; a jump after it is not)."""
+        covered = 0.0
+        for geometry, child in sorted(
+            zip(geometries, _children(plan_view, "geometry"), strict=True),
+            key=lambda pair: pair[0].s,
+        ):
+            if geometry.s - covered > self._limits.max_plan_view_gap:
+                raise self._error(
+                    child,
+                    f"road {road_id!r} has no geometry from s={covered:g} to s={geometry.s:g}",
+                )
+            covered = max(covered, geometry.s + geometry.length)
+        if covered == 0.0:
+            raise self._error(plan_view, f"road {road_id!r} has no geometry of positive length")
 
     def _count_signals(self, signals: etree._Element | None, count: int) -> None:
         self._signal_count += count
@@ -464,6 +502,8 @@ class _Reader:
                         f"{name} {value:g} moves the curve more than {limit:g} m "
                         f"within the element",
                     )
+        if param and not any((*geometry.u[1:], *geometry.v[1:])):
+            raise self._error(shape, "every b, c and d coefficient is 0: the curve is one point")
         return geometry
 
     def _coefficients(
@@ -482,6 +522,13 @@ class _Reader:
                 raise self._error(
                     container,
                     f"{len(children)} lanes in <{side}>, more than {self._limits.max_lanes}",
+                )
+            self._lane_count += len(children)
+            if self._lane_count > self._limits.max_total_lanes:
+                raise self._error(
+                    container,
+                    f"more than {self._limits.max_total_lanes:,} lanes in all lane sections "
+                    "(the road network limit)",
                 )
             result = [self.lane(child, span) for child in children]
             for lane in result:

@@ -185,7 +185,7 @@ class Dispatcher:
                 self._ignore(f"AddEntityAction of {actor.name}, which is already in the world")
                 return Done(actor)
             # It comes back with the speed it had (esmini keeps a deleted entity's state).
-            self.teleport(actor, positions.resolve(world, body.position))
+            self.teleport(actor, positions.resolve(world, body.position, placing=True))
             return Done(actor)
         if isinstance(body, model.DeleteEntityAction):
             self.remove(world.actor(body.entity_ref))
@@ -223,7 +223,7 @@ class Dispatcher:
         if isinstance(body, model.TeleportAction):
             if world.hitches.towed(actor.name):
                 return Done(actor)  # its tow vehicle places it (esmini)
-            self.teleport(actor, positions.resolve(world, body.position))
+            self.teleport(actor, positions.resolve(world, body.position, placing=True))
             self.teleported.add(actor.name)
             for trailer in trailers.align(world.actors, world.hitches, actor):
                 world.attach(trailer)

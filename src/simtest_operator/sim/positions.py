@@ -24,8 +24,30 @@ def _require_roads(world: World, position: object) -> None:
         raise ScenarioError(f"{kind} needs a road network, the scenario has none", element=kind)
 
 
-def resolve(world: World, position: model.Position) -> placements.Placement:
-    """World pose of ``position`` now."""
+ROAD_END_TOLERANCE = 1.0
+"""Metres an absolute ``s`` may lie beyond either end of its road (rounding in generated files)."""
+
+
+def _check_along(world: World, position: model.LanePosition | model.RoadPosition) -> None:
+    """Refuse an entity placed at an ``s`` off its road: clamping it put entities on one point at
+    the road's end, and a collision there was blamed on the system under test (issue 29). Other
+    uses (action targets, conditions) clamp, as esmini does with a warning."""
+    roads = world.roads
+    assert roads is not None
+    length = roads.road_length(position.road_id)
+    if not -ROAD_END_TOLERANCE <= position.s <= length + ROAD_END_TOLERANCE:
+        raise ScenarioError(
+            f"s={position.s:g} is off road {position.road_id!r}, which is {length:g} m long",
+            element=type(position).__name__,
+            line=position.line,
+        )
+
+
+def resolve(
+    world: World, position: model.Position, *, placing: bool = False
+) -> placements.Placement:
+    """World pose of ``position`` now; ``placing`` (a TeleportAction) refuses an ``s`` beyond
+    the road's ends instead of clamping it."""
     if isinstance(position, model.Unsupported):
         raise placements.unsupported(position)
     if isinstance(position, model.WorldPosition):
@@ -51,6 +73,8 @@ def resolve(world: World, position: model.Position) -> placements.Placement:
         )
     if isinstance(position, model.LanePosition):
         _require_roads(world, position)
+        if placing:
+            _check_along(world, position)
         return placements.lane_placement(
             world,
             position.road_id,
@@ -62,6 +86,8 @@ def resolve(world: World, position: model.Position) -> placements.Placement:
         )
     if isinstance(position, model.RoadPosition):
         _require_roads(world, position)
+        if placing:
+            _check_along(world, position)
         # A road position faces along the reference line (s), whatever lane it lies in.
         return placements.road_placement(
             world, position.road_id, position.s, position.t, 1, position.orientation

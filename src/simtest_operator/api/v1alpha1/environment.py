@@ -191,12 +191,23 @@ class SutConfig(ApiModel):
 class SimulatorSettings(ApiModel):
     """Settings of the SUMO-backed simulator stand-in."""
 
+    cel_rules: ClassVar[tuple[dict[str, str], ...]] = (
+        # The API server compares an integer (`stepLength: 0`) with the minimum cast to an
+        # integer (0), so the schema's minimum alone lets 0 through.
+        cel(
+            "!has(self.stepLength) || self.stepLength >= 0.001",
+            "stepLength must be at least 0.001 s",
+            field_path=".stepLength",
+        ),
+    )
+
     image: Annotated[str, StringConstraints(max_length=512)] = (
         "ghcr.io/simtest-dev/simtest-runner:0.1.0"
     )
     """Runner image the simulator pod runs."""
-    step_length: Annotated[float, Field(gt=0, le=0.5)] = 0.05
-    """Simulation step (s)."""
+    # `1e-300` once passed and made every scenario `Error`, retried (issue 29).
+    step_length: Annotated[float, Field(ge=0.001, le=0.5)] = 0.05
+    """Simulation step (s); at least 1 ms, SUMO's time resolution (a shorter step rounds to 0)."""
     real_time_factor: Annotated[float, Field(ge=0)] = 0.0
     """Pace relative to wall time; 0 runs as fast as possible."""
     seed: Annotated[int, Field(ge=0, le=2**31 - 1)] = 42

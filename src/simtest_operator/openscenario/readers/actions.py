@@ -125,10 +125,14 @@ def _infrastructure(el: Element, ctx: reading.Context) -> a.GlobalAction:
 
 
 def _dynamics(el: Element, ctx: reading.Context) -> a.TransitionDynamics:
+    # A duration or distance below 0 cannot be run (LaneChangeTime -2.5 ended Error, issue 29); a
+    # negative rate is common in real files (a deceleration) and only its size counts.
+    dimension = ctx.enum(el, "dynamicsDimension", a.DynamicsDimension)
+    rate = dimension is a.DynamicsDimension.RATE
     return a.TransitionDynamics(
         shape=ctx.enum(el, "dynamicsShape", a.DynamicsShape),
-        dimension=ctx.enum(el, "dynamicsDimension", a.DynamicsDimension),
-        value=ctx.double(el, "value"),
+        dimension=dimension,
+        value=ctx.double(el, "value", minimum=None if rate else 0.0),
         following_mode=ctx.opt_enum(el, "followingMode", a.FollowingMode),
         line=el.sourceline,
     )
@@ -138,11 +142,11 @@ def _constraints(el: Element | None, ctx: reading.Context) -> a.DynamicConstrain
     if el is None:
         return None
     return a.DynamicConstraints(
-        max_acceleration=ctx.opt_double(el, "maxAcceleration"),
-        max_deceleration=ctx.opt_double(el, "maxDeceleration"),
-        max_speed=ctx.opt_double(el, "maxSpeed"),
-        max_acceleration_rate=ctx.opt_double(el, "maxAccelerationRate"),
-        max_deceleration_rate=ctx.opt_double(el, "maxDecelerationRate"),
+        max_acceleration=ctx.opt_double(el, "maxAcceleration", minimum=0.0),
+        max_deceleration=ctx.opt_double(el, "maxDeceleration", minimum=0.0),
+        max_speed=ctx.opt_double(el, "maxSpeed", minimum=0.0),
+        max_acceleration_rate=ctx.opt_double(el, "maxAccelerationRate", minimum=0.0),
+        max_deceleration_rate=ctx.opt_double(el, "maxDecelerationRate", minimum=0.0),
         line=el.sourceline,
     )
 
@@ -176,8 +180,8 @@ def _longitudinal_distance(el: Element, ctx: reading.Context) -> a.LongitudinalD
         entity_ref=ctx.string(el, "entityRef"),
         freespace=ctx.boolean(el, "freespace"),
         continuous=ctx.boolean(el, "continuous"),
-        distance=ctx.opt_double(el, "distance"),
-        time_gap=ctx.opt_double(el, "timeGap"),
+        distance=ctx.opt_double(el, "distance", minimum=0.0),
+        time_gap=ctx.opt_double(el, "timeGap", minimum=0.0),
         coordinate_system=ctx.opt_enum(el, "coordinateSystem", m.CoordinateSystem)
         or m.CoordinateSystem.ENTITY,
         displacement=ctx.opt_enum(el, "displacement", a.LongitudinalDisplacement)
@@ -191,7 +195,7 @@ def _speed_profile(el: Element, ctx: reading.Context) -> a.SpeedProfileAction:
     entries = tuple(
         a.SpeedProfileEntry(
             speed=ctx.double(entry, "speed"),
-            time=ctx.opt_double(entry, "time"),
+            time=ctx.opt_double(entry, "time", minimum=0.0),
             line=entry.sourceline,
         )
         for entry in reading.all_children(el, "SpeedProfileEntry")
@@ -250,7 +254,7 @@ def _lane_offset(el: Element, ctx: reading.Context) -> a.LaneOffsetAction:
         continuous=ctx.boolean(el, "continuous"),
         shape=ctx.enum(dyn, "dynamicsShape", a.DynamicsShape),
         target=offset,
-        max_lateral_acc=ctx.opt_double(dyn, "maxLateralAcc"),
+        max_lateral_acc=ctx.opt_double(dyn, "maxLateralAcc", minimum=0.0),
         line=el.sourceline,
     )
 
@@ -260,7 +264,7 @@ def _lateral_distance(el: Element, ctx: reading.Context) -> a.LateralDistanceAct
         entity_ref=ctx.string(el, "entityRef"),
         freespace=ctx.boolean(el, "freespace"),
         continuous=ctx.boolean(el, "continuous"),
-        distance=ctx.opt_double(el, "distance"),
+        distance=ctx.opt_double(el, "distance", minimum=0.0),
         coordinate_system=ctx.opt_enum(el, "coordinateSystem", m.CoordinateSystem)
         or m.CoordinateSystem.ENTITY,
         displacement=ctx.opt_enum(el, "displacement", a.LateralDisplacement)
@@ -336,8 +340,8 @@ def _synchronize(el: Element, ctx: reading.Context) -> a.SynchronizeAction:
         target_position_master=positions.position(ctx.require(el, "TargetPositionMaster"), ctx),
         target_position=positions.position(ctx.require(el, "TargetPosition"), ctx),
         final_speed=final_speed,
-        target_tolerance_master=ctx.opt_double(el, "targetToleranceMaster"),
-        target_tolerance=ctx.opt_double(el, "targetTolerance"),
+        target_tolerance_master=ctx.opt_double(el, "targetToleranceMaster", minimum=0.0),
+        target_tolerance=ctx.opt_double(el, "targetTolerance", minimum=0.0),
         line=el.sourceline,
     )
 
@@ -347,9 +351,11 @@ def _steady_state(el: Element, ctx: reading.Context) -> a.SteadyState | None:
     candidates = reading.children(holder) if holder is not None else reading.children(el)
     for node in candidates:
         if node.tag == "TargetDistanceSteadyState":
-            return a.SteadyState(distance=ctx.double(node, "distance"), line=node.sourceline)
+            return a.SteadyState(
+                distance=ctx.double(node, "distance", minimum=0.0), line=node.sourceline
+            )
         if node.tag == "TargetTimeSteadyState":
-            return a.SteadyState(time=ctx.double(node, "time"), line=node.sourceline)
+            return a.SteadyState(time=ctx.double(node, "time", minimum=0.0), line=node.sourceline)
     return None
 
 

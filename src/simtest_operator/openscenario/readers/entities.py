@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 from simtest_operator.openscenario import reading
 from simtest_operator.openscenario.model import entities as e
 from simtest_operator.openscenario.readers import controllers
@@ -23,6 +25,21 @@ VEHICLE_CATEGORIES = frozenset(
     }
 )
 """The schema's VehicleCategory values."""
+
+MIN_BOX_SIZE = 0.01
+"""Shortest bounding-box length or width (m): a smaller box cannot collide, and a collision with
+it became a pass (issue 29)."""
+CARLA_BLUEPRINT = re.compile(r"(vehicle|walker|static)\.")
+"""A model name that is a CARLA blueprint id: CARLA spawns the blueprint and ignores the box."""
+CARLA_SIZES = {
+    EntityKind.VEHICLE: (4.9, 2.1, 1.5),
+    EntityKind.PEDESTRIAN: (0.7, 0.7, 1.9),
+    EntityKind.MISC_OBJECT: (1.0, 1.0, 1.0),
+}
+"""Length, width, height (m) a zero box in a CARLA file is read as: typical of CARLA's car and
+walker blueprints; 1 m for a prop (a cone is smaller, a container larger)."""
+CARLA_TWO_WHEELERS = (1.8, 0.8, 1.6)
+"""The same for ``bicycle`` and ``motorbike`` vehicles."""
 
 _KINDS = {
     "Vehicle": (EntityKind.VEHICLE, "vehicleCategory"),
@@ -92,7 +109,9 @@ def _object(
         name=name,
         kind=kind,
         category=category,
-        bounding_box=_bounding_box(inner.require(el, "BoundingBox"), inner),
+        bounding_box=_bounding_box(
+            inner.require(el, "BoundingBox"), inner, kind, category, inner.opt_string(el, "name")
+        ),
         model_name=inner.opt_string(el, "name"),
         catalog_entry=catalog_entry,
         role=inner.opt_string(el, "role"),
@@ -131,7 +150,9 @@ def _trailer(
     return None, scenario_object(ctx.require(el, "Trailer"), ctx)
 
 
-def _bounding_box(el: Element, ctx: reading.Context) -> BoundingBox:
+def _bounding_box(
+    el: Element, ctx: reading.Context, kind: EntityKind, category: str, model: str | None
+) -> BoundingBox:
     center = ctx.require(el, "Center")
     dims = ctx.require(el, "Dimensions")
     box = BoundingBox(
@@ -142,15 +163,31 @@ def _bounding_box(el: Element, ctx: reading.Context) -> BoundingBox:
         width=ctx.double(dims, "width", minimum=0.0),
         height=ctx.double(dims, "height", minimum=0.0),
     )
-    if box.length == 0.0 or box.width == 0.0:
-        # CARLA files give props and walkers no size: they are points, never in a collision.
-        ctx.deviation(
+    if min(box.length, box.width) >= MIN_BOX_SIZE:
+        return box
+    written = f"bounding box {box.length:g} x {box.width:g} m"
+    if not (ctx.carla_frame or (model is not None and CARLA_BLUEPRINT.match(model))):
+        raise ctx.error(
             dims,
-            "bounding-box-zero-size",
-            f"bounding box {box.length:g} x {box.width:g} m has no area: collisions with it "
-            "are not detected",
+            f"{written} cannot collide: length and width must be at least {MIN_BOX_SIZE:g} m",
         )
-    return box
+    # CARLA files give props and walkers no size: CARLA spawns the named blueprint instead.
+    two_wheeler = kind is EntityKind.VEHICLE and category in ("bicycle", "motorbike")
+    length, width, height = CARLA_TWO_WHEELERS if two_wheeler else CARLA_SIZES[kind]
+    ctx.deviation(
+        dims,
+        "bounding-box-zero-size",
+        f"{written} of CARLA blueprint {model or '(CARLA: file)'} read as {length:g} x {width:g} "
+        f"x {height:g} m, the blueprint's typical size",
+    )
+    return BoundingBox(
+        center_x=box.center_x,
+        center_y=box.center_y,
+        center_z=box.center_z,
+        length=length,
+        width=width,
+        height=height,
+    )
 
 
 def _performance(el: Element | None, ctx: reading.Context) -> e.Performance | None:

@@ -118,7 +118,7 @@ def condition(el: Element, ctx: reading.Context) -> c.Condition:
         raise ctx.error(chosen, "expected ByEntityCondition or ByValueCondition")
     return c.Condition(
         name=ctx.opt_string(el, "name") or "",
-        delay=ctx.double_or(el, "delay", 0.0),
+        delay=ctx.double_or(el, "delay", 0.0, minimum=0.0),
         edge=ctx.enum(el, "conditionEdge", c.ConditionEdge),
         body=body,
         line=el.sourceline,
@@ -160,7 +160,7 @@ def _duration(kind: _DurationKind) -> _EntityReader:
     """A reader of a condition holding only a ``duration`` (end of road, off road, standstill)."""
 
     def read(el: Element, ctx: reading.Context) -> c.EntityCondition:
-        return kind(duration=ctx.double(el, "duration"), line=el.sourceline)
+        return kind(duration=ctx.double(el, "duration", minimum=0.0), line=el.sourceline)
 
     return read
 
@@ -180,7 +180,9 @@ def _motion(kind: _MotionKind) -> _EntityReader:
 
 
 def _traveled_distance(el: Element, ctx: reading.Context) -> c.TraveledDistanceCondition:
-    return c.TraveledDistanceCondition(value=ctx.double(el, "value"), line=el.sourceline)
+    return c.TraveledDistanceCondition(
+        value=ctx.double(el, "value", minimum=0.0), line=el.sourceline
+    )
 
 
 def _collision(el: Element, ctx: reading.Context) -> c.CollisionCondition:
@@ -203,7 +205,7 @@ def _relative_speed(el: Element, ctx: reading.Context) -> c.RelativeSpeedConditi
 def _reach_position(el: Element, ctx: reading.Context) -> c.ReachPositionCondition:
     return c.ReachPositionCondition(
         position=positions.position(ctx.require(el, "Position"), ctx),
-        tolerance=ctx.double(el, "tolerance"),
+        tolerance=ctx.double(el, "tolerance", minimum=0.0),
         line=el.sourceline,
     )
 
@@ -212,7 +214,7 @@ def _time_headway(el: Element, ctx: reading.Context) -> c.TimeHeadwayCondition:
     system, kind, along = _distance_frame(el, ctx, m.RelativeDistanceType.LONGITUDINAL)
     return c.TimeHeadwayCondition(
         entity_ref=ctx.string(el, "entityRef"),
-        value=ctx.double(el, "value"),
+        value=ctx.double(el, "value", minimum=0.0),
         rule=ctx.enum(el, "rule", m.Rule),
         freespace=ctx.boolean(el, "freespace"),
         coordinate_system=system,
@@ -226,7 +228,7 @@ def _distance(el: Element, ctx: reading.Context) -> c.DistanceCondition:
     system, kind, along = _distance_frame(el, ctx, m.RelativeDistanceType.EUCLIDEAN)
     return c.DistanceCondition(
         position=positions.position(ctx.require(el, "Position"), ctx),
-        value=ctx.double(el, "value"),
+        value=ctx.double(el, "value", minimum=0.0),
         rule=ctx.enum(el, "rule", m.Rule),
         freespace=ctx.boolean(el, "freespace"),
         coordinate_system=system,
@@ -248,8 +250,8 @@ def _relative_clearance(el: Element, ctx: reading.Context) -> c.RelativeClearanc
         ),
         opposite_lanes=ctx.boolean(el, "oppositeLanes"),
         freespace=ctx.boolean(el, "freeSpace"),
-        distance_forward=ctx.opt_double(el, "distanceForward"),
-        distance_backward=ctx.opt_double(el, "distanceBackward"),
+        distance_forward=ctx.opt_double(el, "distanceForward", minimum=0.0),
+        distance_backward=ctx.opt_double(el, "distanceBackward", minimum=0.0),
         line=el.sourceline,
     )
 
@@ -300,7 +302,7 @@ def _relative_distance(el: Element, ctx: reading.Context) -> c.RelativeDistanceC
     system, kind, _ = _distance_frame(el, ctx, m.RelativeDistanceType.EUCLIDEAN)
     return c.RelativeDistanceCondition(
         entity_ref=ctx.string(el, "entityRef"),
-        value=ctx.double(el, "value"),
+        value=ctx.double(el, "value", minimum=0.0),
         rule=ctx.enum(el, "rule", m.Rule),
         freespace=ctx.boolean(el, "freespace"),
         relative_distance_type=kind,
@@ -318,7 +320,7 @@ def _time_to_collision(el: Element, ctx: reading.Context) -> c.TimeToCollisionCo
     if entity_ref is None and position is None:
         raise ctx.error(target, "expected EntityRef or Position")
     return c.TimeToCollisionCondition(
-        value=ctx.double(el, "value"),
+        value=ctx.double(el, "value", minimum=0.0),
         rule=ctx.enum(el, "rule", m.Rule),
         freespace=ctx.boolean(el, "freespace"),
         entity_ref=entity_ref,
