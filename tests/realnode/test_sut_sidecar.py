@@ -58,13 +58,18 @@ def _sut_pids() -> list[int]:
     return found
 
 
+_LOOPBACK = ("0100007F:", "0000000000000000FFFF00000100007F:", "00000000000000000000000001000000:")
+"""127.0.0.1 in /proc/net/tcp, and as /proc/net/tcp6 shows it (v4-mapped, ::1)."""
+
+
 def _simulator_connected(pid: int) -> bool:
     """Whether the SUT process holds an established TCP connection from the pod's loopback.
 
     The simulator reaches its sidecar on 127.0.0.1 (the kubelet's startup probe comes from the
-    node, not loopback). Read from the pod's network namespace (``/proc/<pid>/net/tcp``, state
-    ``01``, remote ``0100007F``) and matched to the SUT's file descriptors by socket inode:
-    evidence that the run is under way, not a guess of how long start-up takes under load.
+    node, not loopback). Read from the pod's network namespace (``/proc/<pid>/net/tcp`` and
+    ``tcp6``: Go listens on 0.0.0.0 with a dual-stack socket; state ``01``, remote loopback) and
+    matched to the SUT's file descriptors by socket inode: evidence that the run is under way,
+    not a guess of how long start-up takes under load.
     """
     proc = Path("/proc") / str(pid)
     try:
@@ -73,18 +78,19 @@ def _simulator_connected(pid: int) -> bool:
             for fd in (proc / "fd").iterdir()
             if (link := str(fd.readlink())).startswith("socket:[")
         }
-        table = (proc / "net" / "tcp").read_text()
+        tables = [(proc / "net" / name).read_text() for name in ("tcp", "tcp6")]
     except OSError:
         return False
-    for line in table.splitlines()[1:]:
-        fields = line.split()
-        if (
-            len(fields) > 9
-            and fields[3] == "01"
-            and fields[2].startswith("0100007F:")
-            and fields[9] in inodes
-        ):
-            return True
+    for table in tables:
+        for line in table.splitlines()[1:]:
+            fields = line.split()
+            if (
+                len(fields) > 9
+                and fields[3] == "01"
+                and fields[2].startswith(_LOOPBACK)
+                and fields[9] in inodes
+            ):
+                return True
     return False
 
 
