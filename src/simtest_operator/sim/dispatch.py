@@ -33,6 +33,7 @@ from simtest_operator.sim.synchronize import SynchronizeRun
 from simtest_operator.sim.traffic import Traffic
 from simtest_operator.sim.trajectories import PathRun
 from simtest_operator.sim.world import World
+from simtest_operator.snapshots import JumpCause
 
 ControllerSwitch = Callable[[Actor, bool], None]
 """Engages (True) or releases (False) the SUT driver model on an actor."""
@@ -179,6 +180,7 @@ class Dispatcher:
                 return Done(actor)
             # It comes back with the speed it had (esmini keeps a deleted entity's state).
             self.teleport(actor, positions.resolve(world, body.position))
+            world.declare(actor, JumpCause.ADDED)
             return Done(actor)
         if isinstance(body, model.DeleteEntityAction):
             self.remove(world.actor(body.entity_ref))
@@ -203,6 +205,7 @@ class Dispatcher:
                 run.cancel()
         actor.placed = False
         actor.driver = None
+        self._world.declare(actor, JumpCause.DELETED)
 
     def start_private(self, actor: Actor, body: model.AnyAction) -> Run:
         world = self._world
@@ -216,6 +219,7 @@ class Dispatcher:
         if isinstance(body, model.TeleportAction):
             self.teleport(actor, positions.resolve(world, body.position))
             self.teleported.add(actor.name)
+            world.declare(actor, JumpCause.TELEPORT)
             return Done(actor)
         if isinstance(body, model.ActivateControllerAction):
             self._activate(actor, body.longitudinal, body.lateral, autopilot=self._carla)
