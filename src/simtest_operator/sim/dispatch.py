@@ -217,9 +217,11 @@ class Dispatcher:
         if actor.obj.unsupported is not None:
             raise placements.unsupported(actor.obj.unsupported)
         if isinstance(body, model.TeleportAction):
+            moved = actor.placed  # the first pose (in Init) is no jump
             self.teleport(actor, positions.resolve(world, body.position))
             self.teleported.add(actor.name)
-            world.declare(actor, JumpCause.TELEPORT)
+            if moved:
+                world.declare(actor, JumpCause.TELEPORT)
             return Done(actor)
         if isinstance(body, model.ActivateControllerAction):
             self._activate(actor, body.longitudinal, body.lateral, autopilot=self._carla)
