@@ -1,8 +1,10 @@
 """The run recorder: world snapshots -> one omega-prime (OSI GroundTruth 3.7.0) MCAP file.
 
 Layout of a recording, as omega-prime and the OSI MCAP trace convention expect:
-- file metadata ``net.asam.osi.trace`` (OSI/protobuf versions, description, zero time) and
-  ``simtest.run`` (scenario id, seed, tool versions);
+- file metadata ``net.asam.osi.trace`` (OSI/protobuf versions, description, zero time),
+  ``simtest.run`` (scenario id, seed, tool versions), one ``simtest.environment`` per environment
+  the scenario set and one ``simtest.discontinuity`` per jump it commanded (the evidence checks
+  excuse those);
 - topic ``ground_truth``: one ``osi3.GroundTruth`` per recorded frame, timestamps being offsets
   from the scenario start, log time equal to the timestamp;
 - topic ``ground_truth_map``: one ``osi3.MapAsamOpenDrive`` with the road file, whose
