@@ -169,3 +169,38 @@ class WorldSnapshot:
             if state.name == name:
                 return state
         return None
+
+
+class JumpCause(enum.StrEnum):
+    """Why the simulation moved an entity discontinuously on purpose (what the scenario asked)."""
+
+    TELEPORT = "teleport"
+    """A TeleportAction put it elsewhere."""
+    TRAJECTORY_START = "trajectoryStart"
+    """A FollowTrajectoryAction put it on its trajectory's start."""
+    LATERAL_STEP = "lateralStep"
+    """A lane change or lane offset of ``step`` shape (or zero time) moved it across at once."""
+    ROAD_END = "roadEnd"
+    """It reached the end of its road and stands there, its speed dropped a step later (as
+    esmini does)."""
+    ADDED = "added"
+    """An AddEntityAction (re)placed it."""
+    DELETED = "deleted"
+    """A DeleteEntityAction took it out of the world."""
+    HITCHED = "hitched"
+    """A ConnectTrailerAction hitched it (a parked trailer) to its tow vehicle, which pulls it
+    onto the hitch at once (as esmini does)."""
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Discontinuity:
+    """A discontinuity the scenario commands: ``entity`` (:attr:`EntityState.id`) is first shown
+    in its new state by the frame at ``time``, so the evidence checks excuse the frame interval
+    that ends there, for that entity alone."""
+
+    time: float
+    entity: int
+    cause: JumpCause
+    object_id: int | None = None
+    """The OSI moving object id the entity had in a recording (it changes when an entity
+    comes back after a gap); None in the simulation."""

@@ -19,6 +19,7 @@ from simtest_operator.evaluation.scenes import scene_from_columns
 from simtest_operator.recording import objects as objects_module
 from simtest_operator.recording import read_trajectories
 from simtest_operator.recording.objects import ObjectRecord, RecordedObjects, read_objects
+from simtest_operator.snapshots import Discontinuity, JumpCause
 from simtest_operator.verdicts import Verdict
 from tests.evaluation import recorded_runs
 
@@ -248,3 +249,76 @@ def test_a_speed_that_steps_between_frames_is_explained(recordings: dict[str, Pa
     assert math.hypot(lead.vx[40], lead.vy[40]) > 5.0
     lead.vx[40] = lead.vy[40] = 0.0
     assert quality.assess(stepped, simulated_seconds=decoded.frame_times[-1]).issues == ()
+
+
+def _teleported(decoded: RecordedObjects, frame: int, metres: float) -> RecordedObjects:
+    """The lead (object 1) put ``metres`` further along x from ``frame`` on, velocities kept:
+    the recording of a mid-run TeleportAction."""
+    lead = decoded.objects[1]
+    moved = dataclasses.replace(
+        lead, x=[x + (metres if i >= frame else 0.0) for i, x in enumerate(lead.x)]
+    )
+    return dataclasses.replace(decoded, objects={**decoded.objects, 1: moved})
+
+
+def _jump(time: float, object_id: int, cause: JumpCause = JumpCause.TELEPORT) -> Discontinuity:
+    return Discontinuity(time=time, entity=object_id, cause=cause, object_id=object_id)
+
+
+def test_a_declared_jump_is_excused_only_where_and_for_whom_it_was_declared(
+    recordings: dict[str, Path],
+) -> None:
+    decoded = read_objects(recordings["following"])
+    end = decoded.frame_times[-1]
+    jumped = _teleported(decoded, 40, 20.0)
+    at = jumped.objects[1].t[40]
+    undeclared = quality.assess(jumped, simulated_seconds=end)
+    assert any(
+        re.fullmatch(rf"object 1 jumps 19\.\d\d m against its velocity at t={at:.2f} s", issue)
+        for issue in undeclared.issues
+    ), undeclared.issues
+    declared = dataclasses.replace(jumped, discontinuities=(_jump(at, 1),))
+    assert quality.assess(declared, simulated_seconds=end).issues == ()
+    # The same jump declared for another entity, or for another frame, is still caught.
+    for wrong in (_jump(at, 0), _jump(jumped.objects[1].t[41], 1), _jump(at - 0.1, 1)):
+        misdeclared = dataclasses.replace(jumped, discontinuities=(wrong,))
+        assert quality.assess(misdeclared, simulated_seconds=end).issues == undeclared.issues
+    # A declaration excuses its own frame interval only: a second jump later is caught.
+    twice = dataclasses.replace(_teleported(jumped, 60, 20.0), discontinuities=(_jump(at, 1),))
+    issues = quality.assess(twice, simulated_seconds=end).issues
+    later = jumped.objects[1].t[60]
+    assert (
+        len(issues) == 1
+        and f"object 1 jumps 20.00 m against its velocity at t={later:.2f} s" in issues[0]
+    )
+
+
+def test_a_deleted_ego_is_not_due_in_the_frames_after_its_declared_deletion(
+    recordings: dict[str, Path],
+) -> None:
+    decoded = read_objects(recordings["following"])
+    end = decoded.frame_times[-1]
+    ego = decoded.objects[0]
+    kept = {
+        f.name: getattr(ego, f.name)[:50]
+        for f in dataclasses.fields(ObjectRecord)
+        if f.name != "object_id"
+    }
+    deleted = dataclasses.replace(
+        decoded, objects={**decoded.objects, 0: ObjectRecord(object_id=0, **kept)}
+    )
+    gone_at = decoded.frame_times[50]
+    frames = len(decoded.frame_times)
+    assert quality.assess(deleted, simulated_seconds=end).issues == (
+        f"host vehicle 0 is in 50 of {frames} frames",
+    )
+    declared = dataclasses.replace(deleted, discontinuities=(_jump(gone_at, 0, JumpCause.DELETED),))
+    assert quality.assess(declared, simulated_seconds=end).issues == ()
+    # Added again at frame 70 but missing from the recording from then on: that is a gap.
+    back = decoded.frame_times[70]
+    readded = dataclasses.replace(
+        declared, discontinuities=(*declared.discontinuities, _jump(back, 0, JumpCause.ADDED))
+    )
+    assert quality.assess(readded, simulated_seconds=end).issues == (
+        f"host vehicle 0 is in 50 of {frames - 20} frames",
+    )

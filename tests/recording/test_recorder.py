@@ -24,7 +24,16 @@ from mcap.stream_reader import StreamReader
 
 from simtest_operator.errors import ResultsError
 from simtest_operator.recording import Recorder, RecordingInfo, read_metadata, read_trajectories
-from simtest_operator.snapshots import BoundingBox, EntityKind, EntityState, WorldSnapshot
+from simtest_operator.recording.objects import read_objects
+from simtest_operator.recording.writing import DISCONTINUITY_METADATA
+from simtest_operator.snapshots import (
+    BoundingBox,
+    Discontinuity,
+    EntityKind,
+    EntityState,
+    JumpCause,
+    WorldSnapshot,
+)
 
 XODR = (
     Path(__file__).resolve().parents[3]
@@ -343,3 +352,32 @@ def test_empty_recording_still_has_the_map(tmp_path: Path) -> None:
         topics = [channel.topic for _, channel, _ in make_reader(stream).iter_messages()]
     assert topics == ["ground_truth_map"]
     assert read_trajectories(path) == {}
+
+
+def test_declared_jumps_are_recorded_with_the_osi_id_the_entity_had_then(tmp_path: Path) -> None:
+    # Vehicle 4 is deleted at t=2 s and added again at t=3 s under a fresh OSI id: its
+    # deletion names the id it had, its return the id it has from then on.
+    path = tmp_path / "jumps.mcap"
+    with Recorder(path, info=RecordingInfo(scenario_id="j", seed=1), period=0.1) as recorder:
+        for step in range(101):
+            recorder.write(world(round(step * 0.05, 10)))
+        for time, cause in ((2.0, JumpCause.DELETED), (3.0, JumpCause.ADDED)):
+            recorder.add_discontinuity(Discontinuity(time=time, entity=4, cause=cause))
+        recorder.add_discontinuity(Discontinuity(time=1.5, entity=0, cause=JumpCause.TELEPORT))
+    decoded = read_objects(path)
+    (fresh,) = [i for i in decoded.objects if i >= 1_000_000_000]
+    assert decoded.objects[fresh].t[0] == 3.0
+    assert decoded.discontinuities == (
+        Discontinuity(time=2.0, entity=4, cause=JumpCause.DELETED, object_id=4),
+        Discontinuity(time=3.0, entity=4, cause=JumpCause.ADDED, object_id=fresh),
+        Discontinuity(time=1.5, entity=0, cause=JumpCause.TELEPORT, object_id=0),
+    )
+
+
+def test_a_malformed_jump_record_makes_the_recording_unreadable(tmp_path: Path) -> None:
+    path = tmp_path / "bad.mcap"
+    with Recorder(path, info=RecordingInfo(scenario_id="j", seed=1), period=0.1) as recorder:
+        recorder.write(world(0.0))
+        recorder._writer.add_metadata(DISCONTINUITY_METADATA, {"time": "1", "cause": "warp"})
+    with pytest.raises(ResultsError, match="cannot read recording"):
+        read_objects(path)

@@ -68,6 +68,7 @@ class Bench:
                 run.after_motion(world)
             self.steps += 1
             world.time = round(self.steps * DT, 9)
+            world.date_jumps()  # as the engine does when it builds the snapshot
 
 
 def lane(lane_id: int, s: float, offset: float = 0.0, h: float | None = None) -> model.Position:

@@ -11,18 +11,24 @@ omega-prime's format needs but does not make (see docs/evaluation.md): frame rat
 frame gaps, a host vehicle in every frame, a map whose reference matches, constant box size and
 class per object, positions that agree with the recorded velocities, and a recording that
 covers the run's simulated time.
+
+A jump the scenario commands (a teleport, a trajectory's start, a lane change of step shape, a
+stop at a road's end, an entity deleted and added) is declared by the simulation and recorded
+with the evidence (``simtest.discontinuity`` records); only the frame interval that ends at a
+declared jump is excused, and only for its entity, so the same jump undeclared is still caught.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 import numpy.typing as npt
 
 from simtest_operator.evaluation.scenes import ObjectColumns, RecordedColumns, host_id, median
+from simtest_operator.snapshots import Discontinuity, JumpCause
 
 _RANGES = {
     "length": (0.0, math.inf, False),
@@ -35,6 +41,8 @@ _RANGES = {
 """omega-prime's value checks (column -> low, high, low inclusive); high always inclusive."""
 _CHECKED_COLUMNS = 20
 """Columns of omega-prime's ``polars_schema`` that ``data_format_consistency`` counts."""
+_SAME_TIME = 1e-6
+"""Seconds within which a declared jump's time is a frame's time."""
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
@@ -114,7 +122,24 @@ def _unexplained(
     return np.asarray(np.hypot(ex - share * wx, ey - share * wy), dtype=np.float64)
 
 
-def _consistency_issues(objects: Mapping[int, ObjectColumns], max_error: float) -> list[str]:
+def _declared_intervals(
+    t: npt.NDArray[np.float64], times: Sequence[float]
+) -> npt.NDArray[np.bool_]:
+    """Per frame interval of a track, whether a declared jump falls in it: after its first
+    frame, at or before its second (the frame that first shows the new state)."""
+    excused = np.zeros(max(len(t) - 1, 0), dtype=np.bool_)
+    for at in times:
+        excused |= (t[:-1] + _SAME_TIME < at) & (at <= t[1:] + _SAME_TIME)
+    return excused
+
+
+def _consistency_issues(
+    objects: Mapping[int, ObjectColumns], max_error: float, jumps: Sequence[Discontinuity]
+) -> list[str]:
+    declared: dict[int, list[float]] = {}
+    for jump in jumps:
+        object_id = jump.entity if jump.object_id is None else jump.object_id
+        declared.setdefault(object_id, []).append(jump.time)
     issues = []
     for object_id, o in sorted(objects.items()):
         if len(o.t) < 2:
@@ -130,7 +155,8 @@ def _consistency_issues(objects: Mapping[int, ObjectColumns], max_error: float) 
             issues.append(f"object {object_id} has non-finite positions")
             continue
         error = _unexplained(np.diff(t), np.diff(x), np.diff(y), vx, vy)
-        wrong = np.nonzero(error > max_error)[0]
+        excused = _declared_intervals(t, declared.get(object_id, ()))
+        wrong = np.nonzero((error > max_error) & ~excused)[0]
         if len(wrong):
             first = int(wrong[0])
             issues.append(
@@ -138,6 +164,33 @@ def _consistency_issues(objects: Mapping[int, ObjectColumns], max_error: float) 
                 f"at t={t[first + 1]:.2f} s"
             )
     return issues
+
+
+def _host_frames(recorded: RecordedColumns) -> tuple[int, int]:
+    """(frames that show the host vehicle, frames due to show it): an ego the scenario deleted
+    is not due until it is added again, when it comes back under a fresh OSI id."""
+    times = np.asarray(recorded.frame_times, dtype=np.float64)
+    hosts = {h for h in recorded.host_ids if h is not None}
+    shown = np.zeros(len(times), dtype=np.bool_)
+    for h in hosts & recorded.objects.keys():
+        shown |= np.isin(times, np.asarray(recorded.objects[h].t, dtype=np.float64))
+    entities = {
+        j.entity for j in recorded.discontinuities if j.object_id in hosts or j.entity in hosts
+    }
+    gone = np.zeros(len(times), dtype=np.bool_)
+    for entity in entities:
+        since: float | None = None
+        for jump in sorted(recorded.discontinuities, key=lambda j: j.time):
+            if jump.entity != entity:
+                continue
+            if jump.cause is JumpCause.DELETED and since is None:
+                since = jump.time
+            elif jump.cause is JumpCause.ADDED and since is not None:
+                gone |= (times >= since - _SAME_TIME) & (times < jump.time - _SAME_TIME)
+                since = None
+        if since is not None:
+            gone |= times >= since - _SAME_TIME
+    return int(np.count_nonzero(shown & ~gone)), int(np.count_nonzero(~gone))
 
 
 def _content_issues(
@@ -154,9 +207,9 @@ def _content_issues(
     elif host is None or host not in recorded.objects:
         issues.append("no host vehicle (ego) in the recording")
     elif missing_host or len(recorded.objects[host].t) != frames:
-        issues.append(
-            f"host vehicle {host} is in {len(recorded.objects[host].t)} of {frames} frames"
-        )
+        shown, due = _host_frames(recorded)
+        if missing_host or shown != due:
+            issues.append(f"host vehicle {host} is in {shown} of {due} frames")
     if recorded.map_xml is None:
         if map_expected:
             issues.append("no map (ground_truth_map channel) in the recording")
@@ -241,5 +294,7 @@ def assess(
             f"{invalid} value(s) out of omega-prime's ranges, data format consistency "
             f"{metrics['dataFormatConsistency']:.2f} %"
         )
-    issues += _consistency_issues(recorded.objects, rules.max_position_error)
+    issues += _consistency_issues(
+        recorded.objects, rules.max_position_error, recorded.discontinuities
+    )
     return Quality(metrics={k: round(v, 4) for k, v in metrics.items()}, issues=tuple(issues))

@@ -16,6 +16,8 @@ from typing import Protocol
 import numpy as np
 import numpy.typing as npt
 
+from simtest_operator.snapshots import Discontinuity
+
 Array = npt.NDArray[np.float64]
 
 # OSI MovingObject.Type and VehicleClassification.Type values (osi_object.proto 3.7.0).
@@ -91,6 +93,8 @@ class RecordedColumns(Protocol):
     def map_xml(self) -> str | None: ...
     @property
     def map_channel_reference(self) -> str | None: ...
+    @property
+    def discontinuities(self) -> Sequence[Discontinuity]: ...
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)

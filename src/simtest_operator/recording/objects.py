@@ -24,7 +24,12 @@ from mcap.reader import McapReader, make_reader
 from mcap.records import Chunk
 
 from simtest_operator.errors import ResultsError
-from simtest_operator.recording.writing import GROUND_TRUTH_TOPIC, MAP_TOPIC
+from simtest_operator.recording.writing import (
+    DISCONTINUITY_METADATA,
+    GROUND_TRUTH_TOPIC,
+    MAP_TOPIC,
+)
+from simtest_operator.snapshots import Discontinuity, JumpCause
 
 _DOUBLE = struct.Struct("<d").unpack_from
 _FLOAT = struct.Struct("<f").unpack_from
@@ -73,6 +78,8 @@ class RecordedObjects:
     """The OpenDRIVE text of the map channel, if present."""
     map_channel_reference: str | None
     metadata: dict[str, dict[str, str]]
+    discontinuities: tuple[Discontinuity, ...] = ()
+    """Jumps the run declared it commanded (``simtest.discontinuity`` records), by OSI id."""
 
 
 def _varint(data: bytes, pos: int) -> tuple[int, int]:
@@ -481,6 +488,18 @@ def _columns(object_id: int, rows: list[tuple[float, ...]]) -> ObjectRecord:
     )  # fmt: skip
 
 
+def _discontinuity(data: dict[str, str]) -> Discontinuity:
+    """A declared jump from its metadata record (a malformed one makes the file unreadable: a
+    recording that excuses jumps must say which, exactly)."""
+    entity = int(data["entity"])
+    return Discontinuity(
+        time=float(data["time"]),
+        entity=entity,
+        cause=JumpCause(data["cause"]),
+        object_id=int(data.get("object", entity)),
+    )
+
+
 def read_objects(path: Path, *, with_map: bool = True) -> RecordedObjects:
     """Every frame and object of an omega-prime recording (both map topic spellings)."""
     rows: dict[int, list[tuple[float, ...]]] = {}
@@ -493,7 +512,13 @@ def read_objects(path: Path, *, with_map: bool = True) -> RecordedObjects:
     try:
         with path.open("rb") as stream:
             reader = make_reader(stream)
-            metadata = {record.name: dict(record.metadata) for record in reader.iter_metadata()}
+            records = list(reader.iter_metadata())
+            metadata = {record.name: dict(record.metadata) for record in records}
+            jumps = tuple(
+                _discontinuity(record.metadata)
+                for record in records
+                if record.name == DISCONTINUITY_METADATA
+            )
             messages = _chunk_messages(reader, stream, topics)
             if messages is None:
                 messages = (
@@ -509,7 +534,15 @@ def read_objects(path: Path, *, with_map: bool = True) -> RecordedObjects:
                 t, host = _ground_truth(data, log_time * 1e-9, rows, refs)
                 times.append(t)
                 hosts.append(host)
-    except (OSError, McapError, ValueError, IndexError, struct.error, zstandard.ZstdError) as exc:
+    except (
+        OSError,
+        McapError,
+        ValueError,
+        KeyError,
+        IndexError,
+        struct.error,
+        zstandard.ZstdError,
+    ) as exc:
         detail = str(exc) or f"{type(exc).__name__} (truncated or damaged file)"
         raise ResultsError(f"cannot read recording {path}: {detail}") from exc
     return RecordedObjects(
@@ -520,4 +553,5 @@ def read_objects(path: Path, *, with_map: bool = True) -> RecordedObjects:
         map_xml=map_xml,
         map_channel_reference=map_ref,
         metadata=metadata,
+        discontinuities=jumps,
     )

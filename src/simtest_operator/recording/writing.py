@@ -1,8 +1,10 @@
 """The run recorder: world snapshots -> one omega-prime (OSI GroundTruth 3.7.0) MCAP file.
 
 Layout of a recording, as omega-prime and the OSI MCAP trace convention expect:
-- file metadata ``net.asam.osi.trace`` (OSI/protobuf versions, description, zero time) and
-  ``simtest.run`` (scenario id, seed, tool versions);
+- file metadata ``net.asam.osi.trace`` (OSI/protobuf versions, description, zero time),
+  ``simtest.run`` (scenario id, seed, tool versions), one ``simtest.environment`` per environment
+  the scenario set and one ``simtest.discontinuity`` per jump it commanded (the evidence checks
+  excuse those);
 - topic ``ground_truth``: one ``osi3.GroundTruth`` per recorded frame, timestamps being offsets
   from the scenario start, log time equal to the timestamp;
 - topic ``ground_truth_map``: one ``osi3.MapAsamOpenDrive`` with the road file, whose
@@ -28,7 +30,13 @@ from mcap.writer import CompressionType, Writer
 
 from simtest_operator.errors import ResultsError
 from simtest_operator.recording import descriptors, osiwire
-from simtest_operator.snapshots import BoundingBox, EntityKind, EntityState, WorldSnapshot
+from simtest_operator.snapshots import (
+    BoundingBox,
+    Discontinuity,
+    EntityKind,
+    EntityState,
+    WorldSnapshot,
+)
 
 GROUND_TRUTH_TOPIC = "ground_truth"
 MAP_TOPIC = "ground_truth_map"
@@ -36,6 +44,9 @@ OSI_TRACE_METADATA = "net.asam.osi.trace"
 RUN_METADATA = "simtest.run"
 ENVIRONMENT_METADATA = "simtest.environment"
 """One metadata record per environment the scenario set (time, name, Element.attribute settings)."""
+DISCONTINUITY_METADATA = "simtest.discontinuity"
+"""One metadata record per jump the scenario commanded (time, entity, OSI object id, cause): the
+evidence checks excuse these, in the run and when the recording is judged again."""
 _OSI_VERSION = ".".join(str(part) for part in osiwire.OSI_VERSION)
 _PROTOBUF_VERSION = "7.0.0"  # what betterosi declares for the OSI protobuf files
 _REISSUED_ID_BASE = 1_000_000_000
@@ -110,6 +121,8 @@ class Recorder:
             country_code=country_code, map_reference=map_reference
         )
         self._ids: dict[int, int] = {}
+        self._id_history: dict[int, list[tuple[int, int]]] = {}
+        """Per entity, the OSI ids it had and the time (ns) from which it had each."""
         self._previous: set[int] = set()
         self._seen: set[int] = set()
         self._reissued = 0
@@ -180,13 +193,16 @@ class Recorder:
     ) -> None:
         self.close()
 
-    def _osi_id(self, entity_id: int) -> int:
+    def _osi_id(self, entity_id: int, nanos: int) -> int:
         if entity_id in self._previous or entity_id not in self._seen:
-            self._seen.add(entity_id)
+            if entity_id not in self._seen:
+                self._seen.add(entity_id)
+                self._id_history[entity_id] = [(nanos, entity_id)]
             return self._ids.setdefault(entity_id, entity_id)
         # Back after a gap: omega-prime forbids gaps, so this is a new object.
         self._reissued += 1
         self._ids[entity_id] = _REISSUED_ID_BASE + self._reissued
+        self._id_history[entity_id].append((nanos, self._ids[entity_id]))
         return self._ids[entity_id]
 
     def _layout(self, osi_id: int, state: EntityState) -> osiwire.ObjectLayout:
@@ -214,10 +230,10 @@ class Recorder:
         self._layouts[osi_id] = (state.kind, state.category, box, layout)
         return layout
 
-    def _relayout(self, entities: tuple[EntityState, ...]) -> osiwire.FrameLayout:
+    def _relayout(self, entities: tuple[EntityState, ...], nanos: int) -> osiwire.FrameLayout:
         """The frame layout for a new set of entities (or changed boxes or categories); keeps
         OSI ids stable and reissues the id of an entity that is back after a gap."""
-        layouts = [self._layout(self._osi_id(state.id), state) for state in entities]
+        layouts = [self._layout(self._osi_id(state.id, nanos), state) for state in entities]
         self._previous = {state.id for state in entities}
         if self._host_id is None and entities:
             self._host_id = min(state.id for state in entities)
@@ -247,7 +263,7 @@ class Recorder:
         # same boxes and categories: then neither ids nor constant bytes change.
         signature = tuple(map(_SIGNATURE, entities))
         if signature != self._signature:
-            self._frame = self._relayout(entities)
+            self._frame = self._relayout(entities, nanos)
             self._signature = signature
         # Per object: bounding-box centre, roll/pitch/yaw in [-pi, pi] (math.remainder is exact,
         # so angles already in range are kept as they are), world-frame velocity and acceleration.
@@ -296,6 +312,25 @@ class Recorder:
             return
         data = {"time": f"{time:g}", "name": name, **dict(settings)}
         self._writer.add_metadata(ENVIRONMENT_METADATA, data)
+
+    def add_discontinuity(self, jump: Discontinuity) -> None:
+        """Record a jump the scenario commanded (after the frames it concerns, so the OSI id the
+        entity had then is known) as an MCAP metadata record."""
+        if self._file is None:
+            return
+        nanos = round(jump.time * 1e9)
+        history = self._id_history.get(jump.entity, [(0, jump.entity)])
+        object_id = history[0][1]
+        for since, osi_id in history:
+            if since <= nanos:
+                object_id = osi_id
+        data = {
+            "time": repr(jump.time),
+            "entity": str(jump.entity),
+            "object": str(object_id),
+            "cause": jump.cause.value,
+        }
+        self._writer.add_metadata(DISCONTINUITY_METADATA, data)
 
     def close(self) -> None:
         """Finish the file (summary and index); safe to call twice."""

@@ -223,6 +223,8 @@ def run_scenario(
             if recorder is not None:
                 recorder.add_environment(at, env.name, env.settings)
         if recorder is not None:
+            for jump in simulation.discontinuities:
+                recorder.add_discontinuity(jump)
             recorder.close()
     wall = time.perf_counter() - started
     facts = evaluation.RunFacts(

@@ -40,6 +40,7 @@ from simtest_operator.sim.synchronize import SynchronizeRun
 from simtest_operator.sim.traffic import Traffic
 from simtest_operator.sim.trajectories import PathRun
 from simtest_operator.sim.world import World
+from simtest_operator.snapshots import JumpCause
 
 ControllerSwitch = Callable[[Actor, bool], None]
 """Engages (True) or releases (False) the SUT driver model on an actor."""
@@ -186,6 +187,7 @@ class Dispatcher:
                 return Done(actor)
             # It comes back with the speed it had (esmini keeps a deleted entity's state).
             self.teleport(actor, positions.resolve(world, body.position, placing=True))
+            world.declare(actor, JumpCause.ADDED)
             return Done(actor)
         if isinstance(body, model.DeleteEntityAction):
             self.remove(world.actor(body.entity_ref))
@@ -210,6 +212,7 @@ class Dispatcher:
                 run.cancel()
         actor.placed = False
         actor.driver = None
+        self._world.declare(actor, JumpCause.DELETED)
 
     def start_private(self, actor: Actor, body: model.AnyAction) -> Run:
         world = self._world
@@ -223,16 +226,24 @@ class Dispatcher:
         if isinstance(body, model.TeleportAction):
             if world.hitches.towed(actor.name):
                 return Done(actor)  # its tow vehicle places it (esmini)
+            moved = actor.placed  # the first pose (in Init) is no jump
             self.teleport(actor, positions.resolve(world, body.position, placing=True))
             self.teleported.add(actor.name)
+            if moved:
+                world.declare(actor, JumpCause.TELEPORT)
             for trailer in trailers.align(world.actors, world.hitches, actor):
                 world.attach(trailer)
+                if moved:
+                    world.declare(trailer, JumpCause.TELEPORT)
             return Done(actor)
         if isinstance(body, model.TrailerAction):
             if body.trailer_ref is None:
                 world.hitches.disconnect(actor.name)
             else:
-                world.hitches.connect(actor.obj, world.actor(body.trailer_ref).obj)
+                trailer = world.actor(body.trailer_ref)
+                world.hitches.connect(actor.obj, trailer.obj)
+                if trailer.placed:
+                    world.declare(trailer, JumpCause.HITCHED)
             return Done(actor)
         if isinstance(body, model.ActivateControllerAction):
             self._activate(actor, body.longitudinal, body.lateral, autopilot=self._carla)

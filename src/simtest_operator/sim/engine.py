@@ -32,7 +32,13 @@ from simtest_operator.sim.sut import Pilot, PilotView
 from simtest_operator.sim.traffic import Traffic
 from simtest_operator.sim.trajectories import PathRun
 from simtest_operator.sim.world import World
-from simtest_operator.snapshots import BoundingBox, EntityKind, EntityState, WorldSnapshot
+from simtest_operator.snapshots import (
+    BoundingBox,
+    Discontinuity,
+    EntityKind,
+    EntityState,
+    WorldSnapshot,
+)
 
 EGO_NAMES = ("Ego", "ego", "hero", "Hero", "EGO")
 
@@ -171,6 +177,11 @@ class Simulation:
     def environments(self) -> tuple[tuple[float, model.Environment], ...]:
         """Environments the scenario set (time, environment): recorded, not rendered."""
         return tuple(self.world.environments)
+
+    @property
+    def discontinuities(self) -> tuple[Discontinuity, ...]:
+        """Jumps the scenario commanded (teleports, trajectory starts, ...), for the recording."""
+        return tuple(self.world.discontinuities)
 
     def off_road(self, state: EntityState) -> bool:
         """Whether an entity is off the drivable road (for the online evaluation)."""
@@ -367,6 +378,7 @@ class Simulation:
             backend.place(
                 state.name, x=state.x, y=state.y, heading=state.heading, speed=state.speed
             )
+        self.world.date_jumps()
         host = backend.traffic()
         if self._traffic.active and host is not None:
             self._traffic.update(self.world, host, entities, backend.states())

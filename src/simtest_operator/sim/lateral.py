@@ -19,6 +19,7 @@ from simtest_operator.sim import placements
 from simtest_operator.sim.actors import Actor, Mode
 from simtest_operator.sim.runs import LATERAL, Run, shape_fraction, shape_slope
 from simtest_operator.sim.world import World
+from simtest_operator.snapshots import JumpCause
 
 DEFAULT_MAX_LATERAL_ACCELERATION = 0.5
 """m/s^2 for LaneOffsetActions without ``maxLateralAcc``."""
@@ -93,6 +94,8 @@ class LaneChangeRun(Run):
             self._duration = lateral / abs(dynamics.value) if dynamics.value else 0.0
         if self._duration <= 0.0:
             self._finish(world)
+            if lateral > 0.0:
+                world.declare(actor, JumpCause.LATERAL_STEP)
 
     def _target_lane(self) -> int:
         assert self.actor is not None
@@ -178,6 +181,8 @@ class LaneOffsetRun(Run):
         if self._duration <= 0.0:
             actor.offset = self._target(world)
             self.finished = True
+            if distance > 0.0:
+                world.declare(actor, JumpCause.LATERAL_STEP)
 
     def _target(self, world: World) -> float:
         """The offset from the actor's lane centre to aim at. A relative target is ``value``

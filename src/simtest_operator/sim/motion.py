@@ -13,6 +13,7 @@ import math
 
 from simtest_operator.sim.actors import Actor, Mode
 from simtest_operator.sim.world import World
+from simtest_operator.snapshots import JumpCause
 
 _LOOKAHEAD = 4
 """Route roads considered ahead of the current one (a junction is road, connector, road)."""
@@ -81,6 +82,10 @@ def move(
         )
         walked = 1 if distance >= 0 else -1
         actor.stuck = location.remaining > 1e-9 or (was_stuck and distance == 0.0)
+        if actor.stuck and not was_stuck:
+            # It stops short of its step with its speed kept for one more step: a stop the
+            # recorded velocity does not explain.
+            world.declare(actor, JumpCause.ROAD_END)
         if actor.stuck and was_stuck:
             # The lane ended: the entity stands there, as in esmini, which drops the speed one
             # step after the end was reached (a teleport right at the end keeps the speed).

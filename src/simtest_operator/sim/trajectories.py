@@ -23,6 +23,10 @@ from simtest_operator.sim import placements, positions, shapes
 from simtest_operator.sim.actors import Actor, Mode
 from simtest_operator.sim.runs import BOTH, LATERAL, Run
 from simtest_operator.sim.world import World
+from simtest_operator.snapshots import JumpCause
+
+_ON_PATH = 1e-3
+"""Metres an entity may be off its trajectory's start and still be on it (no jump to declare)."""
 
 
 class PathRun(Run):
@@ -52,6 +56,8 @@ class PathRun(Run):
             # against it (a parking car backs out along a trajectory drawn the way it moves).
             self._against = self._timing is None and actor.speed < 0.0
         self._place(actor, self._distance)
+        if math.hypot(actor.x - start.x, actor.y - start.y) > _ON_PATH:
+            world.declare(actor, JumpCause.TRAJECTORY_START)
         if self._timing is not None and self._against:
             actor.speed = -abs(actor.speed)
 

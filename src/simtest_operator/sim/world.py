@@ -18,7 +18,7 @@ from simtest_operator.sim.actors import Actor, Mode
 from simtest_operator.sim.lanecache import LaneCache
 from simtest_operator.sim.signal_controllers import SignalControllers
 from simtest_operator.sim.trailers import Hitches
-from simtest_operator.snapshots import EntityState
+from simtest_operator.snapshots import Discontinuity, EntityState, JumpCause
 
 
 class World:
@@ -27,7 +27,9 @@ class World:
     __slots__ = (
         "_lanes",
         "_states",
+        "_undated",
         "actors",
+        "discontinuities",
         "dt",
         "environments",
         "hitches",
@@ -71,9 +73,27 @@ class World:
         self.environments: list[tuple[float, model.Environment]] = []
         """Environments set by EnvironmentActions, with the time they were set (not rendered:
         recorded for the result)."""
+        self.discontinuities: list[Discontinuity] = []
+        """Jumps the scenario commanded, dated by the snapshot that first shows them (for the
+        evidence checks, which excuse exactly these)."""
+        self._undated: list[tuple[int, JumpCause]] = []
         self._states: dict[str, EntityState] = {}
         self.traffic: tuple[EntityState, ...] = ()
         """Vehicles the backend drives (anonymous traffic) as of the last step."""
+
+    def declare(self, actor: Actor, cause: JumpCause) -> None:
+        """Note that ``actor`` moves discontinuously on purpose; dated by :meth:`date_jumps`
+        when the next snapshot is built (an action may start before or after time advances)."""
+        self._undated.append((actor.id, cause))
+
+    def date_jumps(self) -> None:
+        """Date the jumps declared since the last snapshot with the time of the one being
+        built."""
+        self.discontinuities.extend(
+            Discontinuity(time=self.time, entity=entity, cause=cause)
+            for entity, cause in self._undated
+        )
+        self._undated.clear()
 
     def actor(self, name: str) -> Actor:
         try:
