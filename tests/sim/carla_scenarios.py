@@ -430,10 +430,7 @@ def town01_drive(
           <Maneuver name="Drive">
             <Event name="Arrived" priority="parallel">
               <Action name="Cruise">
-                <PrivateAction><LongitudinalAction><SpeedAction>
-                  <SpeedActionDynamics dynamicsShape="step" value="0" dynamicsDimension="time"/>
-                  <SpeedActionTarget><AbsoluteTargetSpeed value="8.33"/></SpeedActionTarget>
-                </SpeedAction></LongitudinalAction></PrivateAction>
+                <PrivateAction>{speed(8.33)}</PrivateAction>
               </Action>{traveled("hero", distance)}
             </Event>{events}
           </Maneuver>
