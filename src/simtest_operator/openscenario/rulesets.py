@@ -13,7 +13,7 @@ by any of (first match named):
 
 Every other file runs under OpenSCENARIO's rules, as esmini reads it. CARLA's left-handed
 coordinate frame is a separate matter: ScenarioRunner applies it only after the ``CARLA:`` header
-(``loading.CARLA_PREFIX``), and so does the reader.
+(:data:`CARLA_PREFIX`), and so does the reader.
 """
 
 from __future__ import annotations

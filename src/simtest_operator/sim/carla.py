@@ -29,6 +29,7 @@ from collections.abc import Iterable
 
 from simtest_operator.drivermodel import DriverModel, SutConfig
 from simtest_operator.openscenario import model, rulesets
+from simtest_operator.openscenario.readers.entities import CARLA_SIZES
 from simtest_operator.sim.actors import Actor, Mode
 from simtest_operator.sim.world import World
 from simtest_operator.snapshots import BoundingBox, EntityKind
@@ -37,7 +38,8 @@ CRUISE_SPEED = 30.0 / 3.6
 """m/s: the urban speed limit of the CARLA towns, which their autopilot and agents drive at."""
 
 
-WALKER_BOX = BoundingBox(center_z=0.9, length=0.5, width=0.5, height=1.8)
+_LENGTH, _WIDTH, _HEIGHT = CARLA_SIZES[EntityKind.PEDESTRIAN]
+WALKER_BOX = BoundingBox(center_z=_HEIGHT / 2, length=_LENGTH, width=_WIDTH, height=_HEIGHT)
 """CARLA's walker blueprints: a capsule about 0.5 m across and 1.8 m tall round the actor's
 location. ScenarioRunner spawns the blueprint; a Pedestrian's BoundingBox in the file is not
 its size in CARLA."""

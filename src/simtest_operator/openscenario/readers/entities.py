@@ -33,11 +33,13 @@ CARLA_BLUEPRINT = re.compile(r"(vehicle|walker|static)\.")
 """A model name that is a CARLA blueprint id: CARLA spawns the blueprint and ignores the box."""
 CARLA_SIZES = {
     EntityKind.VEHICLE: (4.9, 2.1, 1.5),
-    EntityKind.PEDESTRIAN: (0.7, 0.7, 1.9),
+    EntityKind.PEDESTRIAN: (0.5, 0.5, 1.8),
     EntityKind.MISC_OBJECT: (1.0, 1.0, 1.0),
 }
 """Length, width, height (m) a zero box in a CARLA file is read as: typical of CARLA's car and
-walker blueprints; 1 m for a prop (a cone is smaller, a container larger)."""
+walker blueprints (a walker is a capsule about 0.5 m across; the simulator gives every walker of
+a ScenarioRunner file this size, ``sim.carla.WALKER_BOX``); 1 m for a prop (a cone is smaller, a
+container larger)."""
 CARLA_TWO_WHEELERS = (1.8, 0.8, 1.6)
 """The same for ``bicycle`` and ``motorbike`` vehicles."""
 
