@@ -57,10 +57,10 @@ class Dispatcher:
 
     __slots__ = (
         "_active",
-        "_carla",
         "_ego",
         "_external",
         "_host",
+        "_scenario_runner",
         "_switch",
         "_traffic",
         "_watched",
@@ -77,10 +77,10 @@ class Dispatcher:
         switch: ControllerSwitch,
         traffic: Traffic | None = None,
         host: TrafficHost | None = None,
-        carla_conventions: bool = False,
+        scenario_runner: bool = False,
     ) -> None:
         self._world = world
-        self._carla = carla_conventions
+        self._scenario_runner = scenario_runner
         """The file runs under ScenarioRunner's rules: its controllers and action lifetimes."""
         self._traffic = traffic if traffic is not None else Traffic(seed=0)
         self._host = host
@@ -246,7 +246,7 @@ class Dispatcher:
                     world.declare(trailer, JumpCause.HITCHED)
             return Done(actor)
         if isinstance(body, model.ActivateControllerAction):
-            self._activate(actor, body.longitudinal, body.lateral, autopilot=self._carla)
+            self._activate(actor, body.longitudinal, body.lateral, autopilot=self._scenario_runner)
             return Done(actor)
         if isinstance(body, model.AssignControllerAction):
             controller = body.controller
@@ -272,7 +272,7 @@ class Dispatcher:
             self._route(actor, [body.position])
             return self._routed(actor, body.position)
         if (
-            self._carla
+            self._scenario_runner
             and actor.name in self._external
             and isinstance(body, model.LaneOffsetAction | model.LaneChangeAction)
         ):
@@ -285,7 +285,7 @@ class Dispatcher:
                 return Done(actor)
             if isinstance(body, model.SpeedAction):
                 actor.driver.set_speed = target_speed(world, body.target)
-                if self._carla:
+                if self._scenario_runner:
                     return self._watch("speed", SpeedHold(world, actor, body, None))
                 return Done(actor)
             if isinstance(body, _SUT_LONGITUDINAL):
@@ -296,7 +296,7 @@ class Dispatcher:
     def _routed(self, actor: Actor, last: model.Position) -> Run:
         """A routing action's run: done at once, or, under ScenarioRunner's rules, once the
         actor reached the last waypoint (an ``external_control`` actor: never)."""
-        if not self._carla:
+        if not self._scenario_runner:
             return Done(actor)
         external = actor.name in self._external
         goal = None if external else positions.resolve(self._world, last)
@@ -316,7 +316,7 @@ class Dispatcher:
     def _make(self, actor: Actor, body: model.AnyAction) -> Run:
         world = self._world
         if isinstance(body, model.SpeedAction):
-            if self._carla:
+            if self._scenario_runner:
                 return SpeedHold(world, actor, body, SpeedRun(world, actor, body))
             return SpeedRun(world, actor, body)
         if isinstance(body, model.SpeedProfileAction):
@@ -366,7 +366,7 @@ class Dispatcher:
         )
         actor.placed = True
         lane = placement.lane
-        walker = self._carla and carla.is_walker(actor)
+        walker = self._scenario_runner and carla.is_walker(actor)
         if walker:
             actor.mode = Mode.FREE  # ScenarioRunner's walkers go where they face, off the lanes
         elif lane is not None and world.roads is not None:
@@ -409,7 +409,7 @@ class Dispatcher:
     ) -> None:
         """Hand ``actor`` to a built-in driver or take it back; ``autopilot``: CARLA's (the
         road's speed limit), as ScenarioRunner's ActivateControllerAction switches it."""
-        if actor.name != self._ego and self._carla:
+        if actor.name != self._ego and self._scenario_runner:
             carla.autopilot(self._world, actor, on=longitudinal is not False or lateral is True)
             return
         if actor.name != self._ego:

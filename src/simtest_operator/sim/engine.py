@@ -115,7 +115,7 @@ class Simulation:
             switch=self._switch_driver,
             traffic=self._traffic,
             host=backend.traffic(),
-            carla_conventions=scenario_runner,
+            scenario_runner=scenario_runner,
         )
         if scenario_runner:
             carla.spawn_walkers(actors)
