@@ -1,16 +1,18 @@
 #!/usr/bin/env bash
 # Build the dev-cluster toolchain from Go modules only (no release downloads, no containers):
 # the control plane, the kubelet of the dev cluster's real node, kwok, helm and helmfile, and the
-# simulator-slot device plugin of deploy/deviceplugin (the project's own Go module).
+# simulator-slot device plugin of deploy/deviceplugin (the project's own Go module), and Kueue
+# (`simtest dev-cluster up --kueue`; its CRDs ship in the module source, copied beside the binary).
 #
 #   bash deploy/devcluster/build.sh            # everything (idempotent; seconds when cached)
-#   bash deploy/devcluster/build.sh etcd kwok  # a subset: etcd kubernetes kwok helm helmfile
+#   bash deploy/devcluster/build.sh etcd kwok  # a subset: etcd kubernetes kwok crictl helm helmfile kueue
 #   bash deploy/devcluster/build.sh --cache-dir DIR ...   # instead of $SIMTEST_CACHE_DIR
 #
 # Versions: deploy/devcluster/versions.env (the one place they are pinned).
 # Output:   ${SIMTEST_CACHE_DIR:-${XDG_CACHE_HOME:-~/.cache}/simtest}/toolchain/
 #             <tool>-<version>/bin/*   the binaries, keyed by version
 #             deviceplugin-<hash>/bin/ simtest-device-plugin, keyed by the content of its sources
+#             kueue-<version>/crd/     Kueue's CRDs (config/components/crd/bases of the module)
 #             bin/                     symlinks to the versions pinned now (put it on PATH)
 #             gomodcache/ gocache/     Go module and build caches (shared by all versions)
 #             work/                    generated wrapper modules
@@ -27,7 +29,7 @@ if [[ "${1:-}" == --cache-dir ]]; then
     CACHE_ROOT="$2"; shift 2
 fi
 TC="$CACHE_ROOT/toolchain"
-ALL_COMPONENTS=(etcd kwok kubernetes crictl helm helmfile deviceplugin)
+ALL_COMPONENTS=(etcd kwok kubernetes crictl helm helmfile deviceplugin kueue)
 JOBS="${SIMTEST_BUILD_JOBS:-2}"
 
 START=$(date +%s)
@@ -293,6 +295,51 @@ build_deviceplugin() {
     log "deviceplugin $h: done"
 }
 
+# Kueue has no --version flag (it connects to a cluster first), so the pin is checked in the build
+# info Go embeds in every binary ("mod<TAB>sigs.k8s.io/kueue<TAB>v0.17.0"): no Go needed to read it.
+kueue_cached() {
+    local v="v$KUEUE_VERSION" dir="$TC/kueue-$KUEUE_VERSION"
+    [[ -x "$dir/bin/kueue" && -f "$dir/crd/kueue.x-k8s.io_clusterqueues.yaml" ]] || return 1
+    grep -qaF "$(printf 'mod\tsigs.k8s.io/kueue\t%s\t' "$v")" "$dir/bin/kueue"
+}
+
+build_kueue() {
+    local v="$KUEUE_VERSION" dir="$TC/kueue-$KUEUE_VERSION"
+    if kueue_cached; then log "kueue $v: cached"; return; fi
+    estimate "kueue $v"
+    require_go
+    log "kueue $v: building the manager (sigs.k8s.io/kueue/cmd/kueue; several minutes on 2 cores)"
+    local w="$TC/work/kueue-$v"
+    new_wrapper "$w" local/kueuebin
+    local ldf="-s -w -X sigs.k8s.io/kueue/pkg/version.GitVersion=v$v"
+    ldf+=" -X sigs.k8s.io/kueue/pkg/version.BuildDate=$(date -u +%Y-%m-%dT%H:%M:%SZ)"
+    (
+        cd "$w"
+        # Like helmfile: copy the module's replace lines (none in v0.17.0) into the wrapper,
+        # since a dependent module ignores them.
+        local gomod r
+        gomod="$(go mod download -json "sigs.k8s.io/kueue@v$v" \
+            | sed -n 's/^[[:space:]]*"GoMod": "\(.*\)",*$/\1/p')"
+        [[ -f "$gomod" ]] || die "cannot download sigs.k8s.io/kueue@v$v"
+        while read -r r; do
+            [[ -n "$r" ]] && go mod edit -replace="$r"
+        done < <(sed -n '/^replace (/,/^)/{/=>/{s/[[:space:]]*\/\/.*//;s/^[[:space:]]*//;s/ => /=/;s/ v/@v/g;p}}' "$gomod")
+        go_get "sigs.k8s.io/kueue/cmd/kueue@v$v"
+        "${GO_BUILD[@]}" -ldflags "$ldf" -o "$w/out/kueue" sigs.k8s.io/kueue/cmd/kueue
+        # The CRDs the manager serves, from the same module version (kustomize bases, plain YAML).
+        local src
+        src="$(go list -m -f '{{.Dir}}' sigs.k8s.io/kueue)/config/components/crd/bases"
+        [[ -d "$src" ]] || die "no config/components/crd/bases in sigs.k8s.io/kueue@v$v"
+        rm -rf "$w/crd"; mkdir -p "$w/crd"
+        cp "$src"/*.yaml "$w/crd/"
+        chmod u+w "$w/crd"/*.yaml
+    )
+    install_bins "$w/out" "$dir/bin"
+    rm -rf "$dir/crd"; mv "$w/crd" "$dir/crd"
+    kueue_cached || die "kueue built but its build info does not name sigs.k8s.io/kueue v$v"
+    log "kueue $v: done"
+}
+
 # --- main ------------------------------------------------------------------------------------
 components=("$@")
 [[ ${#components[@]} -gt 0 ]] || components=("${ALL_COMPONENTS[@]}")
@@ -312,7 +359,8 @@ for c in "${components[@]}"; do "build_$c"; done
 
 # Refresh bin/ symlinks to the pinned versions of what exists.
 for pair in "etcd-$ETCD_VERSION:etcd" "kwok-$KWOK_VERSION:kwok kwokctl" \
-    "kubernetes-$KUBERNETES_VERSION:$K8S_CMDS" "crictl-$CRI_TOOLS_VERSION:crictl" "helm-$HELM_VERSION:helm" "helmfile-$HELMFILE_VERSION:helmfile"; do
+    "kubernetes-$KUBERNETES_VERSION:$K8S_CMDS" "crictl-$CRI_TOOLS_VERSION:crictl" "helm-$HELM_VERSION:helm" "helmfile-$HELMFILE_VERSION:helmfile" \
+    "kueue-$KUEUE_VERSION:kueue"; do
     d="${pair%%:*}"
     for b in ${pair#*:}; do
         [[ -x "$TC/$d/bin/$b" ]] && ln -sfn "../$d/bin/$b" "$TC/bin/$b"
