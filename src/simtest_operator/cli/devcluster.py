@@ -92,6 +92,13 @@ def build(components: tuple[str, ...]) -> None:
     show_default=True,
     help="Nodes with a real kubelet, containerd and runc (needs root; at most one per machine).",
 )
+@click.option(
+    "--kueue",
+    "with_kueue",
+    is_flag=True,
+    help="Also start Kueue (built by `dev-cluster build`) so campaigns with "
+    "spec.execution.queueName are admitted by its ClusterQueues (docs/kueue.md).",
+)
 def up(
     name: str,
     root: Path | None,
@@ -101,6 +108,7 @@ def up(
     crds_dir: Path,
     port: int | None,
     real_nodes: int,
+    with_kueue: bool,
 ) -> None:
     """Start the cluster (or report the running one) and wait until it is usable."""
     settings = Settings.from_env()
@@ -120,6 +128,7 @@ def up(
             crds_dir=crds_dir,
             apiserver_port=port,
             real_node=real_node,
+            with_kueue=with_kueue,
         )
     took = f" in {info.startup_seconds:.1f}s" if info.startup_seconds is not None else ""
     click.echo(f"dev cluster up{took}: {info.server}")
@@ -130,6 +139,8 @@ def up(
             " slots from the device plugin)"
         )
     click.echo(f"  CRDs:  {', '.join(info.crds) or '(none found in ' + str(crds_dir) + ')'}")
+    if with_kueue:
+        click.echo("  kueue: running (webhooks not registered; see docs/kueue.md)")
     click.echo(f"  logs:  {info.logs_dir}")
     click.echo(f"  export KUBECONFIG={info.kubeconfig}")
 

@@ -23,6 +23,7 @@ from simtest_operator.devcluster import (
     components,
     hostnet,
     kubeconfig,
+    kueue,
     provisioning,
     realnodes,
 )
@@ -54,7 +55,7 @@ from simtest_operator.devcluster.state import (
 from simtest_operator.devcluster.toolchain import CONTROL_PLANE_BINARIES, Toolchain
 from simtest_operator.errors import ClusterError, ToolchainError
 
-COMPONENT_USERS = ("kube-controller-manager", "kube-scheduler", "kwok")
+COMPONENT_USERS = ("kube-controller-manager", "kube-scheduler", "kwok", "kueue")
 
 
 class DevCluster:
@@ -86,6 +87,7 @@ class DevCluster:
         crds_dir: Path | None = None,
         apiserver_port: int | None = None,
         real_node: RealNodeSetup | None = None,
+        with_kueue: bool = False,
         timeout: float = 90.0,
     ) -> ClusterInfo:
         """Start the cluster (or return the running one) and wait until it is usable.
@@ -95,7 +97,8 @@ class DevCluster:
         ``nodes`` fake nodes Ready with ``slots`` ``simtest.dev/simulator`` each (``shape``
         overrides all capacities), the ``default`` service account present, and with
         ``real_node`` the real node (kubelet + containerd) Ready with its images imported and,
-        given addons, advertising simulator slots.
+        given addons, advertising simulator slots; ``with_kueue`` adds Kueue's manager (its CRDs
+        established, ``/readyz`` ok).
         """
         current = self._load_state()
         if current is not None:
@@ -104,7 +107,11 @@ class DevCluster:
             self.down()  # stale: something died; start over cleanly
         if real_node is not None:
             realnodes.check_host()
-        needed = (*CONTROL_PLANE_BINARIES, *(("kubelet", "crictl") if real_node else ()))
+        needed = (
+            *CONTROL_PLANE_BINARIES,
+            *(("kubelet", "crictl") if real_node else ()),
+            *(("kueue",) if with_kueue else ()),
+        )
         missing = self.toolchain.missing(needed)
         if missing:
             raise ToolchainError(
@@ -126,6 +133,8 @@ class DevCluster:
             state = self._provision(
                 state, pki, nodes=nodes, shape=shape, crds_dir=crds_dir, timeout=timeout
             )
+            if with_kueue:
+                state = self._start_kueue(state, timeout=timeout)
             if real_node is not None:
                 state = self._start_real_node(state, pki, real_node, timeout=timeout)
         except BaseException:
@@ -340,6 +349,48 @@ class DevCluster:
             api.close()  # type: ignore[no-untyped-call]
         state = dataclasses.replace(state, nodes=names, crds=crds)
         state.save(self.layout.state)
+        return state
+
+    def _start_kueue(self, state: ClusterState, *, timeout: float) -> ClusterState:
+        """Kueue's CRDs and bootstrap objects, then its manager, ready when ``/readyz`` answers
+        (after its rotator injected the CA: see :mod:`~simtest_operator.devcluster.kueue`)."""
+        binary = self.toolchain.binary("kueue")
+        api = provisioning.api_client(self.layout.kubeconfig)
+        by_name = {r.name: r for r in state.processes}
+        try:
+            crds = provisioning.apply_crds(api, kueue.crd_documents(binary))
+            wait_until(
+                lambda: provisioning.crds_established(api, crds),
+                what="Kueue CRDs Established",
+                timeout=timeout,
+                watch=state.processes,
+                blame=by_name["kube-apiserver"],
+            )
+            addons.apply(api, kueue.bootstrap_objects())
+        finally:
+            api.close()  # type: ignore[no-untyped-call]
+        health, webhook = free_ports(2)
+        kueue.write_config(self.layout, health_port=health, webhook_port=webhook)
+        argv = kueue.argv(binary, self.layout, self.layout.component_kubeconfig("kueue"))
+        state = self._spawn(dataclasses.replace(state, crds=(*state.crds, *crds)), "kueue", argv)
+        api = provisioning.api_client(self.layout.kubeconfig)
+        try:
+            wait_until(
+                functools.partial(kueue.mount_certs, api, self.layout),
+                what="Kueue's webhook certificate in its Secret",
+                timeout=timeout,
+                watch=state.processes,
+                blame=state.processes[-1],
+            )
+        finally:
+            api.close()  # type: ignore[no-untyped-call]
+        wait_until(
+            functools.partial(http_ok, f"http://127.0.0.1:{health}/readyz"),
+            what="kueue /readyz",
+            timeout=timeout,
+            watch=state.processes,
+            blame=state.processes[-1],
+        )
         return state
 
     def _start_real_node(

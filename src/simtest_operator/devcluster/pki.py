@@ -34,6 +34,7 @@ USERS: Mapping[str, tuple[str, tuple[str, ...]]] = {
     "kube-controller-manager": ("system:kube-controller-manager", ()),
     "kube-scheduler": ("system:kube-scheduler", ()),
     "kwok": ("kwok-controller", ("system:masters",)),
+    "kueue": ("kueue-controller", ("system:masters",)),
 }
 """Token users by client: (user name, groups). The controller-manager and the scheduler get the
 user names that Kubernetes' bootstrap RBAC policy already binds, so RBAC is exercised for real."""
