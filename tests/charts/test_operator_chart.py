@@ -186,6 +186,7 @@ NAMESPACED = {
     ("", "events"): {"create"},
     ("", "secrets"): {"get"},
     ("batch", "jobs"): {"get", "list", "watch", "create", "delete"},
+    ("kueue.x-k8s.io", "workloads"): {"get", "list", "watch", "create", "delete"},
     ("rbac.authorization.k8s.io", "rolebindings"): {"create"},
     ("rbac.authorization.k8s.io", "clusterroles"): {"bind"},
 }

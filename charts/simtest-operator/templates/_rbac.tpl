@@ -51,6 +51,12 @@
 - apiGroups: ["batch"]
   resources: ["jobs"]
   verbs: ["get", "list", "watch", "create", "delete"]
+# Kueue (spec.execution.queueName): one Workload per campaign asks its LocalQueue for the
+# window; watched for the admitted count, deleted when the campaign is done. Harmless without
+# Kueue (no such resource to watch).
+- apiGroups: ["kueue.x-k8s.io"]
+  resources: ["workloads"]
+  verbs: ["get", "list", "watch", "create", "delete"]
 {{- if .Values.helmfileProvisioner.enabled }}
 # provisioner: Helmfile — a Job runs helmfile under a per-campaign ServiceAccount that a
 # RoleBinding ties to the provisioner ClusterRole (see "simtest-operator.bindRule").

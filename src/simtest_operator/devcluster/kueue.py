@@ -190,4 +190,3 @@ def write_config(layout: Layout, *, health_port: int, webhook_port: int) -> Path
     document = configuration(layout, health_port=health_port, webhook_port=webhook_port)
     path.write_text(yaml.safe_dump(document, sort_keys=False))
     return path
-

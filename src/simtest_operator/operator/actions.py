@@ -28,6 +28,8 @@ class Kind(enum.StrEnum):
     SERVICE_ACCOUNT = "serviceaccounts"
     JOB = "jobs"
     ROLE_BINDING = "rolebindings"
+    WORKLOAD = "workloads"
+    """Kueue's (``spec.execution.queueName``; :mod:`~simtest_operator.operator.admission`)."""
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)

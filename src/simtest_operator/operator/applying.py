@@ -131,7 +131,10 @@ class Applier:
             except AlreadyExistsError:
                 created = None
             except ApiError as exc:
-                if exc.status in REFUSED_FOR_GOOD:
+                # A Workload's 404: Kueue's CRDs are not installed (or the namespace is gone).
+                if exc.status in REFUSED_FOR_GOOD or (
+                    exc.status == 404 and action.kind is Kind.WORKLOAD
+                ):
                     applied.refused[(action.kind, action.name)] = str(exc)
                 raise
             applied.expectations.append(

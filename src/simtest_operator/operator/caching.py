@@ -12,6 +12,7 @@ from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
 from simtest_operator.operator.actions import Kind
+from simtest_operator.operator.admission import WorkloadView
 from simtest_operator.operator.jobviews import JobView
 from simtest_operator.operator.observed import (
     BatchView,
@@ -39,6 +40,8 @@ class Cache:
     """None when the operator does not watch nodes."""
     jobs: Mapping[Any, Iterable[JobView]] = dataclasses.field(default_factory=dict)
     """helmfile Jobs by (namespace, campaign) (``provisioner: Helmfile``)."""
+    workloads: Mapping[Any, Iterable[WorkloadView]] = dataclasses.field(default_factory=dict)
+    """Kueue Workloads by (namespace, campaign) (``spec.execution.queueName``)."""
 
     def campaign(self, key: CampaignKey) -> CampaignView | None:
         """The campaign's view, if it exists."""
@@ -59,6 +62,10 @@ class Cache:
     def jobs_of(self, key: CampaignKey) -> dict[str, JobView]:
         """The campaign's helmfile Jobs by name."""
         return {j.name: j for j in self.jobs.get(key, ())}
+
+    def workload_of(self, key: CampaignKey) -> WorkloadView | None:
+        """The campaign's Kueue Workload, if it has one."""
+        return next(iter(self.workloads.get(key, ())), None)
 
     def node_map(self) -> dict[str, NodeView] | None:
         """All nodes by name (None when nodes are not watched)."""
@@ -81,6 +88,7 @@ class Cache:
             Kind.ENVIRONMENT: self.environments,
             Kind.POD: self.pods,
             Kind.JOB: self.jobs,
+            Kind.WORKLOAD: self.workloads,
         }
         indexed: dict[Kind, dict[str, Any]] = {}
 

@@ -116,8 +116,9 @@ def load_credentials(kubeconfig: Path | None = None, *, context: str | None = No
 GROUP_PATHS: Mapping[str, str] = {
     Kind.JOB: "/apis/batch/v1",
     Kind.ROLE_BINDING: "/apis/rbac.authorization.k8s.io/v1",
+    Kind.WORKLOAD: "/apis/kueue.x-k8s.io/v1beta2",
 }
-"""Built-in kinds outside the core group."""
+"""Kinds outside the core group and ours."""
 
 
 def _path(kind: Kind | str, namespace: str | None, name: str | None = None) -> str:

@@ -19,7 +19,7 @@ from typing import Any
 import kopf
 
 from simtest_operator.api.v1alpha1 import GROUP, VERSION
-from simtest_operator.operator import jobviews, names, observed, runtime
+from simtest_operator.operator import admission, jobviews, names, observed, runtime
 from simtest_operator.operator.caching import ALL_NODES, Cache
 from simtest_operator.operator.client import Credentials, load_credentials
 from simtest_operator.settings import Settings
@@ -67,6 +67,15 @@ def job_index(
     return {(namespace or "", labels[names.LABEL_CAMPAIGN]): jobviews.job_view(body)}
 
 
+@kopf.index(admission.GROUP, admission.VERSION, "workloads", labels=CAMPAIGN_LABEL)
+def workload_index(
+    namespace: str | None, labels: kopf.Labels, body: kopf.Body, **_: Any
+) -> dict[Any, Any]:
+    """Kueue Workload views by (namespace, campaign) (``spec.execution.queueName``; without
+    Kueue's CRDs kopf serves nothing here and says so once)."""
+    return {(namespace or "", labels[names.LABEL_CAMPAIGN]): admission.workload_view(body)}
+
+
 @kopf.index("v1", "nodes")
 def node_index(body: kopf.Body, **_: Any) -> dict[Any, Any]:
     """Node views, all under one key."""
@@ -93,10 +102,11 @@ async def child_event(namespace: str | None, spec: kopf.Spec, memo: Any, **_: An
     memo.runtime.loops.wake((namespace or "", str(spec.get("campaign", ""))))
 
 
+@kopf.on.event(admission.GROUP, admission.VERSION, "workloads", labels=CAMPAIGN_LABEL)
 @kopf.on.event("batch", "v1", "jobs", labels=CAMPAIGN_LABEL)
 @kopf.on.event("v1", "pods", labels=CAMPAIGN_LABEL)
 async def pod_event(namespace: str | None, labels: kopf.Labels, memo: Any, **_: Any) -> None:
-    """A simulator pod changed: wake its campaign."""
+    """A simulator pod, helmfile Job or Kueue Workload changed: wake its campaign."""
     memo.runtime.loops.wake((namespace or "", labels[names.LABEL_CAMPAIGN]))
 
 
@@ -152,6 +162,7 @@ async def startup(settings: kopf.OperatorSettings, memo: Any, **kwargs: Any) -> 
         pods=kwargs["pod_index"],
         nodes=kwargs["node_index"],
         jobs=kwargs["job_index"],
+        workloads=kwargs["workload_index"],
     )
     memo.runtime = await runtime.start(config, _credentials(memo), cache)
 

@@ -147,6 +147,7 @@ class CampaignLoop:
             now=now,
             last_status_write=self.last_status_write,
             jobs=cache.jobs_of(self.key),
+            workload=cache.workload_of(self.key),
             refused=dict(self.refused),
         )
         plan = planning.plan(inputs, config=shared.config, render=shared.render)

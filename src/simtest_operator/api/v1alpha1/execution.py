@@ -7,7 +7,7 @@ from typing import Annotated, ClassVar
 
 from pydantic import Field, model_validator
 
-from simtest_operator.api.v1alpha1.common import ApiModel, Quantity, Toleration, cel
+from simtest_operator.api.v1alpha1.common import ApiModel, DnsLabel, Quantity, Toleration, cel
 
 
 class Isolation(enum.StrEnum):
@@ -75,6 +75,10 @@ class ExecutionSpec(ApiModel):
     batch_barrier: bool = False
     """Run batch after batch, waiting for each to finish (the paper's behaviour, for comparison);
     the default keeps a window of maxParallel scenarios in flight and refills it immediately."""
+    queue_name: DnsLabel | None = None
+    """Kueue LocalQueue (in the campaign's namespace) that admits the campaign's simulators, as
+    Kueue's ``kueue.x-k8s.io/queue-name`` label names it: the operator asks it for the window as
+    one Workload and starts pods only within what it admits (docs/kueue.md). Unset: no Kueue."""
 
     @model_validator(mode="after")
     def _barrier_fits(self) -> ExecutionSpec:

@@ -14,6 +14,7 @@ from collections.abc import Callable, Mapping, Sequence
 from simtest_operator.api.v1alpha1 import TestCampaignSpec
 from simtest_operator.operator import recording_results
 from simtest_operator.operator.actions import Kind
+from simtest_operator.operator.admission import WorkloadView
 from simtest_operator.operator.batches import Layout
 from simtest_operator.operator.jobviews import JobView
 from simtest_operator.operator.observed import (
@@ -48,6 +49,8 @@ class Inputs:
     last_status_write: datetime.datetime | None = None
     jobs: Mapping[str, JobView] = dataclasses.field(default_factory=dict)
     """helmfile Jobs by name (``provisioner: Helmfile``)."""
+    workload: WorkloadView | None = None
+    """The campaign's Kueue Workload (``spec.execution.queueName``), once it exists."""
     refused: Mapping[tuple[Kind, str], str] = dataclasses.field(default_factory=dict)
     """Creates the API server refused for good, by kind and name: its status code and message
     (the applier's :attr:`~simtest_operator.operator.applying.Applied.refused`, kept by the

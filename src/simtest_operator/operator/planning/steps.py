@@ -10,9 +10,11 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-from simtest_operator.operator import cancelling
+from simtest_operator.operator import admission, cancelling
 from simtest_operator.operator.actions import Observation, Plan
+from simtest_operator.operator.admission import Gate
 from simtest_operator.operator.planning import (
+    admitting,
     assessing,
     cleaning,
     evaluating,
@@ -58,9 +60,11 @@ def _run(step: inputs.Step) -> Plan:
     counts = counting.counters(states)
     complete = all(s.state.settled for s in states)
     in_flight = assessing.in_flight(step, judged)
-    window = starting.window(step)
+    gate = admitting.admit(step, starting.window(step), complete=complete)
+    window = gate.window
     outcome = (
-        tending.tend(step, judged)
+        Outcome(actions=gate.actions)
+        + tending.tend(step, judged)
         + cleaning.teardowns(step)
         + folding.fold(step, states)
         + cleaning.removals(step, judged, states)
@@ -72,7 +76,13 @@ def _run(step: inputs.Step) -> Plan:
     evaluated, evaluation = evaluating.evaluate(step, due=due)
     outcome += evaluated
     outcome += _campaign(
-        step, counts, complete=complete, cancellation=cancellation, evaluation=evaluation
+        step,
+        counts,
+        complete=complete,
+        cancellation=cancellation,
+        evaluation=evaluation,
+        admitted=gate,
+        in_flight=in_flight,
     )
     return Plan(
         actions=outcome.actions,
@@ -101,6 +111,8 @@ def _campaign(
     complete: bool,
     cancellation: cancelling.Cancellation | None,
     evaluation: EvaluationState | None,
+    admitted: Gate,
+    in_flight: int,
 ) -> Outcome:
     """The campaign's own status and event (a counters-only change may wait: a wake-up)."""
     update = campaignstatus.progressed(
@@ -114,5 +126,7 @@ def _campaign(
         last_write=step.inputs.last_status_write,
         status_interval=step.config.pacing.status_interval,
         evaluation=evaluation,
+        admission=admitted.condition,
+        waiting=admission.now_waiting(admitted, in_flight=in_flight),
     )
     return Outcome(actions=update.actions, wakes=(update.due,) if update.due is not None else ())

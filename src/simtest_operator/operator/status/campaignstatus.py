@@ -85,9 +85,13 @@ def progressed(
     last_write: datetime.datetime | None,
     status_interval: float,
     evaluation: EvaluationState | None = None,
+    admission: conditions.Desired | None = None,
+    waiting: str | None = None,
 ) -> Update:
     """Status of a resolved campaign from its scenario counters (and its evaluation step, when
-    that has something to say)."""
+    that has something to say). ``admission`` is the ``Admitted`` condition of a campaign with a
+    Kueue queue; ``waiting`` its message while nothing is admitted and nothing runs (phase
+    Pending, reason ``Queued``)."""
     wire = campaign.status_wire
     total = counts["total"]
     if total == 0:
@@ -101,6 +105,8 @@ def progressed(
         reason, message = phase, _summary(counts)
     elif spec.suspend:
         phase, reason, message = "Suspended", "Suspended", "spec.suspend is true"
+    elif waiting is not None:
+        phase, reason, message = "Pending", "Queued", waiting
     else:
         phase, reason, message = "Running", "Running", _summary(counts)
     start = wire.get("startTime") or conditions.rfc3339(now)
@@ -125,7 +131,10 @@ def progressed(
     desired["conditions"] = _conditions(
         campaign, counts, phase=phase, reason=reason, message=message, complete=complete,
         cancelling_=cancellation is not None, now=now,
-        extra=(evaluation.condition(),) if evaluation is not None else (),
+        extra=(
+            *((evaluation.condition(),) if evaluation is not None else ()),
+            *((admission,) if admission is not None else ()),
+        ),
     )  # fmt: skip
     patch = patches.changed_fields(desired, wire)
     if not patch:

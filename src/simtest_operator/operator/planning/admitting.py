@@ -1,0 +1,28 @@
+"""Admission through Kueue for one step: the window it allows, its Workload's create or delete.
+
+The decisions are :func:`simtest_operator.operator.admission.gate`'s; this only feeds it the
+step's facts.
+"""
+
+from __future__ import annotations
+
+from simtest_operator.operator import admission
+from simtest_operator.operator.actions import Kind
+from simtest_operator.operator.planning.inputs import Step
+
+
+def admit(step: Step, window: int, *, complete: bool) -> admission.Gate:
+    """What admission allows this step (the window unchanged without ``queueName``)."""
+    campaign = step.campaign
+    name = admission.workload_name(campaign.name)
+    return admission.gate(
+        step.spec,
+        campaign=campaign.name,
+        namespace=campaign.namespace,
+        campaign_uid=campaign.uid,
+        window=window,
+        scenarios=len(step.frozen),
+        workload=step.inputs.workload,
+        complete=complete,
+        refused=step.inputs.refused.get((Kind.WORKLOAD, name)),
+    )
