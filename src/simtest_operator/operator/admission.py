@@ -233,7 +233,8 @@ def gate(
                 f"simulators at once (Workload {name})",
             ),
         )
-    reason = workload.reason or "Pending"
+    # Before Kueue first looks at it the Workload has no conditions: still just queued.
+    reason = workload.reason or "Queued"
     message = workload.message or f"Workload {name} waits in LocalQueue {queue}"
     return Gate(
         window=0,
