@@ -18,7 +18,7 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
-from simtest_operator.operator import jobviews, observed, planning, scenariolists
+from simtest_operator.operator import admission, jobviews, observed, planning, scenariolists
 from simtest_operator.operator.actions import (
     Create,
     Delete,
@@ -173,8 +173,14 @@ class FakeCluster:
             now=self.now,
             last_status_write=self.last_status_write,
             jobs={j["metadata"]["name"]: jobviews.job_view(j) for j in self.of(Kind.JOB)},
+            workload=self._workload(name),
             refused=dict(self.refused),
         )
+
+    def _workload(self, campaign: str) -> admission.WorkloadView | None:
+        """The campaign's Kueue Workload (admitted by a test's hand: no Kueue here)."""
+        body = self.get(Kind.WORKLOAD, admission.workload_name(campaign))
+        return admission.workload_view(body) if body is not None else None
 
     def _node_view(self, name: str) -> observed.NodeView:
         return observed.NodeView(
