@@ -34,8 +34,9 @@ ALL_BINARIES = (
     "helm",
     "helmfile",
     DEVICE_PLUGIN_BINARY,
+    "kueue",
 )
-"""Everything ``build.sh`` produces."""
+"""Everything ``build.sh`` produces (``kueue`` only for ``up --kueue``)."""
 
 BUILD_SCRIPT = Path("deploy/devcluster/build.sh")
 """The build script, relative to the repository root."""
