@@ -178,9 +178,25 @@ def test_workload_body_asks_for_the_pod_of_the_spec() -> None:
     assert template["tolerations"] == [{"key": "gpu", "operator": "Exists", "effect": "NoSchedule"}]
     owner = body["metadata"]["ownerReferences"][0]
     assert (owner["kind"], owner["uid"], owner["controller"]) == ("TestCampaign", "u-1", False)
+    assert [c["name"] for c in template["containers"]] == ["simulator"]
     cpu_only = parse_campaign(campaign_body(queueName="q"), source="test").spec
     requests = admission.pod_requests(cpu_only)
     assert "nvidia.com/gpu" not in requests and requests["simtest.dev/simulator"] == "1"
+    with_sut = parse_campaign(
+        {
+            **campaign_body(queueName="q"),
+            "spec": {
+                **campaign_body(queueName="q")["spec"],
+                "environment": {"sut": {"external": {"image": "registry.example/sut:1"}}},
+            },
+        },
+        source="test",
+    ).spec
+    sut_body = admission.workload_body(
+        with_sut, campaign="camp", namespace="ns", campaign_uid="u", count=2
+    )
+    sidecar = sut_body["spec"]["podSets"][0]["template"]["spec"]["containers"][1]
+    assert sidecar == {"name": "sut", "resources": {"requests": {"cpu": "500m", "memory": "256Mi"}}}
 
 
 def test_workload_view_reads_kueue_status() -> None:

@@ -3,7 +3,8 @@
 The operator does not let Kueue gate its pods (that needs Kueue's pod webhook, and a gated pod
 still counts against ``pendingTimeoutSeconds``). It asks for the window instead: one Workload,
 ``<campaign>-simulators``, whose single pod set is ``count`` = the window's simulator pods (each
-with the campaign's cpu, memory, ``nvidia.com/gpu`` and one ``simtest.dev/simulator``) and
+with the campaign's cpu, memory, ``nvidia.com/gpu`` and one ``simtest.dev/simulator``, plus the
+SUT sidecar's cpu and memory when the SUT runs as one) and
 ``minCount`` 1, in the LocalQueue ``queueName``. Kueue admits it by its ClusterQueue's rules
 (quotas, cohorts, fair sharing, partial admission down to what fits) and writes the admitted
 count; the campaign then keeps at most that many environments in flight. Nothing starts before
@@ -102,7 +103,7 @@ def workload_view(body: Raw) -> WorkloadView:
 
 
 def pod_requests(spec: TestCampaignSpec) -> dict[str, str]:
-    """What one simulator pod asks for, in Kueue's terms (the simulator container's requests)."""
+    """What the simulator container asks for, in Kueue's terms."""
     requests = spec.execution.resources.requests
     amounts = {"cpu": requests.cpu, "memory": requests.memory, SIMULATOR_RESOURCE: "1"}
     if requests.gpu:
@@ -115,10 +116,13 @@ def workload_body(
 ) -> dict[str, Any]:
     """The campaign's Workload asking for ``count`` simulator pods (at least one)."""
     queue = spec.execution.queue_name or ""
-    template: dict[str, Any] = {
-        "restartPolicy": "Never",
-        "containers": [{"name": "simulator", "resources": {"requests": pod_requests(spec)}}],
-    }
+    containers = [{"name": "simulator", "resources": {"requests": pod_requests(spec)}}]
+    sut = spec.environment.sut.external
+    if sut is not None and sut.image:
+        # The SUT sidecar's requests count towards the pod's (and so towards the quota).
+        sidecar = {"cpu": sut.resources.requests.cpu, "memory": sut.resources.requests.memory}
+        containers.append({"name": "sut", "resources": {"requests": sidecar}})
+    template: dict[str, Any] = {"restartPolicy": "Never", "containers": containers}
     if spec.execution.node_selector:
         template["nodeSelector"] = dict(spec.execution.node_selector)
     if spec.execution.tolerations:
