@@ -134,6 +134,32 @@ def test_an_evicted_workload_stops_new_starts() -> None:
     )
 
 
+def test_a_suspended_campaign_releases_its_quota_and_asks_again_on_resume() -> None:
+    cluster = _queued_campaign(count=12)
+    cluster.step()
+    _kueue(cluster, admitted=2)
+    cluster.step()
+    campaign = cluster.get(Kind.CAMPAIGN, "camp")
+    assert campaign is not None
+    campaign["spec"]["suspend"] = True
+    cluster.step()
+    assert cluster.get(Kind.WORKLOAD, WORKLOAD) is not None  # two still run: it keeps them
+    for _ in range(10):
+        cluster.step(seconds=5)
+    assert cluster.get(Kind.WORKLOAD, WORKLOAD) is None
+    suspended = _condition(cluster.status(), "Admitted")
+    assert (suspended["status"], suspended["reason"]) == ("False", "Suspended")
+    assert cluster.status()["phase"] == "Suspended"
+    started = len(cluster.pods_started)
+    campaign["spec"]["suspend"] = False
+    cluster.step()
+    assert cluster.get(Kind.WORKLOAD, WORKLOAD) is not None
+    assert len(cluster.pods_started) == started  # not before Kueue admits again
+    _kueue(cluster, admitted=2)
+    cluster.run()
+    assert cluster.status()["phase"] == "Succeeded" and len(cluster.results()) == 12
+
+
 def test_a_refused_workload_is_named_in_the_condition() -> None:
     cluster = _queued_campaign()
     cluster.refusing[(Kind.WORKLOAD, WORKLOAD)] = "404 Not Found: the server could not find"

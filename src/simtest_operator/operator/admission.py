@@ -10,8 +10,8 @@ SUT sidecar's cpu and memory when the SUT runs as one) and
 count; the campaign then keeps at most that many environments in flight. Nothing starts before
 admission, so a campaign over quota creates no pods at all; it waits with condition
 ``Admitted=False`` carrying Kueue's own reason and message. The Workload is deleted (its quota
-released) once every scenario has its verdict; it is owned by the campaign, so deleting the
-campaign removes it too.
+released) once every scenario has its verdict, and while the campaign is suspended with nothing
+in flight; it is owned by the campaign, so deleting the campaign removes it too.
 
 Pure: the step's views in, the gate (window, condition, actions) out.
 """
@@ -175,26 +175,43 @@ def gate(
     scenarios: int,
     workload: WorkloadView | None,
     complete: bool,
+    in_flight: int = 0,
     refused: str | None = None,
 ) -> Gate:
-    """The window admission allows, the Workload to create or delete, and the condition."""
+    """The window admission allows, the Workload to create or delete, and the condition.
+
+    The Workload goes when the campaign is done, and while it is suspended with nothing in
+    flight (a paused campaign holds no quota; resuming asks the queue again, as Kueue does with
+    a suspended Job)."""
     queue = spec.execution.queue_name
     if queue is None:
         return Gate(window=window)
     name = workload_name(campaign)
+    release: tuple[Action, ...] = ()
+    if workload is not None and not workload.deleting:
+        release = (Delete(kind=Kind.WORKLOAD, name=name, uid=workload.uid or None),)
     if complete:
-        actions: tuple[Action, ...] = ()
-        if workload is not None and not workload.deleting:
-            actions = (Delete(kind=Kind.WORKLOAD, name=name, uid=workload.uid or None),)
         return Gate(
             window=0,
-            actions=actions,
+            actions=release,
             condition=conditions.Desired(
                 type=CONDITION,
                 status=False,
                 reason="Released",
                 message=f"every scenario has its verdict; Workload {name} deleted, its quota "
                 "released",
+            ),
+        )
+    if spec.suspend and in_flight == 0:
+        return Gate(
+            window=0,
+            actions=release,
+            condition=conditions.Desired(
+                type=CONDITION,
+                status=False,
+                reason="Suspended",
+                message=f"spec.suspend is true: Workload {name} deleted, its quota released; "
+                "resuming asks the queue again",
             ),
         )
     if workload is None or workload.deleting:

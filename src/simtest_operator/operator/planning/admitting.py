@@ -11,7 +11,7 @@ from simtest_operator.operator.actions import Kind
 from simtest_operator.operator.planning.inputs import Step
 
 
-def admit(step: Step, window: int, *, complete: bool) -> admission.Gate:
+def admit(step: Step, window: int, *, complete: bool, in_flight: int) -> admission.Gate:
     """What admission allows this step (the window unchanged without ``queueName``)."""
     campaign = step.campaign
     name = admission.workload_name(campaign.name)
@@ -24,5 +24,6 @@ def admit(step: Step, window: int, *, complete: bool) -> admission.Gate:
         scenarios=len(step.frozen),
         workload=step.inputs.workload,
         complete=complete,
+        in_flight=in_flight,
         refused=step.inputs.refused.get((Kind.WORKLOAD, name)),
     )

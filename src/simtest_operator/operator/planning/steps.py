@@ -60,7 +60,7 @@ def _run(step: inputs.Step) -> Plan:
     counts = counting.counters(states)
     complete = all(s.state.settled for s in states)
     in_flight = assessing.in_flight(step, judged)
-    gate = admitting.admit(step, starting.window(step), complete=complete)
+    gate = admitting.admit(step, starting.window(step), complete=complete, in_flight=in_flight)
     window = gate.window
     outcome = (
         Outcome(actions=gate.actions)
