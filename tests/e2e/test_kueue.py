@@ -5,7 +5,8 @@ Covers: a campaign whose queue has no free ``simtest.dev/simulator`` quota creat
 waits (phase Pending, ``Admitted=False`` with Kueue's reason and message) until quota frees,
 then runs within the admitted count and releases its Workload when done; two campaigns in one
 ClusterQueue share its quota (partial admission: together never more simulators than the quota,
-both admitted while the first still runs) and both complete.
+both admitted while the first still runs) and both complete; with admission fair sharing the
+team that has used less of the queue is admitted first, although its campaign came later.
 """
 
 from __future__ import annotations
@@ -101,7 +102,7 @@ class Queues:
         self.namespace = namespace
         self.cluster_queues: list[str] = []
 
-    def cluster_queue(self, name: str, *, simulators: int) -> None:
+    def cluster_queue(self, name: str, *, simulators: int, fair: bool = False) -> None:
         resources = [
             {"name": "cpu", "nominalQuota": "16"},
             {"name": "memory", "nominalQuota": "32Gi"},
@@ -114,6 +115,11 @@ class Queues:
             "metadata": {"name": name},
             "spec": {
                 "namespaceSelector": {},
+                **(
+                    {"admissionScope": {"admissionMode": "UsageBasedAdmissionFairSharing"}}
+                    if fair
+                    else {}
+                ),
                 "resourceGroups": [
                     {
                         "coveredResources": [r["name"] for r in resources],
@@ -366,3 +372,49 @@ def test_two_campaigns_share_one_cluster_queue(
     assert admitted_counts == {"alpha-simulators": 3, "beta-simulators": 1}
     assert peak_total <= 4, f"{peak_total} simulators at once; the ClusterQueue admits 4"
     assert peak["alpha"] <= 3 and peak["beta"] <= 1, peak
+
+
+def test_fair_sharing_admits_the_team_that_used_less_first(
+    api: client.ApiClient,
+    namespace: str,
+    queues: Queues,
+    operator: support.OperatorProcess,
+) -> None:
+    cq = f"fair-{namespace}"
+    queues.cluster_queue(cq, simulators=2, fair=True)
+    queues.local_queue("team-a", cq)
+    queues.local_queue("team-b", cq)
+    scenarios = operator.sources / "scenarios"
+    for folder in ("a1", "a2", "b1"):
+        support.scenario_files(scenarios / folder, [f"slow-{i:02d}.xosc" for i in range(4)])
+    cluster = support.Cluster(api, namespace)
+
+    def campaign(name: str, queue: str) -> None:
+        cluster.create(
+            support.campaign(
+                name, path=f"scenarios/{name}", execution={"queueName": queue, "maxParallel": 2}
+            )
+        )
+
+    def admitted(name: str) -> bool:
+        return _condition(cluster.status(name), "Admitted").get("status") == "True"
+
+    with support.running(operator):
+        campaign("a1", "team-a")  # team a uses the whole quota for a while (4 x 6 s, 2 at once)
+        _wait(lambda: admitted("a1"), timeout=60, what="a1 admitted")
+        time.sleep(2)
+        campaign("a2", "team-a")  # team a asks again first ...
+        time.sleep(1)
+        campaign("b1", "team-b")  # ... team b, which used nothing, asks later
+        _wait(
+            lambda: admitted("b1") or admitted("a2"),
+            timeout=120,
+            what="the next campaign admitted once a1 releases the quota",
+        )
+        assert admitted("b1") and not admitted("a2"), (
+            _condition(cluster.status("a2"), "Admitted"),
+            _condition(cluster.status("b1"), "Admitted"),
+        )
+        for name in ("a1", "b1", "a2"):
+            final = cluster.wait_complete(name, timeout=180, alive=operator.alive)
+            assert final["phase"] == "Succeeded" and final["passed"] == 4, final
