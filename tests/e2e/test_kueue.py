@@ -399,13 +399,18 @@ def test_fair_sharing_admits_the_team_that_used_less_first(
     def admitted(name: str) -> bool:
         return _condition(cluster.status(name), "Admitted").get("status") == "True"
 
+    def waiting(name: str) -> bool:
+        return _condition(cluster.status(name), "Admitted").get("reason") == "Pending"
+
     with support.running(operator):
         campaign("a1", "team-a")  # team a uses the whole quota for a while (4 x 6 s, 2 at once)
         _wait(lambda: admitted("a1"), timeout=60, what="a1 admitted")
-        time.sleep(2)
-        campaign("a2", "team-a")  # team a asks again first ...
+        campaign("a2", "team-a")  # team a asks again first (FIFO would admit it next) ...
+        _wait(lambda: waiting("a2"), timeout=60, what="a2 waiting in Kueue")
         time.sleep(1)
         campaign("b1", "team-b")  # ... team b, which used nothing, asks later
+        _wait(lambda: waiting("b1"), timeout=60, what="b1 waiting in Kueue")
+        assert _condition(cluster.status("a1"), "Complete").get("status") != "True"
         _wait(
             lambda: admitted("b1") or admitted("a2"),
             timeout=120,
