@@ -38,8 +38,8 @@ FLAVOR = "default-flavor"
 def kueue_cluster(
     dev_toolchain: Toolchain, tmp_path_factory: pytest.TempPathFactory
 ) -> Iterator[ClusterInfo]:
-    """Its own dev cluster (2 kwok nodes x 3 slots) with Kueue; skipped only when the Kueue
-    binary cannot be built on this machine."""
+    """Its own dev cluster (2 kwok nodes x 3 slots), Kueue added once it runs; skipped only when
+    the Kueue binary cannot be built on this machine."""
     settings = Settings.from_env()
     try:
         build(
@@ -53,7 +53,10 @@ def kueue_cluster(
     cluster = DevCluster(
         tmp_path_factory.mktemp("kueue-cluster"), dev_toolchain, tied_to_this_process=True
     )
-    info = cluster.up(nodes=2, slots=3, crds_dir=REPO_ROOT / "crds", with_kueue=True)
+    cluster.up(nodes=2, slots=3, crds_dir=REPO_ROOT / "crds")
+    info = cluster.up(with_kueue=True)  # Kueue added to the running cluster (`up`, `up --kueue`)
+    assert "workloads.kueue.x-k8s.io" in info.crds
+    assert any(c.name == "kueue" and c.alive for c in cluster.status().components)
     try:
         yield info
     finally:

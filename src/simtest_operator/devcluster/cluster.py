@@ -103,6 +103,9 @@ class DevCluster:
         current = self._load_state()
         if current is not None:
             if self.status().running:
+                if with_kueue and not any(r.name == "kueue" for r in current.processes):
+                    current = self._start_kueue(current, timeout=timeout)  # `up`, then `up --kueue`
+                    current.save(self.layout.state)
                 return self._info(current)
             self.down()  # stale: something died; start over cleanly
         if real_node is not None:
