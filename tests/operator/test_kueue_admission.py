@@ -88,6 +88,7 @@ def test_nothing_starts_before_admission_and_the_campaign_says_why() -> None:
         message,
     )
     assert status["phase"] == "Pending"
+    assert "startTime" not in status  # the wait does not count against activeDeadlineSeconds
     assert _condition(status, "Running")["reason"] == "Queued"
     assert message in _condition(status, "Running")["message"]
     assert not cluster.of(Kind.ENVIRONMENT) and not cluster.of(Kind.POD)
@@ -100,6 +101,7 @@ def test_runs_within_the_admitted_count_and_releases_the_workload() -> None:
     cluster.step()
     running = _condition(cluster.status(), "Admitted")
     assert (running["status"], running["reason"]) == ("True", "Admitted")
+    assert "startTime" in cluster.status()
     assert "admitted 2 simulators" in running["message"]
     cluster.run()
     assert cluster.status()["phase"] == "Succeeded"

@@ -91,7 +91,7 @@ def progressed(
     """Status of a resolved campaign from its scenario counters (and its evaluation step, when
     that has something to say). ``admission`` is the ``Admitted`` condition of a campaign with a
     Kueue queue; ``waiting`` its message while nothing is admitted and nothing runs (phase
-    Pending, reason ``Queued``)."""
+    Pending, reason ``Queued``; no ``startTime`` yet)."""
     wire = campaign.status_wire
     total = counts["total"]
     if total == 0:
@@ -120,6 +120,10 @@ def progressed(
         "scenarioList": names.scenario_list(campaign.name),
         "batches": batches,
     }
+    if waiting is not None and not wire.get("startTime"):
+        # Not started before admission: the wait in Kueue's queue does not count against
+        # activeDeadlineSeconds (a Job's startTime waits for Kueue the same way).
+        del desired["startTime"]
     started_at = reading.timestamp(start) or now
     minutes = (now - started_at).total_seconds() / 60.0
     if minutes > 0 and finished:
