@@ -112,6 +112,24 @@ def test_runs_within_the_admitted_count_and_releases_the_workload() -> None:
     assert (released["status"], released["reason"]) == ("False", "Released")
 
 
+def test_a_barrier_campaign_is_admitted_a_whole_batch_at_least() -> None:
+    """minCount is the batch size, so Kueue never admits less than the barrier submits whole."""
+    cluster = FakeCluster(nodes={"n0": 3, "n1": 3})
+    body = campaign_body(queueName="team-a", maxParallel=6, batchSize=3, batchBarrier=True)
+    cluster.start_campaign(body, frozen_list(9), batch_size=3)
+    cluster.step()
+    workload = cluster.get(Kind.WORKLOAD, WORKLOAD)
+    assert workload is not None
+    assert (
+        workload["spec"]["podSets"][0]["count"],
+        workload["spec"]["podSets"][0]["minCount"],
+    ) == (6, 3)
+    _kueue(cluster, admitted=3)
+    cluster.run()
+    assert cluster.status()["phase"] == "Succeeded" and len(cluster.results()) == 9
+    assert cluster.max_in_flight <= 3
+
+
 def test_an_evicted_workload_stops_new_starts() -> None:
     cluster = _queued_campaign(count=12)
     cluster.step()

@@ -4,8 +4,8 @@ The operator does not let Kueue gate its pods (that needs Kueue's pod webhook, a
 still counts against ``pendingTimeoutSeconds``). It asks for the window instead: one Workload,
 ``<campaign>-simulators``, whose single pod set is ``count`` = the window's simulator pods (each
 with the campaign's cpu, memory, ``nvidia.com/gpu`` and one ``simtest.dev/simulator``, plus the
-SUT sidecar's cpu and memory when the SUT runs as one) and
-``minCount`` 1, in the LocalQueue ``queueName``. Kueue admits it by its ClusterQueue's rules
+SUT sidecar's cpu and memory when the SUT runs as one) and ``minCount`` 1 (a batch with
+``batchBarrier``), in the LocalQueue ``queueName``. Kueue admits it by its ClusterQueue's rules
 (quotas, cohorts, fair sharing, partial admission down to what fits) and writes the admitted
 count; the campaign then keeps at most that many environments in flight. Nothing starts before
 admission, so a campaign over quota creates no pods at all; it waits with condition
@@ -144,12 +144,19 @@ def workload_body(
                 {
                     "name": POD_SET,
                     "count": max(count, 1),
-                    "minCount": 1,
+                    "minCount": min_count(spec, count),
                     "template": {"spec": template},
                 }
             ],
         },
     }
+
+
+def min_count(spec: TestCampaignSpec, count: int) -> int:
+    """The fewest simulators worth admitting: one, or with ``batchBarrier`` a whole batch (a
+    barrier batch is submitted whole)."""
+    execution = spec.execution
+    return max(min(execution.batch_size if execution.batch_barrier else 1, count), 1)
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
