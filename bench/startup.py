@@ -36,6 +36,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import tomllib
 from pathlib import Path
 from typing import Any
 
@@ -114,9 +115,11 @@ sys.meta_path.insert(0, _Probing())
 _mark("main")
 """
 
-ENTRY = "import sys; from {module} import main; sys.argv[0] = {name!r}; sys.exit(main())"
-CLI = ("simtest_operator.cli.main", "simtest")
-RUNNER = ("simtest_operator.runner.entrypoint", "simtest-runner")
+ENTRY = (
+    "import sys; from {module} import {function} as main; sys.argv[0] = {name!r}; sys.exit(main())"
+)
+CLI = "simtest"
+RUNNER = "simtest-runner"
 IMPORT_LINE = re.compile(r"import time:\s+(-?\d+) \|\s+(-?\d+) \|(\s*)(\S+)")
 
 
@@ -125,7 +128,8 @@ class Command:
     """One benchmarked command line."""
 
     name: str
-    entry: tuple[str, str]
+    entry: str
+    """The console script, run as its ``module:function`` in the tree's pyproject.toml says."""
     args: tuple[str, ...]
     spec: str = ""
     """The runner's run spec (``SIMTEST_RUN_SPEC``), empty for the CLI."""
@@ -198,8 +202,8 @@ def execute(
     command: Command, tree: Path, cache: Path, *, probes: Path | None, importtime: bool
 ) -> dict[str, Any]:
     """Run ``command`` once on the sources in ``tree``: wall/CPU seconds, events, imports."""
-    module, name = command.entry
-    code = ENTRY.format(module=module, name=name)
+    module, function = console_scripts(tree)[command.entry].split(":")
+    code = ENTRY.format(module=module, function=function, name=command.entry)
     if command.cold:
         cache = Path(tempfile.mkdtemp(dir=cache.parent, prefix="cold-cache-"))
     env = {**os.environ, "PYTHONPATH": str(tree / "src"), "SIMTEST_CACHE_DIR": str(cache)}
@@ -231,6 +235,13 @@ def execute(
     if importtime:
         result["imports"] = imports_by_package(stderr)
     return result
+
+
+def console_scripts(tree: Path) -> dict[str, str]:
+    """The ``[project.scripts]`` of the tree: each tree runs its own entry points."""
+    with (tree / "pyproject.toml").open("rb") as file:
+        scripts: dict[str, str] = tomllib.load(file)["project"]["scripts"]
+    return scripts
 
 
 def _rel(value: float | None, started: float) -> float | None:

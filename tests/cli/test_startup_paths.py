@@ -54,7 +54,8 @@ finally:
 
 
 def packages_loaded(body: str, env: dict[str, str] | None = None) -> dict[str, set[str]]:
-    """Top-level packages loaded at the first step and at exit of ``body`` in a fresh process."""
+    """Top-level packages loaded at the first step and at exit of ``body`` in a fresh process
+    (and, under ``<label>-modules``, every module)."""
     done = subprocess.run(
         [sys.executable, "-c", _PROBE.replace("{body}", body)],
         capture_output=True,
@@ -68,7 +69,8 @@ def packages_loaded(body: str, env: dict[str, str] | None = None) -> dict[str, s
     for line in done.stderr.splitlines():
         label, _, modules = line.partition(" ")
         if label in ("first-step", "at-exit"):
-            found[label] = {m.split(".")[0] for m in json.loads(modules)}
+            found[f"{label}-modules"] = set(json.loads(modules))
+            found[label] = {m.split(".")[0] for m in found[f"{label}-modules"]}
     return found
 
 
@@ -107,11 +109,18 @@ def test_the_runner_reaches_its_first_step_lean(tmp_path: Path) -> None:
     spec = spec_for([SCENARIO], tmp_path / "artifacts", "PerScenario")
     log = tmp_path / "termination-log"
     found = packages_loaded(
-        "from simtest_operator.runner.entrypoint import main\n"
-        f"    main(['--spec', {spec.dumps()!r}, '--termination-log', {str(log)!r}])",
+        "from simtest_operator.runner.launch import main\n"
+        f"    sys.argv = ['simtest-runner', '--spec', {spec.dumps()!r}, "
+        f"'--termination-log', {str(log)!r}]\n"
+        "    main()",
         env={"PATH": "/usr/bin:/bin", "SIMTEST_CACHE_DIR": str(tmp_path / "cache")},
     )
     assert found["first-step"] & NEVER_BEFORE_FIRST_STEP == set()
+    # The pod validates three wire models of its run spec and renders nothing.
+    assert found["first-step"] & {"jinja2", "yaml"} == set()
+    assert {"simtest_operator.api.v1alpha1.kinds", "simtest_operator.render.rendering"} & found[
+        "first-step-modules"
+    ] == set()
     assert found["at-exit"] & {"omega_prime", "betterosi", "pyarrow", "polars"} == set()
     assert json.loads(log.read_text())["verdict"] == "Passed"
 

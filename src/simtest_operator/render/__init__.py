@@ -1,21 +1,55 @@
 """Pure rendering of environment templates (``helm-templates/``) into Helm values, the simulator
-pod and a run-specific helmfile; plus the run-spec contract between pod and runner."""
+pod and a run-specific helmfile; plus the run-spec contract between pod and runner.
 
-from simtest_operator.render.inputs import (
-    CHARTS_DIR,
-    SIMULATOR_RESOURCE,
-    Amounts,
-    ArtifactTarget,
-    EnvironmentRequest,
-    OwnerRef,
-    PvcVolume,
-    S3Target,
-    ScenarioRef,
-    SecretKey,
-)
-from simtest_operator.render.rendering import RenderedEnvironment, render_environment
-from simtest_operator.render.runspecs import RunSpec
-from simtest_operator.render.templates import TemplateLibrary
+Names load on first use (PEP 562 ``__getattr__``): the simulator pod reads its run spec and
+writes its termination message through :mod:`.runspecs` and :mod:`.messages` and renders
+nothing, so it does not import the renderer's Jinja and YAML.
+"""
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from simtest_operator.render.inputs import (
+        CHARTS_DIR,
+        SIMULATOR_RESOURCE,
+        Amounts,
+        ArtifactTarget,
+        EnvironmentRequest,
+        OwnerRef,
+        PvcVolume,
+        S3Target,
+        ScenarioRef,
+        SecretKey,
+    )
+    from simtest_operator.render.rendering import RenderedEnvironment, render_environment
+    from simtest_operator.render.runspecs import RunSpec
+    from simtest_operator.render.templates import TemplateLibrary
+
+_MODULES = {
+    "CHARTS_DIR": "inputs",
+    "SIMULATOR_RESOURCE": "inputs",
+    "Amounts": "inputs",
+    "ArtifactTarget": "inputs",
+    "EnvironmentRequest": "inputs",
+    "OwnerRef": "inputs",
+    "PvcVolume": "inputs",
+    "S3Target": "inputs",
+    "ScenarioRef": "inputs",
+    "SecretKey": "inputs",
+    "RenderedEnvironment": "rendering",
+    "render_environment": "rendering",
+    "RunSpec": "runspecs",
+    "TemplateLibrary": "templates",
+}
+
+
+def __getattr__(name: str) -> Any:
+    module = _MODULES.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    return getattr(importlib.import_module(f"{__name__}.{module}"), name)
+
 
 __all__ = [
     "CHARTS_DIR",

@@ -8,7 +8,8 @@ This module is the package's public entry, and the only part of it the CLI may i
 its :class:`LocalRunResult`; :func:`engine` picks what runs each scenario), the frozen list
 (:func:`read_manifest`, :func:`freeze`), exit codes (:func:`summarise`, :data:`EXIT_ERROR`),
 re-scoring (:func:`reevaluate`) and reading a recording (:func:`read_recording`). The pod's
-entrypoint is the ``simtest-runner`` console script (:mod:`.entrypoint`).
+entrypoint is the ``simtest-runner`` console script (:mod:`.launch`, which runs
+:mod:`.entrypoint`).
 
 Names load on first use (PEP 562 ``__getattr__``): each caller pays only for the module behind
 the names it touches, so ``simtest scenario run`` starts without the campaign machinery (pydantic,

@@ -2,38 +2,101 @@
 
 Only this package knows the serialised shape; the rest of the code base works on domain values
 produced by :mod:`simtest_operator.api.converting`.
+
+Names load on first use (PEP 562 ``__getattr__``): the simulator pod validates three wire models
+of its run spec and should not build the kinds, manifests and status models (about 0.1 s of
+every runner's start-up) to get them.
 """
 
-from simtest_operator.api.v1alpha1.common import API_VERSION, GROUP, VERSION, Condition
-from simtest_operator.api.v1alpha1.environment import (
-    DriverModel,
-    EnvironmentSpec,
-    Provisioner,
-    SimulatorSettings,
-    SutConfig,
-)
-from simtest_operator.api.v1alpha1.evaluation import Criteria, CriteriaPatch, EvaluationSpec
-from simtest_operator.api.v1alpha1.execution import ExecutionSpec, Isolation, Resources
-from simtest_operator.api.v1alpha1.kinds import (
-    KINDS,
-    SCENARIO_BATCH,
-    SIM_ENVIRONMENT,
-    TEST_CAMPAIGN,
-    EnvironmentPhase,
-    FrozenScenario,
-    OfflineEvaluationStatus,
-    ResourceKind,
-    ScenarioBatchSpec,
-    ScenarioBatchStatus,
-    SimEnvironmentSpec,
-    SimEnvironmentStatus,
-    TestCampaignSpec,
-    TestCampaignStatus,
-    Timings,
-)
-from simtest_operator.api.v1alpha1.manifests import Manifest, ManifestError, parse, parse_campaign
-from simtest_operator.api.v1alpha1.sources import ScenarioSelection, ScenarioSource
-from simtest_operator.api.v1alpha1.status import Counters, Phase, ScenarioResult
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from simtest_operator.api.v1alpha1.common import API_VERSION, GROUP, VERSION, Condition
+    from simtest_operator.api.v1alpha1.environment import (
+        DriverModel,
+        EnvironmentSpec,
+        Provisioner,
+        SimulatorSettings,
+        SutConfig,
+    )
+    from simtest_operator.api.v1alpha1.evaluation import Criteria, CriteriaPatch, EvaluationSpec
+    from simtest_operator.api.v1alpha1.execution import ExecutionSpec, Isolation, Resources
+    from simtest_operator.api.v1alpha1.kinds import (
+        KINDS,
+        SCENARIO_BATCH,
+        SIM_ENVIRONMENT,
+        TEST_CAMPAIGN,
+        EnvironmentPhase,
+        FrozenScenario,
+        OfflineEvaluationStatus,
+        ResourceKind,
+        ScenarioBatchSpec,
+        ScenarioBatchStatus,
+        SimEnvironmentSpec,
+        SimEnvironmentStatus,
+        TestCampaignSpec,
+        TestCampaignStatus,
+        Timings,
+    )
+    from simtest_operator.api.v1alpha1.manifests import (
+        Manifest,
+        ManifestError,
+        parse,
+        parse_campaign,
+    )
+    from simtest_operator.api.v1alpha1.sources import ScenarioSelection, ScenarioSource
+    from simtest_operator.api.v1alpha1.status import Counters, Phase, ScenarioResult
+
+_MODULES = {
+    "API_VERSION": "common",
+    "GROUP": "common",
+    "VERSION": "common",
+    "Condition": "common",
+    "DriverModel": "environment",
+    "EnvironmentSpec": "environment",
+    "Provisioner": "environment",
+    "SimulatorSettings": "environment",
+    "SutConfig": "environment",
+    "Criteria": "evaluation",
+    "CriteriaPatch": "evaluation",
+    "EvaluationSpec": "evaluation",
+    "ExecutionSpec": "execution",
+    "Isolation": "execution",
+    "Resources": "execution",
+    "KINDS": "kinds",
+    "SCENARIO_BATCH": "kinds",
+    "SIM_ENVIRONMENT": "kinds",
+    "TEST_CAMPAIGN": "kinds",
+    "EnvironmentPhase": "kinds",
+    "FrozenScenario": "kinds",
+    "OfflineEvaluationStatus": "kinds",
+    "ResourceKind": "kinds",
+    "ScenarioBatchSpec": "kinds",
+    "ScenarioBatchStatus": "kinds",
+    "SimEnvironmentSpec": "kinds",
+    "SimEnvironmentStatus": "kinds",
+    "TestCampaignSpec": "kinds",
+    "TestCampaignStatus": "kinds",
+    "Timings": "kinds",
+    "Manifest": "manifests",
+    "ManifestError": "manifests",
+    "parse": "manifests",
+    "parse_campaign": "manifests",
+    "ScenarioSelection": "sources",
+    "ScenarioSource": "sources",
+    "Counters": "status",
+    "Phase": "status",
+    "ScenarioResult": "status",
+}
+
+
+def __getattr__(name: str) -> Any:
+    module = _MODULES.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    return getattr(importlib.import_module(f"{__name__}.{module}"), name)
+
 
 __all__ = [
     "API_VERSION",
