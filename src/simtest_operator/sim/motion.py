@@ -53,6 +53,8 @@ def move(
     was_stuck = actor.stuck
     if placed:
         actor.lateral_speed = 0.0
+        if actor.mode is not Mode.PATH:  # a trajectory gave its own velocity
+            actor.set_travel(None)
     elif actor.mode is Mode.ROAD and actor.road_id is not None and world.roads is not None:
         lateral_rate = 0.0
         if road_before == actor.road_id and dt > 0:
@@ -72,7 +74,8 @@ def move(
         actor.steer_rate = None
         # s per metre driven at the lateral position the last pose found (one step old: the
         # lateral motion within a step changes it by far less than a per mille)
-        stretched = distance * actor.stretch
+        stretch = actor.stretch
+        stretched = distance * stretch
         location = world.roads.advance(
             actor.road_id,
             actor.s,
@@ -107,12 +110,33 @@ def move(
                 _pick_route_lane(world, actor)
         world.pose_on_road(actor, tilt)
         actor.lateral_speed = lateral_rate
+        if dt > 0:
+            # Along the lane by the distance it got (short of a road's end), across it at the
+            # lateral rate: the heading may point elsewhere (an entity placed at an angle).
+            driven = max(abs(stretched) - location.remaining, 0.0) / stretch if stretch else 0.0
+            _travel_on_lane(actor, math.copysign(driven, distance) / dt, lateral_rate, tilt)
+        else:
+            actor.set_travel(None)
     elif actor.mode is Mode.FREE:
         actor.x += actor.speed * math.cos(actor.heading) * dt
         actor.y += actor.speed * math.sin(actor.heading) * dt
         actor.lateral_speed = 0.0
+        actor.set_travel(None)
     actor.odometer += math.hypot(actor.x - x0, actor.y - y0)
     update_timers(world, actor, dt, was_stuck=was_stuck)
+
+
+def _travel_on_lane(actor: Actor, along: float, lateral_rate: float, tilt: float) -> None:
+    """The world velocity of a lane-following actor: ``along`` its lane in its direction of
+    travel, ``lateral_rate`` towards +t (its heading is the lane's turned by its heading
+    offset and ``tilt``)."""
+    base = actor.heading - actor.heading_offset - tilt
+    cos_b, sin_b = math.cos(base), math.sin(base)
+    across = actor.direction * lateral_rate
+    if across == 0.0 and actor.heading_offset == 0.0 and tilt == 0.0 and along == actor.speed:
+        actor.set_travel(None)  # plainly along its heading
+        return
+    actor.set_travel((along * cos_b - across * sin_b, along * sin_b + across * cos_b))
 
 
 def update_timers(world: World, actor: Actor, dt: float, *, was_stuck: bool) -> None:

@@ -102,8 +102,13 @@ class PathRun(Run):
                 done, rest = True, -target
             else:
                 done = False
-        self._distance = min(max(target, 0.0), path.length)
+        before, self._distance = self._distance, min(max(target, 0.0), path.length)
         self._place(actor, self._distance)
+        if dt > 0:
+            # along the path, whatever heading the trajectory gives the entity
+            rate = (self._distance - before) / dt
+            direction = path.direction_at(self._distance)
+            actor.set_travel((rate * math.cos(direction), rate * math.sin(direction)))
         if done:
             self.finished = True
             world.attach(actor)
