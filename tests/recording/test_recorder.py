@@ -5,8 +5,8 @@ pedestrians and misc objects, an entity leaving and coming back under a fresh id
 and early-leaving entities, 20 Hz input thinned to 10 Hz, the embedded OpenDRIVE map and its
 map_reference, metadata records and channel metadata; the frame layout following order, box and
 category changes, random entity churn decoded with betterosi frame by frame against its
-snapshots, an unclosed (killed) recording keeping its finished chunks. The write cost per frame is measured by
-bench/simulator.py, not here."""
+snapshots, an unclosed (killed) recording keeping its finished chunks. The write cost per frame
+is measured by bench/simulator.py, not here."""
 
 from __future__ import annotations
 
