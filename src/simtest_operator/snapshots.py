@@ -195,9 +195,11 @@ class JumpCause(enum.StrEnum):
     TELEPORT = "teleport"
     """A TeleportAction put it elsewhere."""
     TRAJECTORY_START = "trajectoryStart"
-    """A FollowTrajectoryAction put it on its trajectory's start."""
+    """A FollowTrajectoryAction put it on its trajectory's start (elsewhere, or turned to the
+    start's heading)."""
     LATERAL_STEP = "lateralStep"
-    """A lane change or lane offset of ``step`` shape (or zero time) moved it across at once."""
+    """A lane change or lane offset of ``step`` shape (or zero time), or a lateral distance
+    without limits, moved it across at once."""
     ROAD_END = "roadEnd"
     """It reached the end of its road and stands there, its speed dropped a step later (as
     esmini does)."""

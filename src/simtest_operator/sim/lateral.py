@@ -218,7 +218,8 @@ class LateralDistanceRun(Run):
 
     Measured across the road (difference of t, free space subtracting the half widths); the
     requested side is kept (``any``: the side the actor is on now). Without limits the actor
-    snaps to the distance. With them it moves like the reference player: a critically damped
+    snaps to the distance (a declared jump when it starts; while it runs, the snaps follow the
+    reference's motion). With them it moves like the reference player: a critically damped
     spring (stiffness 0.4 per m/s^2 of allowed acceleration) with the acceleration and the
     lateral speed clamped; a non-continuous action ends within 1 cm of the distance.
     """
@@ -238,7 +239,11 @@ class LateralDistanceRun(Run):
         else:
             here = self._t(world, actor) - self._t(world, self._ref)
             self._side = 1.0 if here * actor.direction >= 0 else -1.0
+        offset = actor.offset
         self.step(world, 0.0)
+        if abs(actor.offset - offset) > 1e-9:
+            # Without limits the actor snaps to the distance at once (as esmini).
+            world.declare(actor, JumpCause.LATERAL_STEP)
 
     @staticmethod
     def _t(world: World, actor: Actor) -> float:

@@ -111,9 +111,14 @@ def move(
         world.pose_on_road(actor, tilt)
         actor.lateral_speed = lateral_rate
         if dt > 0:
-            # Along the lane by the distance it got (short of a road's end), across it at the
-            # lateral rate: the heading may point elsewhere (an entity placed at an angle).
-            driven = max(abs(stretched) - location.remaining, 0.0) / stretch if stretch else 0.0
+            # Along the lane by the distance it got, across it at the lateral rate (the heading
+            # may point elsewhere: an entity placed at an angle). The distance is the walk in s
+            # over the stretch along it: where the curvature changes (into a bend, onto the next
+            # road) the one-step-old stretch made it more or less than the speed says.
+            driven = abs(distance)
+            if location.remaining > 0.0 or actor.stretch != stretch:
+                mean = (stretch + actor.stretch) / 2.0
+                driven = max(abs(stretched) - location.remaining, 0.0) / mean
             _travel_on_lane(actor, math.copysign(driven, distance) / dt, lateral_rate, tilt)
         else:
             actor.set_travel(None)
