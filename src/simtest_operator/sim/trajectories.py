@@ -108,9 +108,9 @@ class PathRun(Run):
         before, self._distance = self._distance, min(max(target, 0.0), path.length)
         self._place(actor, self._distance)
         if dt > 0:
-            # along the path, whatever heading the trajectory gives the entity
+            # along the path (the piece this step drove), whatever heading it gives the entity
             rate = (self._distance - before) / dt
-            direction = path.direction_at(self._distance)
+            direction = path.direction_at((self._distance + before) / 2.0)
             actor.set_travel((rate * math.cos(direction), rate * math.sin(direction)))
         if done:
             self.finished = True
