@@ -58,6 +58,7 @@ class LaneChangeRun(Run):
     __slots__ = (
         "_by_distance",
         "_delta",
+        "_direction",
         "_duration",
         "_elapsed",
         "_offset0",
@@ -80,6 +81,8 @@ class LaneChangeRun(Run):
         self._delta = lanes_between(actor.lane_id, target_lane)
         self._target_offset = action.target_lane_offset or 0.0
         self._offset0 = actor.offset
+        self._direction = actor.direction
+        """The actor's direction on its road the lane delta and offsets are counted in."""
         self._shape = action.dynamics.shape
         self._elapsed = 0.0
         """Progress: seconds, or for the distance dimension metres driven along the road."""
@@ -134,6 +137,12 @@ class LaneChangeRun(Run):
             return
         if abs(actor.speed) < 1e-9:
             return  # esmini: no lateral motion while standing, the change waits
+        if actor.direction != self._direction:
+            # It drove onto a road linked end to end: lane ids and t run the other way, the
+            # change goes on to the same side of the vehicle.
+            self._direction = actor.direction
+            self._delta, self._offset0 = -self._delta, -self._offset0
+            self._target_offset = -self._target_offset
         target = self._relative_target(world, actor.road_id)
         # esmini takes the lateral part of the step's travel at the rate the shape has at the
         # start of the step (so the longitudinal motion is not symmetric about the middle)

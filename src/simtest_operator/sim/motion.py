@@ -97,8 +97,10 @@ def move(
         if stretched != 0.0:  # a zero walk reports direction +1 whatever the travel direction
             direction = location.direction * walked
             if direction != actor.direction:
-                # t flips relative to travel: keep the offset on the same side of the vehicle
+                # t flips relative to travel (a road linked end to end): keep the offset and the
+                # lateral motion on the same side of the vehicle
                 actor.offset = -actor.offset
+                lateral_rate = -lateral_rate
             actor.direction = direction
         along = abs(distance) / dt if dt > 0 else abs(actor.speed)
         tilt = math.atan2(actor.direction * lateral_rate, along) if actor.speed else 0.0
