@@ -63,8 +63,10 @@ def move(
             else:
                 t_before = world.lane_t(actor.road_id, actor.s, lane_before) + offset_before
                 lateral_rate = (lateral_position(world, actor) - t_before) / dt
-        distance = actor.speed * dt
-        if actor.lane_changing and lateral_rate != 0.0:
+        speed = actor.speed
+        distance = speed * dt
+        steered = actor.lane_changing and lateral_rate != 0.0
+        if steered:
             # A lane change steers: the speed is along the path, so the lateral part of this
             # step's travel is taken from the longitudinal one (esmini's lane change).
             steer = actor.steer_rate if actor.steer_rate is not None else lateral_rate
@@ -117,11 +119,14 @@ def move(
             # may point elsewhere: an entity placed at an angle). The distance is the walk in s
             # over the stretch along it: where the curvature changes (into a bend, onto the next
             # road) the one-step-old stretch made it more or less than the speed says.
-            driven = abs(distance)
+            along = speed  # (not |distance| / dt: that differs from it in the last bits)
             if location.remaining > 0.0 or actor.stretch != stretch:
                 mean = (stretch + actor.stretch) / 2.0
                 driven = max(abs(stretched) - location.remaining, 0.0) / mean
-            _travel_on_lane(actor, math.copysign(driven, distance) / dt, lateral_rate, tilt)
+                along = math.copysign(driven, distance) / dt
+            elif steered:
+                along = distance / dt
+            _travel_on_lane(actor, along, lateral_rate, tilt)
         else:
             actor.set_travel(None)
     elif actor.mode is Mode.FREE:
@@ -140,8 +145,8 @@ def _travel_on_lane(actor: Actor, along: float, lateral_rate: float, tilt: float
     base = actor.heading - actor.heading_offset - tilt
     cos_b, sin_b = math.cos(base), math.sin(base)
     across = actor.direction * lateral_rate
-    if across == 0.0 and actor.heading_offset == 0.0 and tilt == 0.0 and along == actor.speed:
-        actor.set_travel(None)  # plainly along its heading
+    if across == 0.0 and actor.heading_offset == 0.0 and tilt == 0.0:
+        actor.set_travel(None if along == actor.speed else (along * cos_b, along * sin_b))
         return
     actor.set_travel((along * cos_b - across * sin_b, along * sin_b + across * cos_b))
 
