@@ -17,6 +17,8 @@ from simtest_operator.snapshots import JumpCause
 
 _LOOKAHEAD = 4
 """Route roads considered ahead of the current one (a junction is road, connector, road)."""
+_VANISHED = 0.01
+"""Metres of lane width below which a narrowing lane has ended (a merge lane)."""
 STANDSTILL_SPEED = 1e-3
 """Speed (m/s) below which an actor counts as standing still."""
 
@@ -65,6 +67,7 @@ def move(
                 lateral_rate = (lateral_position(world, actor) - t_before) / dt
         speed = actor.speed
         distance = speed * dt
+        changing_lanes = actor.steer_rate is not None  # a lane change counts lanes from here
         steered = actor.lane_changing and lateral_rate != 0.0
         if steered:
             # A lane change steers: the speed is along the path, so the lateral part of this
@@ -78,6 +81,7 @@ def move(
         # lateral motion within a step changes it by far less than a per mille)
         stretch = actor.stretch
         stretched = distance * stretch
+        s_before = actor.s
         location = world.roads.advance(
             actor.road_id,
             actor.s,
@@ -104,6 +108,9 @@ def move(
                 actor.offset = -actor.offset
                 lateral_rate = -lateral_rate
             actor.direction = direction
+        same_lane = location.road_id == road_before and location.lane_id == lane_before
+        if same_lane and not changing_lanes:
+            _leave_vanished_lane(world, actor, s_before)
         along = abs(distance) / dt if dt > 0 else abs(actor.speed)
         tilt = math.atan2(actor.direction * lateral_rate, along) if actor.speed else 0.0
         road_kept = location.road_id == road_before
@@ -136,6 +143,24 @@ def move(
         actor.set_travel(None)
     actor.odometer += math.hypot(actor.x - x0, actor.y - y0)
     update_timers(world, actor, dt, was_stuck=was_stuck)
+
+
+def _leave_vanished_lane(world: World, actor: Actor, s_before: float) -> None:
+    """A lane that narrowed to nothing under the actor (a merge lane's end) no longer holds it:
+    it belongs to the lane next to it, nearer the centre, where it is (its offset takes the
+    difference), instead of riding a lane of no width to a link that snaps it across."""
+    roads = world.roads
+    assert roads is not None and actor.road_id is not None
+    road_id, lane_id = actor.road_id, actor.lane_id
+    width = roads.lane_width(road_id, actor.s, lane_id)
+    if width >= _VANISHED or width >= roads.lane_width(road_id, s_before, lane_id):
+        return
+    inner = lane_id - (1 if lane_id > 0 else -1)
+    if inner == 0 or roads.lane_width(road_id, actor.s, inner) < _VANISHED:
+        return
+    t = world.lane_t(road_id, actor.s, lane_id) + actor.offset
+    actor.lane_id = inner
+    actor.offset = t - world.lane_t(road_id, actor.s, inner)
 
 
 def _travel_on_lane(actor: Actor, along: float, lateral_rate: float, tilt: float) -> None:
