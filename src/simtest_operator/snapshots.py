@@ -5,9 +5,10 @@ frozen values so those consumers never depend on the simulator backend.
 
 Conventions (OpenDRIVE/OpenSCENARIO, right-handed): ``x``/``y``/``z`` in metres are the entity's
 *reference point* (for vehicles the rear-axle centre projected to the ground); ``heading`` in
-radians counter-clockwise from +x; ``speed`` in m/s along the heading; ``acceleration`` in m/s^2
-along the heading. ``box`` gives the bounding box relative to the reference point, so consumers can
-derive the box centre (:meth:`EntityState.box_center`).
+radians counter-clockwise from +x; ``speed`` in m/s along the heading (along the direction of
+travel when ``travel`` gives one); ``acceleration`` in m/s^2 along the heading. ``box`` gives the
+bounding box relative to the reference point, so consumers can derive the box centre
+(:meth:`EntityState.box_center`) and its velocity (:meth:`EntityState.box_velocity`).
 """
 
 from __future__ import annotations
@@ -55,7 +56,12 @@ class EntityState:
     roll: float = 0.0
     speed: float = 0.0
     acceleration: float = 0.0
-    lateral_speed: float = 0.0
+    travel: tuple[float, float] | None = None
+    """World-frame velocity (m/s) of the reference point where it is not ``speed`` along
+    ``heading``: moving sideways (a lane change, a lane offset), a car crabbing at an angle to
+    its lane, a trajectory whose headings are not its direction."""
+    yaw_rate: float = 0.0
+    """rad/s, counter-clockwise: turns the box centre round the reference point."""
     box: BoundingBox = dataclasses.field(default_factory=BoundingBox)
     road_id: str | None = None
     lane_id: int | None = None
@@ -72,11 +78,20 @@ class EntityState:
         )
 
     def velocity(self) -> tuple[float, float]:
-        """World-frame velocity vector (vx, vy)."""
+        """World-frame velocity vector (vx, vy) of the reference point."""
+        if self.travel is not None:
+            return self.travel
+        return self.speed * math.cos(self.heading), self.speed * math.sin(self.heading)
+
+    def box_velocity(self) -> tuple[float, float]:
+        """World-frame velocity of the bounding-box centre: the reference point's plus the
+        turn of the centre round it (what a recording of box centres moves by)."""
+        vx, vy = self.velocity()
         cos_h, sin_h = math.cos(self.heading), math.sin(self.heading)
+        box, rate = self.box, self.yaw_rate
         return (
-            self.speed * cos_h - self.lateral_speed * sin_h,
-            self.speed * sin_h + self.lateral_speed * cos_h,
+            vx - rate * (box.center_x * sin_h + box.center_y * cos_h),
+            vy + rate * (box.center_x * cos_h - box.center_y * sin_h),
         )
 
 
@@ -94,7 +109,8 @@ class EntityState:
     _set_roll,
     _set_speed,
     _set_acceleration,
-    _set_lateral_speed,
+    _set_travel,
+    _set_yaw_rate,
     _set_box,
     _set_road_id,
     _set_lane_id,
@@ -116,7 +132,8 @@ def fast_entity_state(
     roll: float,
     speed: float,
     acceleration: float,
-    lateral_speed: float,
+    travel: tuple[float, float] | None,
+    yaw_rate: float,
     box: BoundingBox,
     road_id: str | None,
     lane_id: int | None,
@@ -144,7 +161,8 @@ def fast_entity_state(
     _set_roll(state, roll)
     _set_speed(state, speed)
     _set_acceleration(state, acceleration)
-    _set_lateral_speed(state, lateral_speed)
+    _set_travel(state, travel)
+    _set_yaw_rate(state, yaw_rate)
     _set_box(state, box)
     _set_road_id(state, road_id)
     _set_lane_id(state, lane_id)
@@ -177,9 +195,11 @@ class JumpCause(enum.StrEnum):
     TELEPORT = "teleport"
     """A TeleportAction put it elsewhere."""
     TRAJECTORY_START = "trajectoryStart"
-    """A FollowTrajectoryAction put it on its trajectory's start."""
+    """A FollowTrajectoryAction put it on its trajectory's start (elsewhere, or turned to the
+    start's heading)."""
     LATERAL_STEP = "lateralStep"
-    """A lane change or lane offset of ``step`` shape (or zero time) moved it across at once."""
+    """A lane change or lane offset of ``step`` shape (or zero time), or a lateral distance
+    without limits, moved it across at once."""
     ROAD_END = "roadEnd"
     """It reached the end of its road and stands there, its speed dropped a step later (as
     esmini does)."""

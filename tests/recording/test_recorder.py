@@ -1,12 +1,12 @@
 """Recorder end to end, read back with omega-prime (validation on) and with our own reader:
 object ids and counts, bounding-box centres (rotated boxes with lateral offsets), yaw within
-[-pi, pi], velocity with lateral speed, vehicle classification per category, pedestrians and misc
-objects, an entity leaving and coming back under a fresh id (no gaps), late and early-leaving
-entities, 20 Hz input thinned to 10 Hz, the embedded OpenDRIVE map and its map_reference,
-metadata records and channel metadata; the frame layout following order, box and category
-changes, random entity churn decoded with betterosi frame by frame against its snapshots, an
-unclosed (killed) recording keeping its finished chunks. The write cost per frame is measured by
-bench/simulator.py, not here."""
+[-pi, pi], velocity of the box centre (travel and yaw rate), vehicle classification per category,
+pedestrians and misc objects, an entity leaving and coming back under a fresh id (no gaps), late
+and early-leaving entities, 20 Hz input thinned to 10 Hz, the embedded OpenDRIVE map and its
+map_reference, metadata records and channel metadata; the frame layout following order, box and
+category changes, random entity churn decoded with betterosi frame by frame against its
+snapshots, an unclosed (killed) recording keeping its finished chunks. The write cost per frame
+is measured by bench/simulator.py, not here."""
 
 from __future__ import annotations
 
@@ -56,7 +56,7 @@ def world(t: float) -> WorldSnapshot:
             EntityState(
                 id=entity_id, name=f"v{entity_id}", kind=EntityKind.VEHICLE, category=category,
                 x=20.0 * entity_id + 15.0 * t, y=-1.5, heading=3.5 if entity_id == 2 else 0.2,
-                speed=15.0, lateral_speed=0.5, acceleration=-1.0, box=CAR_BOX,
+                speed=15.0, travel=(14.5, 3.0), yaw_rate=0.25, acceleration=-1.0, box=CAR_BOX,
             )
         )  # fmt: skip
     if t >= 1.0:
@@ -123,7 +123,7 @@ def test_positions_are_box_centres(omega) -> None:  # type: ignore[no-untyped-de
     state = world(1.5).entity("v2")
     assert state is not None
     cx, cy, cz = state.box_center()
-    vx, vy = state.velocity()
+    vx, vy = state.box_velocity()
     assert row["x"][0] == pytest.approx(cx)
     assert row["y"][0] == pytest.approx(cy)
     assert row["z"][0] == pytest.approx(cz)
@@ -196,7 +196,7 @@ def test_frame_layout_follows_order_box_and_category_changes(tmp_path: Path) -> 
         base = EntityState(
             id=entity_id, name=f"e{entity_id}", kind=EntityKind.VEHICLE, category="car",
             x=5.0 * k + entity_id, y=float(entity_id), heading=0.3 * k, pitch=4.0, roll=-0.1,
-            speed=10.0 + k, lateral_speed=0.2, acceleration=1.5, box=CAR_BOX,
+            speed=10.0 + k, yaw_rate=3.0, acceleration=1.5, box=CAR_BOX,
         )  # fmt: skip
         return dataclasses.replace(base, **changes)  # type: ignore[arg-type]
 
@@ -232,7 +232,7 @@ def test_frame_layout_follows_order_box_and_category_changes(tmp_path: Path) -> 
             assert (base.position.x, base.position.y, base.position.z) == pytest.approx(
                 expected.box_center()
             )
-            assert (base.velocity.x, base.velocity.y) == pytest.approx(expected.velocity())
+            assert (base.velocity.x, base.velocity.y) == pytest.approx(expected.box_velocity())
             assert base.orientation.yaw == pytest.approx(math.remainder(expected.heading, math.tau))
             assert base.orientation.pitch == pytest.approx(4.0 - math.tau)
             assert base.orientation.roll == -0.1
@@ -250,7 +250,8 @@ def random_state(rng: random.Random, entity_id: int) -> EntityState:
         x=rng.uniform(-1e4, 1e4), y=rng.uniform(-1e3, 1e3), z=rng.uniform(-5.0, 5.0),
         heading=rng.uniform(-20.0, 20.0), pitch=rng.choice((0.0, math.pi, 4.0)),
         roll=rng.uniform(-7.0, 7.0), speed=rng.uniform(-5.0, 50.0),
-        acceleration=rng.uniform(-9.0, 3.0), lateral_speed=rng.uniform(-1.0, 1.0),
+        acceleration=rng.uniform(-9.0, 3.0), yaw_rate=rng.uniform(-1.0, 1.0),
+        travel=rng.choice((None, (rng.uniform(-5.0, 50.0), rng.uniform(-5.0, 5.0)))),
         box=rng.choice(boxes),
     )  # fmt: skip
 
@@ -299,7 +300,7 @@ def test_random_churn_decodes_to_every_snapshot(tmp_path: Path) -> None:
             base = obj.base
             position = (base.position.x, base.position.y, base.position.z)
             assert position == pytest.approx(state.box_center(), abs=1e-9)
-            assert (base.velocity.x, base.velocity.y) == pytest.approx(state.velocity())
+            assert (base.velocity.x, base.velocity.y) == pytest.approx(state.box_velocity())
             orientation = (base.orientation.roll, base.orientation.pitch, base.orientation.yaw)
             assert all(-math.pi <= angle <= math.pi for angle in orientation)
             angles = (state.roll, state.pitch, state.heading)

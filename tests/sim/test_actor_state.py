@@ -33,12 +33,22 @@ def _from_scratch(actor: Actor) -> EntityState:
         roll=actor.roll,
         speed=actor.speed,
         acceleration=actor.acceleration,
-        lateral_speed=actor.lateral_speed,
+        travel=_travel(actor),
+        yaw_rate=actor.yaw_rate,
         box=actor.box,
         road_id=actor.road_id if road else None,
         lane_id=actor.lane_id if road else None,
         s=actor.s if road else None,
     )
+
+
+def _travel(actor: Actor) -> tuple[float, float] | None:
+    if actor.travel is None or actor.speed == actor.travel_speed:
+        return actor.travel
+    if actor.travel_speed == 0.0:
+        return None
+    scale = actor.speed / actor.travel_speed
+    return actor.travel[0] * scale, actor.travel[1] * scale
 
 
 def _on_road() -> Actor:
@@ -81,7 +91,9 @@ def test_unchanged_actor_gives_the_same_state() -> None:
         ("roll", -0.0),
         ("speed", 12.5),
         ("acceleration", -3.0),
-        ("lateral_speed", 0.2),
+        ("travel", (3.0, 4.0)),
+        ("travel_speed", 2.5),
+        ("yaw_rate", 0.2),
         ("road_id", "2"),
         ("lane_id", 1),
         ("s", 21.0),
@@ -120,3 +132,15 @@ def test_mode_changes() -> None:
     assert actor.state() is free  # no lane fields either way: the same value
     actor.mode = Mode.ROAD
     assert _same_repr(actor.state(), on_road)
+
+
+def test_a_speed_set_after_the_motion_scales_its_travel() -> None:
+    """An action started at the step's end sets a new speed: the state's velocity keeps the
+    direction the motion gave and takes the new speed."""
+    actor = _on_road()
+    actor.set_travel((6.0, 8.0))  # at speed 12
+    assert actor.state().velocity() == (6.0, 8.0)
+    actor.speed = 6.0
+    assert actor.state().velocity() == (3.0, 4.0)
+    actor.speed = 0.0
+    assert actor.state().velocity() == (0.0, 0.0)

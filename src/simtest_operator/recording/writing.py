@@ -266,7 +266,8 @@ class Recorder:
             self._frame = self._relayout(entities, nanos)
             self._signature = signature
         # Per object: bounding-box centre, roll/pitch/yaw in [-pi, pi] (math.remainder is exact,
-        # so angles already in range are kept as they are), world-frame velocity and acceleration.
+        # so angles already in range are kept as they are), world-frame velocity of the box
+        # centre (EntityState.box_velocity, inlined: the recorder's hot path) and acceleration.
         cos, sin, remainder, pi, two_pi = math.cos, math.sin, math.remainder, math.pi, 2 * math.pi
         values: list[float] = []
         extend = values.extend
@@ -275,7 +276,9 @@ class Recorder:
             c, s = cos(heading), sin(heading)
             box = state.box
             bx, by = box.center_x, box.center_y
-            speed, lateral, acceleration = state.speed, state.lateral_speed, state.acceleration
+            acceleration, rate = state.acceleration, state.yaw_rate
+            travel = state.travel
+            vx, vy = (state.speed * c, state.speed * s) if travel is None else travel
             extend((
                 state.x + bx * c - by * s,
                 state.y + bx * s + by * c,
@@ -283,8 +286,8 @@ class Recorder:
                 roll if -pi <= roll <= pi else remainder(roll, two_pi),
                 pitch if -pi <= pitch <= pi else remainder(pitch, two_pi),
                 heading if -pi <= heading <= pi else remainder(heading, two_pi),
-                speed * c - lateral * s,
-                speed * s + lateral * c,
+                vx - rate * (bx * s + by * c),
+                vy + rate * (bx * c - by * s),
                 acceleration * c,
                 acceleration * s,
             ))  # fmt: skip

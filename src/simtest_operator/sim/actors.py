@@ -85,9 +85,12 @@ class Actor:
         "steering",
         "stretch",
         "stuck",
+        "travel",
+        "travel_speed",
         "velocity_xy",
         "x",
         "y",
+        "yaw_rate",
         "z",
     )
 
@@ -110,6 +113,16 @@ class Actor:
         """World-frame acceleration: change of ``velocity_xy`` over the last step (includes the
         centripetal part in curves; what AccelerationCondition reads)."""
         self.lateral_speed = 0.0
+        """Rate (m/s) of the lateral position across the lane (+t) over the last step."""
+        self.travel: tuple[float, float] | None = None
+        """World-frame velocity the motion model gave the reference point over the last step,
+        where it is not ``speed`` along ``heading`` (see :attr:`EntityState.travel`); None:
+        along the heading."""
+        self.travel_speed = 0.0
+        """``speed`` when ``travel`` was set: a speed set after the motion (an action started
+        at the step's end) scales it."""
+        self.yaw_rate = 0.0
+        """Change of heading over the last step (rad/s); 0 after a teleport."""
         self.mode = Mode.FREE
         self.road_id: str | None = None
         self.lane_id = 0
@@ -148,22 +161,43 @@ class Actor:
         self._state: EntityState | None = None
         self._state_inputs: tuple[object, ...] = ()
 
-    def measure_motion(self, start: tuple[float, float], dt: float, *, teleported: bool) -> None:
-        """Update ``velocity_xy`` and ``acceleration_xy`` after a step from ``start`` (or,
-        with ``dt`` 0 or after a teleport, from the speed along the heading)."""
+    def measure_motion(
+        self, start: tuple[float, float, float], dt: float, *, teleported: bool
+    ) -> None:
+        """Update ``velocity_xy``, ``acceleration_xy`` and ``yaw_rate`` after a step from the
+        pose ``start`` (x, y, heading); with ``dt`` 0 or after a teleport, the velocity from the
+        speed along the heading and no yaw rate."""
         if teleported or dt <= 0.0:
             velocity = (
                 self.speed * math.cos(self.heading),
                 self.speed * math.sin(self.heading),
             )
+            self.yaw_rate = 0.0
         else:
             velocity = ((self.x - start[0]) / dt, (self.y - start[1]) / dt)
+            self.yaw_rate = math.remainder(self.heading - start[2], 2.0 * math.pi) / dt
         if dt > 0.0:
             self.acceleration_xy = (
                 (velocity[0] - self.velocity_xy[0]) / dt,
                 (velocity[1] - self.velocity_xy[1]) / dt,
             )
         self.velocity_xy = velocity
+
+    def set_travel(self, travel: tuple[float, float] | None) -> None:
+        """Record the velocity this step's motion gave the reference point (None: ``speed``
+        along the heading)."""
+        self.travel = travel
+        self.travel_speed = self.speed
+
+    def _travel(self) -> tuple[float, float] | None:
+        """The state's ``travel``: the motion's velocity at the speed the actor has now."""
+        travel, speed = self.travel, self.speed
+        if travel is None or speed == self.travel_speed:
+            return travel
+        if self.travel_speed == 0.0:
+            return None
+        scale = speed / self.travel_speed
+        return travel[0] * scale, travel[1] * scale
 
     @property
     def front_offset(self) -> float:
@@ -187,7 +221,9 @@ class Actor:
             self.heading,
             self.speed,
             self.acceleration,
-            self.lateral_speed,
+            self.travel,
+            self.travel_speed,
+            self.yaw_rate,
             self.z,
             self.pitch,
             self.roll,
@@ -216,7 +252,8 @@ class Actor:
             self.roll,
             self.speed,
             self.acceleration,
-            self.lateral_speed,
+            self._travel(),
+            self.yaw_rate,
             self.box,
             road_id,
             lane_id,

@@ -209,7 +209,7 @@ class Simulation:
         self._initial_takeover()
         self._pull_trailers(0.0)
         for actor in world.actors.values():
-            actor.measure_motion((actor.x, actor.y), 0.0, teleported=True)
+            actor.measure_motion((actor.x, actor.y, actor.heading), 0.0, teleported=True)
         self._backend.start(self._backend_config)
         for actor in world.actors.values():
             self._backend.add(
@@ -305,7 +305,11 @@ class Simulation:
     def _pull_trailers(self, dt: float) -> None:
         """Trailers follow their tow vehicles' new poses (after every tow vehicle moved)."""
         world = self.world
-        before = {name: (a.x, a.y) for name, a in world.actors.items() if world.hitches.towed(name)}
+        before = {
+            name: (a.x, a.y, a.heading)
+            for name, a in world.actors.items()
+            if world.hitches.towed(name)
+        }
         for trailer in trailers.pull(world.actors, world.hitches):
             world.attach(trailer)
             motion.update_timers(world, trailer, dt, was_stuck=False)
@@ -315,7 +319,7 @@ class Simulation:
         world = self.world
         speed_before = actor.speed
         before = (actor.road_id, actor.lane_id, actor.offset)
-        start = (actor.x, actor.y)
+        start = (actor.x, actor.y, actor.heading)
         runs = self._dispatcher.runs(actor)
         longitudinal = runs.get(Domain.LONGITUDINAL)
         lateral = runs.get(Domain.LATERAL)
@@ -366,7 +370,7 @@ class Simulation:
         )
         if actor.mode is Mode.PATH and Domain.LATERAL not in self._dispatcher.runs(actor):
             world.attach(actor)
-        motion.move(world, actor, dt, before=before, start=start, placed=placed)
+        motion.move(world, actor, dt, before=before, start=start[:2], placed=placed)
         actor.acceleration = (actor.speed - speed_before) / dt if dt > 0 else 0.0
         actor.measure_motion(start, dt, teleported=actor.name in self._dispatcher.teleported)
 

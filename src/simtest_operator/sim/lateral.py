@@ -58,6 +58,7 @@ class LaneChangeRun(Run):
     __slots__ = (
         "_by_distance",
         "_delta",
+        "_direction",
         "_duration",
         "_elapsed",
         "_offset0",
@@ -80,6 +81,8 @@ class LaneChangeRun(Run):
         self._delta = lanes_between(actor.lane_id, target_lane)
         self._target_offset = action.target_lane_offset or 0.0
         self._offset0 = actor.offset
+        self._direction = actor.direction
+        """The actor's direction on its road the lane delta and offsets are counted in."""
         self._shape = action.dynamics.shape
         self._elapsed = 0.0
         """Progress: seconds, or for the distance dimension metres driven along the road."""
@@ -134,6 +137,12 @@ class LaneChangeRun(Run):
             return
         if abs(actor.speed) < 1e-9:
             return  # esmini: no lateral motion while standing, the change waits
+        if actor.direction != self._direction:
+            # It drove onto a road linked end to end: lane ids and t run the other way, the
+            # change goes on to the same side of the vehicle.
+            self._direction = actor.direction
+            self._delta, self._offset0 = -self._delta, -self._offset0
+            self._target_offset = -self._target_offset
         target = self._relative_target(world, actor.road_id)
         # esmini takes the lateral part of the step's travel at the rate the shape has at the
         # start of the step (so the longitudinal motion is not symmetric about the middle)
@@ -218,7 +227,8 @@ class LateralDistanceRun(Run):
 
     Measured across the road (difference of t, free space subtracting the half widths); the
     requested side is kept (``any``: the side the actor is on now). Without limits the actor
-    snaps to the distance. With them it moves like the reference player: a critically damped
+    snaps to the distance (a declared jump when it starts; while it runs, the snaps follow the
+    reference's motion). With them it moves like the reference player: a critically damped
     spring (stiffness 0.4 per m/s^2 of allowed acceleration) with the acceleration and the
     lateral speed clamped; a non-continuous action ends within 1 cm of the distance.
     """
@@ -238,7 +248,11 @@ class LateralDistanceRun(Run):
         else:
             here = self._t(world, actor) - self._t(world, self._ref)
             self._side = 1.0 if here * actor.direction >= 0 else -1.0
+        offset = actor.offset
         self.step(world, 0.0)
+        if abs(actor.offset - offset) > 1e-9:
+            # Without limits the actor snaps to the distance at once (as esmini).
+            world.declare(actor, JumpCause.LATERAL_STEP)
 
     @staticmethod
     def _t(world: World, actor: Actor) -> float:

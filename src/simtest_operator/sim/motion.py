@@ -17,6 +17,8 @@ from simtest_operator.snapshots import JumpCause
 
 _LOOKAHEAD = 4
 """Route roads considered ahead of the current one (a junction is road, connector, road)."""
+_VANISHED = 0.01
+"""Metres of lane width below which a narrowing lane has ended (a merge lane)."""
 STANDSTILL_SPEED = 1e-3
 """Speed (m/s) below which an actor counts as standing still."""
 
@@ -53,6 +55,8 @@ def move(
     was_stuck = actor.stuck
     if placed:
         actor.lateral_speed = 0.0
+        if actor.mode is not Mode.PATH:  # a trajectory gave its own velocity
+            actor.set_travel(None)
     elif actor.mode is Mode.ROAD and actor.road_id is not None and world.roads is not None:
         lateral_rate = 0.0
         if road_before == actor.road_id and dt > 0:
@@ -61,8 +65,11 @@ def move(
             else:
                 t_before = world.lane_t(actor.road_id, actor.s, lane_before) + offset_before
                 lateral_rate = (lateral_position(world, actor) - t_before) / dt
-        distance = actor.speed * dt
-        if actor.lane_changing and lateral_rate != 0.0:
+        speed = actor.speed
+        distance = speed * dt
+        changing_lanes = actor.steer_rate is not None  # a lane change counts lanes from here
+        steered = actor.lane_changing and lateral_rate != 0.0
+        if steered:
             # A lane change steers: the speed is along the path, so the lateral part of this
             # step's travel is taken from the longitudinal one (esmini's lane change).
             steer = actor.steer_rate if actor.steer_rate is not None else lateral_rate
@@ -72,7 +79,9 @@ def move(
         actor.steer_rate = None
         # s per metre driven at the lateral position the last pose found (one step old: the
         # lateral motion within a step changes it by far less than a per mille)
-        stretched = distance * actor.stretch
+        stretch = actor.stretch
+        stretched = distance * stretch
+        s_before = actor.s
         location = world.roads.advance(
             actor.road_id,
             actor.s,
@@ -94,9 +103,14 @@ def move(
         if stretched != 0.0:  # a zero walk reports direction +1 whatever the travel direction
             direction = location.direction * walked
             if direction != actor.direction:
-                # t flips relative to travel: keep the offset on the same side of the vehicle
+                # t flips relative to travel (a road linked end to end): keep the offset and the
+                # lateral motion on the same side of the vehicle
                 actor.offset = -actor.offset
+                lateral_rate = -lateral_rate
             actor.direction = direction
+        same_lane = location.road_id == road_before and location.lane_id == lane_before
+        if same_lane and not changing_lanes:
+            _leave_vanished_lane(world, actor, s_before)
         along = abs(distance) / dt if dt > 0 else abs(actor.speed)
         tilt = math.atan2(actor.direction * lateral_rate, along) if actor.speed else 0.0
         road_kept = location.road_id == road_before
@@ -107,12 +121,59 @@ def move(
                 _pick_route_lane(world, actor)
         world.pose_on_road(actor, tilt)
         actor.lateral_speed = lateral_rate
+        if dt > 0:
+            # Along the lane by the distance it got, across it at the lateral rate (the heading
+            # may point elsewhere: an entity placed at an angle). The distance is the walk in s
+            # over the stretch along it: where the curvature changes (into a bend, onto the next
+            # road) the one-step-old stretch made it more or less than the speed says.
+            along = speed  # (not |distance| / dt: that differs from it in the last bits)
+            if location.remaining > 0.0 or actor.stretch != stretch:
+                mean = (stretch + actor.stretch) / 2.0
+                driven = max(abs(stretched) - location.remaining, 0.0) / mean
+                along = math.copysign(driven, distance) / dt
+            elif steered:
+                along = distance / dt
+            _travel_on_lane(actor, along, lateral_rate, tilt)
+        else:
+            actor.set_travel(None)
     elif actor.mode is Mode.FREE:
         actor.x += actor.speed * math.cos(actor.heading) * dt
         actor.y += actor.speed * math.sin(actor.heading) * dt
         actor.lateral_speed = 0.0
+        actor.set_travel(None)
     actor.odometer += math.hypot(actor.x - x0, actor.y - y0)
     update_timers(world, actor, dt, was_stuck=was_stuck)
+
+
+def _leave_vanished_lane(world: World, actor: Actor, s_before: float) -> None:
+    """A lane that narrowed to nothing under the actor (a merge lane's end) no longer holds it:
+    it belongs to the lane next to it, nearer the centre, where it is (its offset takes the
+    difference), instead of riding a lane of no width to a link that snaps it across."""
+    roads = world.roads
+    assert roads is not None and actor.road_id is not None
+    road_id, lane_id = actor.road_id, actor.lane_id
+    width = roads.lane_width(road_id, actor.s, lane_id)
+    if width >= _VANISHED or width >= roads.lane_width(road_id, s_before, lane_id):
+        return
+    inner = lane_id - (1 if lane_id > 0 else -1)
+    if inner == 0 or roads.lane_width(road_id, actor.s, inner) < _VANISHED:
+        return
+    t = world.lane_t(road_id, actor.s, lane_id) + actor.offset
+    actor.lane_id = inner
+    actor.offset = t - world.lane_t(road_id, actor.s, inner)
+
+
+def _travel_on_lane(actor: Actor, along: float, lateral_rate: float, tilt: float) -> None:
+    """The world velocity of a lane-following actor: ``along`` its lane in its direction of
+    travel, ``lateral_rate`` towards +t (its heading is the lane's turned by its heading
+    offset and ``tilt``)."""
+    base = actor.heading - actor.heading_offset - tilt
+    cos_b, sin_b = math.cos(base), math.sin(base)
+    across = actor.direction * lateral_rate
+    if across == 0.0 and actor.heading_offset == 0.0 and tilt == 0.0:
+        actor.set_travel(None if along == actor.speed else (along * cos_b, along * sin_b))
+        return
+    actor.set_travel((along * cos_b - across * sin_b, along * sin_b + across * cos_b))
 
 
 def update_timers(world: World, actor: Actor, dt: float, *, was_stuck: bool) -> None:

@@ -72,14 +72,19 @@ def add_lanes(lane_id: int, delta: int) -> int:
 
 def lane_beyond(world: World, road_id: str, s: float, lane_id: int) -> tuple[int, float] | None:
     """For a lane past the road's outermost one on its side at ``s``: that outermost lane and
-    the t of the road's outer edge there (None when the road has the lane, or no lane on that
-    side). esmini counts lanes a road does not have as 0 m wide, so such a lane's centre is the
-    edge: relative lanes and lane changes past the road end there."""
+    the t of the road's outer edge there; on a side without lanes (a one-way connector), the
+    innermost lane of the other side and the centre line (None when the road has the lane, or
+    no lanes at all). esmini counts lanes a road does not have as 0 m wide, so such a lane's
+    centre is the edge: relative lanes and lane changes past the road end there."""
     roads = world.roads
     assert roads is not None
-    side = [b for b in roads.lanes_at(road_id, s) if b.lane_id * lane_id > 0]
-    if not side or any(b.lane_id == lane_id for b in side):
+    lanes = [b for b in roads.lanes_at(road_id, s) if b.lane_id != 0]
+    side = [b for b in lanes if b.lane_id * lane_id > 0]
+    if any(b.lane_id == lane_id for b in side) or not lanes:
         return None
+    if not side:
+        innermost = min(lanes, key=lambda b: abs(b.lane_id))
+        return innermost.lane_id, innermost.t_inner
     outermost = max(side, key=lambda b: abs(b.lane_id))
     return outermost.lane_id, outermost.t_outer
 

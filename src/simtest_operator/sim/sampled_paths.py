@@ -50,6 +50,20 @@ class Path:
         h0, h1 = self.headings[i - 1], self.headings[i]
         return x, y, h0 + f * math.remainder(h1 - h0, 2.0 * math.pi)
 
+    def direction_at(self, d: float) -> float:
+        """Direction (rad) the path runs in at distance ``d``: that of the segment there (at a
+        stop, of the next segment that moves; at the end, of the last one). The headings may
+        differ: a trajectory may give its entity a heading of its own."""
+        d = min(max(d, 0.0), self.length)
+        last = len(self.lengths) - 1
+        i = min(max(1, bisect.bisect_right(self.lengths, d)), last)
+        ahead = i
+        while ahead < last and self.lengths[ahead] - self.lengths[ahead - 1] <= 0:
+            ahead += 1
+        while ahead > 1 and self.lengths[ahead] - self.lengths[ahead - 1] <= 0:
+            ahead -= 1
+        return math.atan2(self.ys[ahead] - self.ys[ahead - 1], self.xs[ahead] - self.xs[ahead - 1])
+
     def _span(self, t: float) -> int:
         """Index i of the sample interval [i-1, i] (of positive duration) containing time t."""
         assert self.times is not None

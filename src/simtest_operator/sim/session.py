@@ -4,7 +4,8 @@ Scenarios with a road network run on SUMO (:class:`~simtest_operator.sim.sumo.Su
 network converted once and cached by :mod:`~simtest_operator.sim.netcache`); scenarios without one
 run in open space on :class:`~simtest_operator.sim.memory.MemoryBackend`. An entity whose
 controller is esmini's SUMO controller brings a ``.sumocfg``; SUMO then also loads that file's
-routes and its vehicles join the run as background traffic.
+routes and its vehicles join the run as background traffic. A map netconvert cannot convert
+runs on the in-memory backend unless the scenario brings traffic (SUMO does nothing else).
 
 libsumo is one simulation per process: run one session at a time per process.
 """
@@ -17,6 +18,7 @@ from collections.abc import Mapping
 from pathlib import Path
 
 from simtest_operator.drivermodel import SutConfig
+from simtest_operator.errors import SimulationError
 from simtest_operator.opendrive import RoadNetwork
 from simtest_operator.openscenario import LoadOptions, load_scenario, model
 from simtest_operator.settings import SimulationSettings
@@ -60,6 +62,23 @@ def sumo_config_of(scenario: model.Scenario) -> Path | None:
     return None
 
 
+def brings_traffic(scenario: model.Scenario) -> bool:
+    """Whether the scenario has SUMO drive traffic: an esmini SumoController's ``.sumocfg``,
+    or a TrafficAction (swarm, source, sink) anywhere in its storyboard."""
+    if sumo_config_of(scenario) is not None:
+        return True
+    storyboard = scenario.storyboard
+    bodies: list[model.AnyAction] = [*storyboard.init.global_actions]
+    for story in storyboard.stories:
+        for act in story.acts:
+            for group in act.maneuver_groups:
+                for maneuver in group.maneuvers:
+                    for event in maneuver.events:
+                        bodies.extend(action.body for action in event.actions)
+    traffic = (model.TrafficSwarmAction, model.TrafficSourceAction, model.TrafficSinkAction)
+    return any(isinstance(body, traffic) for body in bodies)
+
+
 def open_simulation(
     path: Path,
     *,
@@ -79,8 +98,16 @@ def open_simulation(
     from_cache, seconds = False, 0.0
     chosen: Backend
     config = BackendConfig(step_length=settings.step_length, seed=settings.seed)
+    converted = None
     if logic_file is not None and backend is BackendChoice.SUMO:
-        converted = netcache.ensure_net(logic_file, cache_dir=nets_dir)
+        try:
+            converted = netcache.ensure_net(logic_file, cache_dir=nets_dir)
+        except SimulationError:
+            # SUMO only drives background traffic (the engine owns every scenario entity): a
+            # map netconvert cannot convert fails only the runs that bring traffic.
+            if brings_traffic(scenario):
+                raise
+    if converted is not None:
         net_file, from_cache, seconds = converted.path, converted.from_cache, converted.seconds
         config = dataclasses.replace(
             config, net_file=net_file, sumo_config=sumo_config_of(scenario)

@@ -26,7 +26,8 @@ from simtest_operator.sim.world import World
 from simtest_operator.snapshots import JumpCause
 
 _ON_PATH = 1e-3
-"""Metres an entity may be off its trajectory's start and still be on it (no jump to declare)."""
+"""Metres an entity may be off its trajectory's start and still be on it (no jump to declare);
+radians its heading may differ from the start's."""
 
 
 class PathRun(Run):
@@ -56,7 +57,9 @@ class PathRun(Run):
             # against it (a parking car backs out along a trajectory drawn the way it moves).
             self._against = self._timing is None and actor.speed < 0.0
         self._place(actor, self._distance)
-        if math.hypot(actor.x - start.x, actor.y - start.y) > _ON_PATH:
+        turned = abs(math.remainder(actor.heading - start.heading, 2.0 * math.pi))
+        if math.hypot(actor.x - start.x, actor.y - start.y) > _ON_PATH or turned > _ON_PATH:
+            # put elsewhere, or turned at once to the start's heading (its box swings round)
             world.declare(actor, JumpCause.TRAJECTORY_START)
         if self._timing is not None and self._against:
             actor.speed = -abs(actor.speed)
@@ -102,8 +105,13 @@ class PathRun(Run):
                 done, rest = True, -target
             else:
                 done = False
-        self._distance = min(max(target, 0.0), path.length)
+        before, self._distance = self._distance, min(max(target, 0.0), path.length)
         self._place(actor, self._distance)
+        if dt > 0:
+            # along the path (the piece this step drove), whatever heading it gives the entity
+            rate = (self._distance - before) / dt
+            direction = path.direction_at((self._distance + before) / 2.0)
+            actor.set_travel((rate * math.cos(direction), rate * math.sin(direction)))
         if done:
             self.finished = True
             world.attach(actor)

@@ -54,7 +54,8 @@ def _kinematics(state: EntityState) -> tuple[float, ...]:
     heading = state.heading
     c, s = math.cos(heading), math.sin(heading)
     box = state.box
-    speed, lateral, acceleration = state.speed, state.lateral_speed, state.acceleration
+    acceleration = state.acceleration
+    vx, vy = state.box_velocity()
     return (
         state.x + box.center_x * c - box.center_y * s,
         state.y + box.center_x * s + box.center_y * c,
@@ -62,8 +63,8 @@ def _kinematics(state: EntityState) -> tuple[float, ...]:
         math.remainder(state.roll, math.tau),
         math.remainder(state.pitch, math.tau),
         math.remainder(heading, math.tau),
-        speed * c - lateral * s,
-        speed * s + lateral * c,
+        vx,
+        vy,
         acceleration * c,
         acceleration * s,
     )
