@@ -16,7 +16,6 @@ from collections.abc import Sequence
 import numpy as np
 import numpy.typing as npt
 from pydantic import BaseModel, ConfigDict
-from sklearn.cluster import AgglomerativeClustering
 
 from simtest_operator.api.v1alpha1.search import SearchObjective
 from simtest_operator.search import boundaries
@@ -163,6 +162,8 @@ def cluster(points: Points) -> npt.NDArray[np.int64]:
     """Region labels of unit-cube failure points (see the module docstring)."""
     if len(points) == 1:
         return np.zeros(1, dtype=np.int64)
+    from sklearn.cluster import AgglomerativeClustering
+
     model = AgglomerativeClustering(
         n_clusters=None, distance_threshold=REGION_DISTANCE, linkage="single"
     )

@@ -12,8 +12,6 @@ import io
 import itertools
 
 import numpy as np
-from matplotlib.backends.backend_agg import FigureCanvasAgg
-from matplotlib.figure import Figure
 
 from simtest_operator.results.plots import VERDICT_COLOURS
 from simtest_operator.search import analysis
@@ -29,6 +27,9 @@ def plot_pairs(
 ) -> list[tuple[str, str, bytes]]:
     """``(x parameter, y parameter, PNG)`` for every pair of dimensions (one plot for a single
     dimension, against nothing)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
     boundary = analysis.fit_boundary(space, records)
     judged = [(p, o) for p, o in records if o.judged]
     points = space.encode_all([p.values for p, _ in judged])
