@@ -45,6 +45,12 @@ if TYPE_CHECKING:
         parse,
         parse_campaign,
     )
+    from simtest_operator.api.v1alpha1.search import (
+        SearchObjective,
+        SearchParameter,
+        SearchSpec,
+        SearchStrategy,
+    )
     from simtest_operator.api.v1alpha1.sources import ScenarioSelection, ScenarioSource
     from simtest_operator.api.v1alpha1.status import Counters, Phase, ScenarioResult
 
@@ -83,6 +89,10 @@ _MODULES = {
     "ManifestError": "manifests",
     "parse": "manifests",
     "parse_campaign": "manifests",
+    "SearchObjective": "search",
+    "SearchParameter": "search",
+    "SearchSpec": "search",
+    "SearchStrategy": "search",
     "ScenarioSelection": "sources",
     "ScenarioSource": "sources",
     "Counters": "status",
@@ -129,6 +139,10 @@ __all__ = [
     "ScenarioResult",
     "ScenarioSelection",
     "ScenarioSource",
+    "SearchObjective",
+    "SearchParameter",
+    "SearchSpec",
+    "SearchStrategy",
     "SimEnvironmentSpec",
     "SimEnvironmentStatus",
     "SimulatorSettings",
