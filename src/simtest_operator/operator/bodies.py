@@ -27,6 +27,8 @@ def owner(kind: str, name: str, uid: str, *, controller: bool = True) -> dict[st
 
 
 def _frozen(entry: PinnedScenario | ScenarioRef) -> dict[str, Any]:
+    if isinstance(entry, PinnedScenario):
+        return entry.to_json()
     return {
         "id": entry.id,
         "source": entry.source,

@@ -111,8 +111,10 @@ def publish(
     compare_with: RunRef | None = None,
     read_trajectories: details.TrajectoryReader | None = None,
     hostname: str = "",
+    search: reportmodel.SearchSection | None = None,
 ) -> Published:
-    """Write the report and/or JUnit file of one run (paths ``None`` skip that output)."""
+    """Write the report and/or JUnit file of one run (paths ``None`` skip that output), with
+    what its search found when it searched."""
     with opening.open_store(run_ref.target, create=False) as store:
         run = load_run(store, run_ref.run_key)
     comparison = None
@@ -136,6 +138,7 @@ def publish(
                 run, run_ref.artifacts_base(), read_trajectories=read_trajectories
             ),
             comparison=comparison,
+            search=search,
         )
         document = reporting.render(view, source=dsn.describe(run_ref.target))
         written_report = reporting.write(report_path, document)

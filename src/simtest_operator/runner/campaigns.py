@@ -22,7 +22,7 @@ from pathlib import Path
 from simtest_operator import recording
 from simtest_operator.errors import ResultsError, ScenarioError, SimtestError, SourceError
 from simtest_operator.results import details, dsn, publishing
-from simtest_operator.runner import outputs, scheduling, storing, summaries, tasks
+from simtest_operator.runner import localsearch, outputs, scheduling, storing, summaries, tasks
 from simtest_operator.runner import preparing as prep
 from simtest_operator.runner.workers import Worker
 from simtest_operator.scenarios import batching
@@ -159,6 +159,11 @@ def _run_planned(
             failed = ScenarioOutcome(scenario_id=pinned.id, verdict=Verdict.ERROR, reason=reason)
             results[pinned.id] = _finish(out, store, pinned, batch, failed, on_event)
 
+        search = None
+        if plan.search is not None:
+            search = localsearch.LocalSearch.start(plan, plan.search, store, paths, results,
+                                                 parallel=parallel)  # fmt: skip
+
         def forward(event: scheduling.Event) -> None:
             if isinstance(event, scheduling.Retrying):
                 tally.add(event.outcome)
@@ -169,10 +174,11 @@ def _run_planned(
                 results[event.pinned.id] = _finish(
                     out, store, event.pinned, event.batch, event.outcome, on_event, event.timing
                 )
+                if search is not None:
+                    search.feed.tell(event.pinned, event.outcome)
             else:
                 on_event(event)
 
-        batches = batching.plan(plan.frozen.scenarios, batch_size=plan.policy.batch_size)
         not_runnable = frozenset(s.id for s in plan.frozen.scenarios) - frozenset(paths)
         cpu_before = _children_cpu()
         executor = scheduling.Executor(
@@ -184,7 +190,12 @@ def _run_planned(
             on_event=forward,
             stop=stop,
         )
-        execution = executor.run(batching.without(batches, not_runnable))
+        if search is None:
+            batches = batching.plan(plan.frozen.scenarios, batch_size=plan.policy.batch_size)
+            execution = executor.run(batching.without(batches, not_runnable))
+        else:
+            execution = executor.run_feed(search.feed)
+        listed = plan.frozen if search is None else search.frozen
         worker_cpu = _children_cpu() - cpu_before
         for batch, pinned in execution.unfinished:
             skipped = ScenarioOutcome(
@@ -192,12 +203,17 @@ def _run_planned(
             )
             out.write_result(pinned, batch, skipped)
             results[pinned.id] = skipped
-        ids = [s.id for s in plan.frozen.scenarios]
+        ids = [s.id for s in listed.scenarios]
         summary = summaries.summarise(ids, results, interrupted=execution.interrupted)
-        store.finish(summary.phase, finished_at=now())
+        searched = None if search is None else search.finish(results)
+        store.finish(
+            summary.phase,
+            finished_at=now(),
+            search=None if searched is None else searched.record,
+        )
         wall = time.monotonic() - started
         _write_state(out, plan, store, summary, parallel, wall, now(), execution.interrupted)
-    report, junit = _publish(out, store, now(), notes)
+    report, junit = _publish(out, store, now(), notes, searched)
     return LocalRunResult(
         output=out.root,
         summary=summary,
@@ -255,7 +271,8 @@ def _parallel(request: prep.LocalRunRequest, plan: prep.Plan) -> int:
     parallel = request.parallel or request.cpu_count
     if request.parallel is None and plan.policy.max_parallel is not None:
         parallel = min(parallel, plan.policy.max_parallel)
-    remaining = len(plan.frozen.scenarios) - len(plan.finished)
+    listed = len(plan.frozen.scenarios) if plan.search is None else plan.search.spec.budget
+    remaining = listed - len(plan.finished)
     return max(1, min(parallel, remaining))
 
 
