@@ -45,6 +45,97 @@ class ConcreteRun:
     """Global parameter values to pass to ``load_scenario(..., overrides=...)`` (read-only)."""
 
 
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Dimension:
+    """One parameter a distribution varies, as a search space sees it: a range or a value set."""
+
+    name: str
+    low: float | None = None
+    high: float | None = None
+    step: float | None = None
+    """The deterministic range's ``stepWidth``; None for stochastic ranges."""
+    choices: tuple[str, ...] | None = None
+
+
+def dimensions(path: Path) -> tuple[Path, list[Dimension]]:
+    """The scenario a distribution file names and the parameters it varies, as ranges or sets.
+
+    Ranges come from deterministic ranges, uniform distributions, histograms (the bins' hull)
+    and normal/log-normal/Poisson distributions with a ``Range``; sets from value sets and
+    probability sets. Multi-parameter value sets vary parameters jointly and unbounded
+    distributions have no range, so both raise UnsupportedFeatureError. Names the scenario
+    does not declare raise ScenarioError.
+    """
+    path = path.resolve()
+    file = str(path)
+    root = xmlsafe.parse_file(path)
+    ctx = reading.Context(
+        file=file,
+        scope=parameters.EMPTY,
+        catalogs=Catalogs.empty(scenario_file=file),
+        findings=reading.Findings(),
+    )
+    dist = reading.child(root, "ParameterValueDistribution")
+    if dist is None:
+        raise ScenarioError("not a ParameterValueDistribution file", file=file)
+    scenario_el = ctx.require(dist, "ScenarioFile")
+    scenario = (path.parent / ctx.string(scenario_el, "filepath")).resolve()
+    if not scenario.is_file():
+        raise ctx.error(scenario_el, f"scenario file {scenario} not found")
+    found: list[Dimension] = []
+    for block in (reading.child(dist, "Deterministic"), reading.child(dist, "Stochastic")):
+        for node in reading.children(block) if block is not None else ():
+            if node.tag == "DeterministicMultiParameterDistribution":
+                raise UnsupportedFeatureError(
+                    "a multi-parameter value set varies parameters jointly: not a search dimension",
+                    file=file,
+                    element=str(node.tag),
+                    line=node.sourceline,
+                )
+            if node.tag in ("DeterministicSingleParameterDistribution", "StochasticDistribution"):
+                found.append(_dimension(ctx.string(node, "parameterName"), ctx.choice(node), ctx))
+    if not found:
+        raise ctx.error(dist, "the distribution varies no parameter")
+    unknown = sorted({d.name for d in found} - _declared_names(scenario))
+    if unknown:
+        raise ctx.error(dist, f"{scenario.name} declares no parameter(s) {', '.join(unknown)}")
+    return scenario, found
+
+
+def _dimension(name: str, el: Element, ctx: reading.Context) -> Dimension:
+    tag = el.tag
+    if tag in ("DistributionSet", "ProbabilityDistributionSet"):
+        values = tuple(ctx.string(item, "value") for item in reading.all_children(el, "Element"))
+        if not values:
+            raise ctx.error(el, "distribution yields no values")
+        return Dimension(name=name, choices=values)
+    if tag == "DistributionRange":
+        low, high = _range(ctx.require(el, "Range"), ctx)
+        return Dimension(name=name, low=low, high=high, step=ctx.double(el, "stepWidth"))
+    if tag == "Histogram":
+        bins = [_range(ctx.require(b, "Range"), ctx) for b in reading.all_children(el, "Bin")]
+        if not bins:
+            raise ctx.error(el, "a histogram needs bins")
+        return Dimension(name=name, low=min(b[0] for b in bins), high=max(b[1] for b in bins))
+    bounds = reading.child(el, "Range")
+    if bounds is None:
+        raise UnsupportedFeatureError(
+            f"{tag} without a Range is unbounded: not a search dimension",
+            file=ctx.file,
+            element=str(tag),
+            line=el.sourceline,
+        )
+    low, high = _range(bounds, ctx)
+    return Dimension(name=name, low=low, high=high)
+
+
+def declared_parameters(root: Element) -> dict[str, str]:
+    """The global parameters a parsed scenario declares: name -> raw value, in file order."""
+    block = reading.child(root, "ParameterDeclarations")
+    decls = reading.all_children(block, "ParameterDeclaration") if block is not None else []
+    return {str(decl.get("name")): str(decl.get("value") or "") for decl in decls}
+
+
 def is_distribution(path: Path) -> bool:
     """True when ``path`` is a ParameterValueDistribution file."""
     return loading.file_kind(path) is headers.FileKind.DISTRIBUTION
@@ -105,9 +196,7 @@ def _declared_names(scenario: Path) -> set[str]:
     root = xmlsafe.parse_file(scenario)
     if loading.file_kind_of(root, file=str(scenario)) is not headers.FileKind.SCENARIO:
         raise ScenarioError("the distribution's ScenarioFile is not a scenario", file=str(scenario))
-    block = reading.child(root, "ParameterDeclarations")
-    decls = reading.all_children(block, "ParameterDeclaration") if block is not None else []
-    return {str(decl.get("name")) for decl in decls}
+    return set(declared_parameters(root))
 
 
 def _format(value: float) -> str:

@@ -32,6 +32,12 @@ from simtest_operator.api.v1alpha1.kinds import (
     Timings,
 )
 from simtest_operator.api.v1alpha1.manifests import Manifest, ManifestError, parse, parse_campaign
+from simtest_operator.api.v1alpha1.search import (
+    SearchObjective,
+    SearchParameter,
+    SearchSpec,
+    SearchStrategy,
+)
 from simtest_operator.api.v1alpha1.sources import ScenarioSelection, ScenarioSource
 from simtest_operator.api.v1alpha1.status import Counters, Phase, ScenarioResult
 
@@ -66,6 +72,10 @@ __all__ = [
     "ScenarioResult",
     "ScenarioSelection",
     "ScenarioSource",
+    "SearchObjective",
+    "SearchParameter",
+    "SearchSpec",
+    "SearchStrategy",
     "SimEnvironmentSpec",
     "SimEnvironmentStatus",
     "SimulatorSettings",
