@@ -21,7 +21,7 @@ from pathlib import Path
 
 from simtest_operator import recording
 from simtest_operator.errors import ResultsError, ScenarioError, SimtestError, SourceError
-from simtest_operator.results import details, dsn, publishing
+from simtest_operator.results import details, dsn, publishing, reportmodel
 from simtest_operator.runner import localsearch, outputs, scheduling, storing, summaries, tasks
 from simtest_operator.runner import preparing as prep
 from simtest_operator.runner.workers import Worker
@@ -72,6 +72,8 @@ class LocalRunResult:
     warnings: tuple[str, ...]
     not_passed: tuple[ScenarioOutcome, ...]
     """Final outcomes other than Passed, in frozen-list order (including earlier runs')."""
+    search: localsearch.Searched | None = None
+    """What the search found (``spec.search``)."""
 
 
 def run(
@@ -213,7 +215,8 @@ def _run_planned(
         )
         wall = time.monotonic() - started
         _write_state(out, plan, store, summary, parallel, wall, now(), execution.interrupted)
-    report, junit = _publish(out, store, now(), notes, searched)
+    section = None if searched is None else localsearch.section(searched)
+    report, junit = _publish(out, store, now(), notes, section)
     return LocalRunResult(
         output=out.root,
         summary=summary,
@@ -230,6 +233,7 @@ def _run_planned(
         not_passed=tuple(
             results[i] for i in ids if i in results and results[i].verdict is not Verdict.PASSED
         ),
+        search=searched,
     )
 
 
@@ -366,6 +370,7 @@ def _publish(
     store: storing.ResultWriter,
     now: datetime.datetime,
     warnings: list[str],
+    search: reportmodel.SearchSection | None = None,
 ) -> tuple[Path | None, Path | None]:
     """Write the HTML report and JUnit XML from the store (a failure is a warning: the results
     themselves are safe in the store and the result files)."""
@@ -377,6 +382,7 @@ def _publish(
             junit_path=out.junit,
             read_trajectories=read_recording,
             hostname=os.uname().nodename,
+            search=search,
         )
     except (ResultsError, ScenarioError) as exc:
         warnings.append(f"report and JUnit not written: {exc}")

@@ -21,8 +21,8 @@ from simtest_operator.errors import ScenarioError, SourceError
 from simtest_operator.openscenario import headers
 from simtest_operator.runner import outputs, resolving, scheduling, searching, suts, tasks
 from simtest_operator.scenarios import selecting, uris
-from simtest_operator.scenarios.locating import Locator
 from simtest_operator.scenarios.batching import ExecutionPolicy
+from simtest_operator.scenarios.locating import Locator
 from simtest_operator.scenarios.pinned import FrozenList, PinnedScenario, sha256_hex
 from simtest_operator.scenarios.querying import SecretProvider
 from simtest_operator.scenarios.resolving import FetchContext

@@ -193,7 +193,9 @@ def freeze_search(
     return dataclasses.replace(frozen, scenarios=(base,))
 
 
-def pin_proposal(base: PinnedScenario, proposal: Proposal, *, told: Sequence[int]) -> PinnedScenario:
+def pin_proposal(
+    base: PinnedScenario, proposal: Proposal, *, told: Sequence[int]
+) -> PinnedScenario:
     """The frozen-list entry of a proposal: the logical scenario with the proposal's parameter
     values over the campaign's overrides, and what replays it (index, basis, the tells before)."""
     return PinnedScenario(
