@@ -75,6 +75,8 @@ class SearchCluster(FakeCluster):
             self.kubelet()
             if self.search is None:
                 self.restart()
+            assert self.search is not None
+            self.search.learn([observed.batch_view(b) for b in self.of(Kind.BATCH)])
             plan = self.plan()
             self.apply(plan, limit=limit)
             assert self.search is not None

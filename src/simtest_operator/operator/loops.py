@@ -141,6 +141,8 @@ class CampaignLoop:
         if self.search is None and self.stored is not None and campaign.spec is not None:
             await self._replay(campaign)
         planning_started = time.perf_counter()  # reading the cache and planning: no API calls
+        if self.search is not None:
+            self.search.learn(cache.batches_of(self.key))
         inputs = planning.Inputs(
             campaign=campaign,
             stored=self.stored,

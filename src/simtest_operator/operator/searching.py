@@ -6,10 +6,10 @@ objects, so it lives beside the planner, in the campaign loop, and is rebuilt fr
 * each wave of proposals is one ScenarioBatch, created complete; its entries carry the
   proposal records (index, values, basis, the results told before it), so the batches *are* the
   search's frozen list (the ConfigMap pins the logical scenario they vary);
-* after every step the loop calls :meth:`CampaignSearch.advance`: the searcher learns the
-  results folded since (in proposal order), then asks for as many proposals as the window has
-  room for (window minus what is in flight or queued) -- no barrier, so as each result comes back
-  the next proposal fills its slot;
+* before every planning step the searcher learns the results folded since, in proposal order
+  (:meth:`CampaignSearch.learn`); after it, it asks for as many proposals as the window has room
+  for (window minus what is in flight or queued: :meth:`CampaignSearch.advance`) -- no barrier,
+  so as each result comes back the next proposal fills its slot;
 * a restarted operator replays the searcher from the batches
   (:meth:`~simtest_operator.search.Searcher.replay`) and gets the same proposals.
 
@@ -20,6 +20,7 @@ The planner sees the waves as an ordinary frozen list
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
@@ -102,11 +103,20 @@ class CampaignSearch:
             open=not self.exhausted and self.searcher.remaining > 0,
         )
 
+    def learn(self, batches: Iterable[BatchView]) -> None:
+        """Before a planning step: tell the searcher the results folded since, in proposal
+        order (so the status the step writes counts them)."""
+        mine = {b.index: b for b in batches}
+        frozen, _ = waves(mine)
+        outcomes = _folded(frozen, mine.values())
+        for index in sorted(set(outcomes) - self.told):
+            self._tell(index, outcomes[index])
+
     def advance(
         self, campaign: CampaignView, batches: Iterable[BatchView], observation: Observation
     ) -> Create | None:
-        """After a planning step: learn the newly folded results, then the next wave's batch
-        (None: the window is full, the search is over, or the cache is behind)."""
+        """After a planning step: the next wave's batch (None: the window is full, the search
+        is over, or the cache is behind)."""
         mine = {b.index: b for b in batches if b.campaign == campaign.name}
         frozen, starts = waves(mine)
         if self.wave is not None:
@@ -115,9 +125,6 @@ class CampaignSearch:
             self.wave = None
         if len(frozen) != self.searcher.asked:
             return None  # the cache has not caught up with our own writes
-        outcomes = _folded(frozen, mine.values())
-        for index in sorted(set(outcomes) - self.told):
-            self._tell(index, outcomes[index])
         spec = campaign.spec
         if spec is None or spec.suspend or spec.cancel or campaign.status.phase.finished:
             return None
@@ -183,6 +190,7 @@ class CampaignSearch:
         if self._record is None or len(self._record["proposals"]) != len(frozen):
             self._record = {
                 "spec": self.spec.to_wire(),
+                "dimensions": [dataclasses.asdict(d) for d in self.space.dimensions],
                 "proposals": [
                     {"id": p.id, **p.proposal.to_json()} for p in frozen if p.proposal is not None
                 ],
