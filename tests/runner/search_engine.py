@@ -8,15 +8,16 @@ import os
 import time
 
 from simtest_operator.runner.tasks import ScenarioTask
+from simtest_operator.sut.processes import SutProcesses
 from simtest_operator.verdicts import ScenarioOutcome, Verdict
 
 
-def execute(task: ScenarioTask) -> ScenarioOutcome:
+def execute(task: ScenarioTask, processes: SutProcesses | None = None) -> ScenarioOutcome:
     """Failed below a margin of zero; ``minTTC`` is the margin. Sleeps a little so several
-    workers are busy at once."""
+    workers are busy at once (it starts no SUT: ``processes`` stays unused)."""
     gap = float(task.overrides["CutInGap"])
     ego = float(task.overrides["EgoSpeed"])
-    margin = max(gap - 15.0, 0.0) / 5 + max(30.0 - ego, 0.0) / 5
+    margin = max(gap - 20.0, 0.0) / 5 + max(25.0 - ego, 0.0) / 5
     time.sleep(0.05 + (hash(task.scenario_id) % 5) / 100)
     return ScenarioOutcome(
         scenario_id=task.scenario_id,

@@ -17,7 +17,8 @@ from pathlib import Path
 import pytest
 
 from simtest_operator import results
-from simtest_operator.runner import campaigns, preparing, scheduling
+from simtest_operator.runner import campaigns, preparing, scheduling, searchresults
+from simtest_operator.scenarios.resolving import FetchContext
 from simtest_operator.settings import Settings
 from tests.runner import search_engine
 
@@ -85,13 +86,30 @@ def test_a_local_search_runs_its_proposals_in_waves_and_records_them(tmp_path: P
         assert p["basis"] == len(told)
     assert proposals[-1]["basis"] >= 6  # later ones learnt from the results before them
     assert result.search is not None and result.search.waves[0] == 3
+    verdicts = [json.loads(r.read_text())["verdict"] for r in out.glob("scenarios/*/result.json")]
+    assert sorted(set(verdicts)) == ["Failed", "Passed"], verdicts
     summary = json.loads((out / "search.json").read_text())
     assert len(summary["proposals"]) == 12
+    assert summary["summary"]["failures"] == verdicts.count("Failed")
     with results.open_store(out) as store:
         (campaign,) = store.campaigns()
         assert campaign.info.settings["search"]["spec"]["budget"] == 12
         assert len(store.outcomes(campaign.run_key)) == 12
     assert 'id="search"' in (out / "report.html").read_text()
+    assert "data:image/png;base64," in (out / "report.html").read_text()
+
+    fetch = FetchContext(base_dir=tmp_path, cache_dir=tmp_path / "cache")
+    exported = searchresults.export(out, tmp_path / "regression", fetch=fetch, top=2)
+    critical = json.loads((out / "search.json").read_text())["summary"]["critical"][:2]
+    assert [f"search-{c['index']}-" in p.name for c, p in zip(critical, exported, strict=True)] == [
+        True,
+        True,
+    ]
+    values = {p["index"]: p["overrides"] for p in proposals}
+    for run, path in zip(critical, exported, strict=True):
+        text = path.read_text()
+        for name, value in values[run["index"]].items():  # type: ignore[attr-defined]
+            assert f'"{name}"' in text and f'"{value}"' in text
 
     again = campaigns.run(_request(tmp_path, manifest, "again", frozen=out / "frozen.json"))
     assert again.search is None and again.summary.total == 12

@@ -20,7 +20,6 @@ The planner sees the waves as an ordinary frozen list
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
@@ -33,7 +32,14 @@ from simtest_operator.operator.planning.inputs import waves
 from simtest_operator.operator.status.searchstatus import SearchProgress
 from simtest_operator.runner import resolving
 from simtest_operator.scenarios.pinned import PinnedScenario
-from simtest_operator.search import Outcome, Proposal, Searcher, SearchSpace, criticality
+from simtest_operator.search import (
+    Outcome,
+    Proposal,
+    Searcher,
+    SearchSpace,
+    criticality,
+    summarise,
+)
 
 MAX_WAVE = 1000
 """Proposals per wave at most: a ScenarioBatch lists at most this many scenarios."""
@@ -61,7 +67,7 @@ class CampaignSearch:
         self.wave: Create | None = None
         """The last wave's batch until the cache shows it (created again until then)."""
         self.waves = 0
-        self._record: Mapping[str, Any] | None = None
+        self._record: tuple[int, Mapping[str, Any]] | None = None
 
     @classmethod
     def replayed(
@@ -185,18 +191,21 @@ class CampaignSearch:
         self, batches: Iterable[BatchView]
     ) -> tuple[tuple[PinnedScenario, ...], Mapping[str, Any]]:
         """The search's frozen list and the record the results store keeps with the campaign
-        (``settings.search``): the spec and every proposal; computed once the search is over."""
-        frozen, _ = waves({b.index: b for b in batches})
-        if self._record is None or len(self._record["proposals"]) != len(frozen):
-            self._record = {
-                "spec": self.spec.to_wire(),
-                "dimensions": [dataclasses.asdict(d) for d in self.space.dimensions],
-                "proposals": [
-                    {"id": p.id, **p.proposal.to_json()} for p in frozen if p.proposal is not None
-                ],
-                "waves": self.waves,
-            }
-        return frozen, self._record
+        (``settings.search``: the spec, the dimensions, every proposal, the summary); computed
+        once the search is over (the loop asks only then), again only if more results came."""
+        mine = {b.index: b for b in batches}
+        frozen, _ = waves(mine)
+        outcomes = _folded(frozen, mine.values())
+        if self._record is None or self._record[0] != len(outcomes):
+            runs = [
+                (resolving.proposal_of(p.proposal), outcomes[p.proposal.index])
+                for p in frozen
+                if p.proposal is not None and p.proposal.index in outcomes
+            ]
+            summary = summarise(self.space, runs, self.spec.objectives)
+            record = resolving.search_record(self.spec, self.space, frozen, summary)
+            self._record = (len(outcomes), record)
+        return frozen, self._record[1]
 
 
 def _folded(frozen: Sequence[PinnedScenario], batches: Iterable[BatchView]) -> dict[int, Outcome]:

@@ -34,6 +34,11 @@ if TYPE_CHECKING:
         run_scenario,
     )
     from simtest_operator.runner.scheduling import Finished, Retrying
+    from simtest_operator.runner.searchresults import export as export_search
+    from simtest_operator.runner.searchresults import lines as search_lines
+    from simtest_operator.runner.searchresults import recorded as recorded_search
+    from simtest_operator.runner.searchresults import section as search_section
+    from simtest_operator.runner.searchresults import section_of as search_section_of
     from simtest_operator.runner.summaries import EXIT_ERROR, summarise
     from simtest_operator.runner.tasks import ExecuteFn
 
@@ -49,13 +54,18 @@ __all__ = [
     "RunReport",
     "RunRequest",
     "engine",
+    "export_search",
     "freeze",
     "read_manifest",
     "read_recording",
+    "recorded_search",
     "reevaluate",
     "run_campaign",
     "run_many",
     "run_scenario",
+    "search_lines",
+    "search_section",
+    "search_section_of",
     "summarise",
 ]
 
@@ -75,6 +85,11 @@ _HOMES = {
     "run_many": ("scenario_execution", "run_many"),
     "run_scenario": ("scenario_execution", "run_scenario"),
     "Finished": ("scheduling", "Finished"),
+    "export_search": ("searchresults", "export"),
+    "search_lines": ("searchresults", "lines"),
+    "recorded_search": ("searchresults", "recorded"),
+    "search_section": ("searchresults", "section"),
+    "search_section_of": ("searchresults", "section_of"),
     "Retrying": ("scheduling", "Retrying"),
     "EXIT_ERROR": ("summaries", "EXIT_ERROR"),
     "summarise": ("summaries", "summarise"),

@@ -22,7 +22,15 @@ from pathlib import Path
 from simtest_operator import recording
 from simtest_operator.errors import ResultsError, ScenarioError, SimtestError, SourceError
 from simtest_operator.results import details, dsn, publishing, reportmodel
-from simtest_operator.runner import localsearch, outputs, scheduling, storing, summaries, tasks
+from simtest_operator.runner import (
+    localsearch,
+    outputs,
+    scheduling,
+    searchresults,
+    storing,
+    summaries,
+    tasks,
+)
 from simtest_operator.runner import preparing as prep
 from simtest_operator.runner.workers import Worker
 from simtest_operator.scenarios import batching
@@ -149,7 +157,9 @@ def _run_planned(
             Prepared(
                 campaign=plan.name,
                 output=out.root,
-                total=len(plan.frozen.scenarios),
+                total=len(plan.frozen.scenarios)
+                if plan.search is None
+                else plan.search.spec.budget,
                 finished=len(plan.finished),
                 parallel=parallel,
                 store=store.description,
@@ -215,7 +225,7 @@ def _run_planned(
         )
         wall = time.monotonic() - started
         _write_state(out, plan, store, summary, parallel, wall, now(), execution.interrupted)
-    section = None if searched is None else localsearch.section(searched)
+    section = None if searched is None else searchresults.section(searched.search)
     report, junit = _publish(out, store, now(), notes, section)
     return LocalRunResult(
         output=out.root,

@@ -13,35 +13,23 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from simtest_operator.api.v1alpha1.search import SearchSpec
-from simtest_operator.runner import preparing, resolving, storing
+from simtest_operator.runner import preparing, resolving, searchresults, storing
 from simtest_operator.runner.searching import SearchFeed, SearchPlan, replayed
 from simtest_operator.scenarios.pinned import FrozenList, PinnedScenario
-from simtest_operator.search import (
-    Outcome,
-    Proposal,
-    SearchSpace,
-    SearchSummary,
-    plot_pairs,
-    summarise,
-)
-from simtest_operator.verdicts import ScenarioOutcome, Verdict
+from simtest_operator.search import SearchSpace, summarise
+from simtest_operator.verdicts import ScenarioOutcome
 
 SUMMARY_FILE = "search.json"
 """The search's summary in the output folder (next to ``frozen.json``)."""
-
-Plot = tuple[str, str, bytes | str]
-"""(parameter x, parameter y, PNG) of one pair plot."""
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
 class Searched:
     """What a finished (or stopped) local search found."""
 
-    summary: SearchSummary
+    search: searchresults.Recorded
     record: Mapping[str, Any]
     """What the results store keeps with the campaign (``settings.search``)."""
-    plots: tuple[Plot, ...]
     waves: tuple[int, ...]
     """Proposals per ask made by this invocation, in order."""
     path: Path
@@ -112,39 +100,14 @@ class LocalSearch:
 
     def finish(self, results: Mapping[str, ScenarioOutcome]) -> Searched:
         """Summarise every proposal with a final outcome; write ``search.json``."""
-        records = run_records(self._entries, results)
-        summary = summarise(self._space, records, self._search.spec.objectives)
-        plots = tuple(plot_pairs(self._space, records, summary))
-        record = store_record(self._search.spec, self._entries, summary)
+        final = {key: (o.verdict.value, dict(o.metrics)) for key, o in results.items()}
+        runs = searchresults.outcomes_of(self._entries, final)
+        spec = self._search.spec
+        summary = summarise(self._space, runs, spec.objectives)
+        record = resolving.search_record(spec, self._space, self._entries, summary)
         path = self._plan.output.root / SUMMARY_FILE
         self._plan.output.write_json(path, record)
-        return Searched(
-            summary=summary, record=record, plots=plots, waves=tuple(self.feed.waves), path=path
+        search = searchresults.Recorded(
+            spec=spec, space=self._space, scenario=spec.scenario, records=runs, summary=summary
         )
-
-
-def run_records(
-    entries: Sequence[PinnedScenario], results: Mapping[str, ScenarioOutcome]
-) -> list[tuple[Proposal, Outcome]]:
-    """(proposal, outcome) of every proposal with a final verdict, in index order."""
-    records = []
-    for pinned in entries:
-        outcome = results.get(pinned.id)
-        if pinned.proposal is None or outcome is None or outcome.verdict is Verdict.SKIPPED:
-            continue
-        told = resolving.search_outcome(outcome.verdict, outcome.metrics)
-        records.append((resolving.proposal_of(pinned.proposal), told))
-    return records
-
-
-def store_record(
-    spec: SearchSpec, entries: Sequence[PinnedScenario], summary: SearchSummary
-) -> dict[str, Any]:
-    """The search as the results store keeps it: the spec, every proposal, the summary."""
-    return {
-        "spec": spec.to_wire(),
-        "proposals": [
-            {"id": p.id, **p.proposal.to_json()} for p in entries if p.proposal is not None
-        ],
-        "summary": summary.model_dump(mode="json", by_alias=True),
-    }
+        return Searched(search=search, record=record, waves=tuple(self.feed.waves), path=path)

@@ -25,14 +25,16 @@ import dataclasses
 import json
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
+from typing import Any
 
 from simtest_operator import openscenario
 from simtest_operator.errors import ScenarioError
 from simtest_operator.openscenario import headers
 from simtest_operator.scenarios import resolving, selecting
 from simtest_operator.scenarios.pinned import FrozenList, PinnedScenario, ProposalPin, sha256_hex
+from simtest_operator.api.v1alpha1.search import SearchSpec
 from simtest_operator.scenarios.specs import Selection
-from simtest_operator.search import Outcome, Proposal
+from simtest_operator.search import Outcome, Proposal, SearchSpace, SearchSummary
 from simtest_operator.verdicts import Verdict
 
 Expander = Callable[[Path, int], Sequence[openscenario.ConcreteRun]]
@@ -252,3 +254,22 @@ def replay_inputs(
 def search_outcome(verdict: Verdict, metrics: Mapping[str, float]) -> Outcome:
     """What the searcher learns from a final result."""
     return Outcome(verdict=verdict, metrics=dict(metrics))
+
+
+def search_record(
+    spec: SearchSpec,
+    space: SearchSpace,
+    entries: Sequence[PinnedScenario],
+    summary: SearchSummary,
+) -> dict[str, Any]:
+    """What the results store keeps with a searching campaign (``settings.search``), written by
+    ``simtest run`` and the operator alike: enough to summarise, plot and export the search
+    again without the scenario file."""
+    return {
+        "spec": spec.to_wire(),
+        "dimensions": [dataclasses.asdict(d) for d in space.dimensions],
+        "proposals": [
+            {"id": p.id, **p.proposal.to_json()} for p in entries if p.proposal is not None
+        ],
+        "summary": summary.model_dump(mode="json"),
+    }
