@@ -28,11 +28,11 @@ from pathlib import Path
 from typing import Any
 
 from simtest_operator import openscenario
+from simtest_operator.api.v1alpha1.search import SearchSpec
 from simtest_operator.errors import ScenarioError
 from simtest_operator.openscenario import headers
 from simtest_operator.scenarios import resolving, selecting
 from simtest_operator.scenarios.pinned import FrozenList, PinnedScenario, ProposalPin, sha256_hex
-from simtest_operator.api.v1alpha1.search import SearchSpec
 from simtest_operator.scenarios.specs import Selection
 from simtest_operator.search import Outcome, Proposal, SearchSpace, SearchSummary
 from simtest_operator.verdicts import Verdict

@@ -14,7 +14,6 @@ import base64
 import dataclasses
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
 
 from simtest_operator.api.v1alpha1.search import SearchSpec
 from simtest_operator.errors import ResultsError, SourceError
