@@ -4,7 +4,8 @@ Covers: the first wave fills every worker and later proposals follow the results
 proposal enters ``frozen.json`` with its proposal record before it runs; ``--frozen`` reruns
 exactly the proposed list without searching; an interrupted search resumes by replaying the
 searcher and ends with the budget spent and the first proposals unchanged; the summary is
-written (``search.json``), kept in the store with the campaign and shown in the report.
+written (``search.json``), kept in the store with the campaign and shown in the report and the
+results UI; ``simtest search export`` writes the most critical ones as concrete scenarios.
 """
 
 from __future__ import annotations
@@ -17,9 +18,11 @@ from pathlib import Path
 import pytest
 
 from simtest_operator import results
+from simtest_operator.results.querying import ReadOnlyDatabase
 from simtest_operator.runner import campaigns, preparing, scheduling, searchresults
 from simtest_operator.scenarios.resolving import FetchContext
 from simtest_operator.settings import Settings
+from simtest_operator.ui import views
 from tests.runner import search_engine
 
 pytestmark = pytest.mark.timeout(180)
@@ -97,6 +100,14 @@ def test_a_local_search_runs_its_proposals_in_waves_and_records_them(tmp_path: P
         assert len(store.outcomes(campaign.run_key)) == 12
     assert 'id="search"' in (out / "report.html").read_text()
     assert "data:image/png;base64," in (out / "report.html").read_text()
+
+    db = ReadOnlyDatabase(str(out))
+    try:
+        page = views.run(db, {}, views.Context(search=searchresults.section_of))
+    finally:
+        db.close()
+    assert page["search"] is not None and len(page["search"].plots) == 1  # one parameter pair
+    assert ("Failures (Failed or Timeout)", str(verdicts.count("Failed"))) in page["search"].facts
 
     fetch = FetchContext(base_dir=tmp_path, cache_dir=tmp_path / "cache")
     exported = searchresults.export(out, tmp_path / "regression", fetch=fetch, top=2)
