@@ -18,9 +18,12 @@ YAML, Jinja) and ``simtest report`` without the simulator (numpy).
 from __future__ import annotations
 
 import importlib
+from collections.abc import Sequence
 from typing import TYPE_CHECKING, Literal
 
 if TYPE_CHECKING:
+    from simtest_operator.results.records import CampaignRecord, StoredOutcome
+    from simtest_operator.results.reportmodel import SearchSection
     from simtest_operator.runner.campaigns import Event as CampaignEvent
     from simtest_operator.runner.campaigns import LocalRunResult, Prepared, read_recording
     from simtest_operator.runner.campaigns import run as run_campaign
@@ -38,7 +41,6 @@ if TYPE_CHECKING:
     from simtest_operator.runner.searchresults import lines as search_lines
     from simtest_operator.runner.searchresults import recorded as recorded_search
     from simtest_operator.runner.searchresults import section as search_section
-    from simtest_operator.runner.searchresults import section_of as search_section_of
     from simtest_operator.runner.summaries import EXIT_ERROR, summarise
     from simtest_operator.runner.tasks import ExecuteFn
 
@@ -89,7 +91,6 @@ _HOMES = {
     "search_lines": ("searchresults", "lines"),
     "recorded_search": ("searchresults", "recorded"),
     "search_section": ("searchresults", "section"),
-    "search_section_of": ("searchresults", "section_of"),
     "Retrying": ("scheduling", "Retrying"),
     "EXIT_ERROR": ("summaries", "EXIT_ERROR"),
     "summarise": ("summaries", "summarise"),
@@ -121,3 +122,15 @@ def engine(name: Literal["sumo", "fake"]) -> ExecuteFn:
     from simtest_operator.runner import engines
 
     return engines.execute
+
+
+def search_section_of(
+    campaign: CampaignRecord, stored: Sequence[StoredOutcome]
+) -> SearchSection | None:
+    """The *Search* section of a stored run for the report and the results UI; the search
+    engine (scikit-learn, matplotlib) is imported only for a run that searched."""
+    if "search" not in campaign.info.settings:
+        return None
+    from simtest_operator.runner import searchresults
+
+    return searchresults.section_of(campaign, stored)
