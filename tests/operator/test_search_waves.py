@@ -146,6 +146,12 @@ def test_a_search_runs_its_budget_in_waves_that_keep_the_slots_busy() -> None:
         assert basis == sum(len(p[2]) for p in proposals[: index + 1])
         assert all(t < index for t in told)
     assert proposals[-1][1] >= 12  # later proposals learnt from the results before them
+    assert cluster.search is not None
+    frozen, record = cluster.search.record([observed.batch_view(b) for b in cluster.of(Kind.BATCH)])
+    assert [p.id for p in frozen] == [f"cut-in.xosc#search-{i}" for i in range(20)]
+    assert record["summary"]["runs"] == 20 and record["summary"]["failures"] == status["failed"]
+    assert [p["index"] for p in record["proposals"]] == list(range(20))
+    assert [d["name"] for d in record["dimensions"]] == ["EgoSpeed", "CutInGap"]
     running, slots = map(sum, zip(*cluster.busy, strict=True))
     assert running / slots >= 0.9, f"slots busy {running / slots:.0%} while searching"
 
