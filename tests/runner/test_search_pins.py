@@ -9,14 +9,24 @@ refused rather than replayed into a different search.
 
 from __future__ import annotations
 
+import shutil
+from pathlib import Path
+
 import pytest
 
 from simtest_operator.errors import ScenarioError
 from simtest_operator.runner import resolving
-from simtest_operator.scenarios import FrozenList, PinnedScenario
+from simtest_operator.scenarios import (
+    FetchContext,
+    FrozenList,
+    PathSource,
+    PinnedScenario,
+    Selection,
+)
 from simtest_operator.search import Outcome, Proposal
 from simtest_operator.verdicts import Verdict
 
+CUT_IN = Path(__file__).parents[2] / "scenarios/library/cut-in/cut-in_highway_v25_gap15_dv10.xosc"
 BASE = PinnedScenario(
     id="cut-in.xosc", source="file:///s/cut-in.xosc", sha256="a" * 64, overrides={"Mode": "x"}
 )
@@ -63,3 +73,16 @@ def test_a_search_record_that_would_replay_differently_is_refused() -> None:
     wrong = [pins[0], pins[1], type(pins[2])(index=2, basis=2, told=(1,), values=pins[2].values)]
     with pytest.raises(ScenarioError, match="says 2 results were told"):
         resolving.replay_inputs(wrong, outcomes)
+
+
+def test_a_search_names_a_file_of_its_selection(tmp_path: Path) -> None:
+    suite = tmp_path / "suite"
+    suite.mkdir()
+    shutil.copy(CUT_IN, suite / "cut-in.xosc")
+    selection = Selection(sources=(PathSource(path="suite"),))
+    ctx = FetchContext(base_dir=tmp_path, cache_dir=tmp_path / "cache")
+    frozen = resolving.freeze_search(selection, ctx, campaign="c", scenario="cut-in.xosc")
+    (base,) = frozen.scenarios
+    assert base.id == "cut-in.xosc" and base.source.endswith("/suite/cut-in.xosc")
+    with pytest.raises(ScenarioError, match="not among the 1 scenario"):
+        resolving.freeze_search(selection, ctx, campaign="c", scenario="other.xosc")

@@ -185,6 +185,12 @@ def freeze_search(
     on a laptop and in a cluster; ``scenario`` must be one of the files it selects."""
     frozen = freeze(selection, ctx, campaign=campaign, seed=seed)
     base = next((s for s in frozen.scenarios if s.id == scenario), None)
+    if base is None and any(s.id.startswith(f"{scenario}#") for s in frozen.scenarios):
+        raise ScenarioError(
+            f"spec.search.scenario {scenario!r} is a ParameterValueDistribution: a campaign "
+            "cannot search one yet; name the scenario file it varies and give the ranges as "
+            "spec.search.parameters"
+        )
     if base is None:
         listed = ", ".join(s.id for s in frozen.scenarios[:5]) or "none"
         raise ScenarioError(
