@@ -14,7 +14,8 @@ from pathlib import Path
 from typing import Any
 
 from simtest_operator.runner import preparing, resolving, searchresults, storing
-from simtest_operator.runner.searching import SearchFeed, SearchPlan, replayed
+from simtest_operator.runner.preparing import SearchPlan
+from simtest_operator.runner.searching import SearchFeed, replayed
 from simtest_operator.scenarios.pinned import FrozenList, PinnedScenario
 from simtest_operator.search import SearchSpace, summarise
 from simtest_operator.verdicts import ScenarioOutcome

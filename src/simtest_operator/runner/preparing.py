@@ -19,7 +19,7 @@ from simtest_operator.api.v1alpha1.search import SearchSpec
 from simtest_operator.drivermodel import SutConfig
 from simtest_operator.errors import ScenarioError, SourceError
 from simtest_operator.openscenario import headers
-from simtest_operator.runner import outputs, resolving, scheduling, searching, suts, tasks
+from simtest_operator.runner import outputs, resolving, scheduling, suts, tasks
 from simtest_operator.scenarios import selecting, uris
 from simtest_operator.scenarios.batching import ExecutionPolicy
 from simtest_operator.scenarios.locating import Locator
@@ -54,6 +54,17 @@ class LocalRunRequest:
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class SearchPlan:
+    """What a local search starts from."""
+
+    spec: SearchSpec
+    base: PinnedScenario
+    """The logical scenario, pinned (id ``spec.scenario``)."""
+    path: Path
+    """Its file on this machine (sha256 verified)."""
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
 class Plan:
     """A run, fully decided, before anything executes."""
 
@@ -78,7 +89,7 @@ class Plan:
     sut: SutConfig
     record: bool
     notes: tuple[str, ...]
-    search: searching.SearchPlan | None = None
+    search: SearchPlan | None = None
     """``spec.search`` when this run searches (not when it reruns a given list): the frozen list
     then holds the proposals made so far and grows as the search proposes."""
 
@@ -185,7 +196,7 @@ def _search_plan(
     frozen: FrozenList,
     selection: Selection,
     fetch: FetchContext,
-) -> searching.SearchPlan:
+) -> SearchPlan:
     """The logical scenario of a search: as just resolved, else (a resumed run) pinned like the
     proposals made so far."""
     base = logical
@@ -206,7 +217,7 @@ def _search_plan(
         path = Locator(fetch).locate(base)
     except SourceError as exc:
         raise ScenarioError(f"spec.search.scenario {spec.scenario!r}: {exc}") from exc
-    return searching.SearchPlan(spec=spec, base=base, path=path)
+    return SearchPlan(spec=spec, base=base, path=path)
 
 
 def read_manifest(path: Path) -> tuple[str, v1alpha1.Manifest[v1alpha1.TestCampaignSpec]]:

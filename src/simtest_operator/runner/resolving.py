@@ -25,7 +25,7 @@ import dataclasses
 import json
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from simtest_operator import openscenario
 from simtest_operator.api.v1alpha1.search import SearchSpec
@@ -34,8 +34,10 @@ from simtest_operator.openscenario import headers
 from simtest_operator.scenarios import resolving, selecting
 from simtest_operator.scenarios.pinned import FrozenList, PinnedScenario, ProposalPin, sha256_hex
 from simtest_operator.scenarios.specs import Selection
-from simtest_operator.search import Outcome, Proposal, SearchSpace, SearchSummary
 from simtest_operator.verdicts import Verdict
+
+if TYPE_CHECKING:  # the engine (scikit-learn, optuna) loads only where a search runs
+    from simtest_operator.search import Outcome, Proposal, SearchSpace, SearchSummary
 
 Expander = Callable[[Path, int], Sequence[openscenario.ConcreteRun]]
 """Expands a distribution file (with a seed for stochastic ones) into concrete runs."""
@@ -222,6 +224,8 @@ def pin_proposal(
 
 def proposal_of(pin: ProposalPin) -> Proposal:
     """The engine's proposal a frozen-list entry pins (values back from their JSON text)."""
+    from simtest_operator.search import Proposal
+
     values: dict[str, float | str] = {}
     for name, text in pin.values.items():
         value = json.loads(text)
@@ -259,6 +263,8 @@ def replay_inputs(
 
 def search_outcome(verdict: Verdict, metrics: Mapping[str, float]) -> Outcome:
     """What the searcher learns from a final result."""
+    from simtest_operator.search import Outcome
+
     return Outcome(verdict=verdict, metrics=dict(metrics))
 
 

@@ -11,27 +11,14 @@ reruns exactly the proposed list, and a resumed run replays the searcher and con
 from __future__ import annotations
 
 import collections
-import dataclasses
 from collections.abc import Callable, Mapping, Sequence
-from pathlib import Path
 
-from simtest_operator.api.v1alpha1.search import SearchSpec
 from simtest_operator.runner import resolving
+from simtest_operator.runner.preparing import SearchPlan
 from simtest_operator.scenarios import batching
 from simtest_operator.scenarios.pinned import PinnedScenario
 from simtest_operator.search import Outcome, Proposal, Searcher, SearchSpace
 from simtest_operator.verdicts import ScenarioOutcome
-
-
-@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
-class SearchPlan:
-    """What a local search starts from."""
-
-    spec: SearchSpec
-    base: PinnedScenario
-    """The logical scenario, pinned (id ``spec.scenario``)."""
-    path: Path
-    """Its file on this machine (sha256 verified)."""
 
 
 def replayed(
