@@ -6,6 +6,9 @@ outcomes; the operator and ``simtest run`` run the proposals as normal scenarios
 export of concrete ``.xosc`` files work on the recorded proposals and outcomes.
 """
 
+from simtest_operator.search.analysis import SearchSummary, fit_boundary, summarise
+from simtest_operator.search.exporting import export_scenarios
+from simtest_operator.search.plotting import plot_pairs
 from simtest_operator.search.records import Outcome, Proposal, criticality
 from simtest_operator.search.searching import ReplayError, Searcher
 from simtest_operator.search.spaces import Dimension, SearchSpace
@@ -16,6 +19,11 @@ __all__ = [
     "Proposal",
     "ReplayError",
     "SearchSpace",
+    "SearchSummary",
     "Searcher",
     "criticality",
+    "export_scenarios",
+    "fit_boundary",
+    "plot_pairs",
+    "summarise",
 ]

@@ -11,14 +11,16 @@ from __future__ import annotations
 
 import dataclasses
 import warnings
+from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
-from sklearn.exceptions import ConvergenceWarning
-from sklearn.gaussian_process import GaussianProcessClassifier
-from sklearn.gaussian_process.kernels import RBF, ConstantKernel
+from threadpoolctl import threadpool_limits
 
 from simtest_operator.search.spaces import Points
+
+if TYPE_CHECKING:
+    from sklearn.gaussian_process import GaussianProcessClassifier
 
 Labels = npt.NDArray[np.bool_]
 
@@ -38,7 +40,8 @@ class Boundary:
         """P(failure) at each row of ``points``."""
         if self.model is None:
             return np.full(len(points), 1.0 if self.constant else 0.0)
-        proba: npt.NDArray[np.float64] = self.model.predict_proba(points)[:, 1]
+        with threadpool_limits(limits=1):
+            proba: npt.NDArray[np.float64] = self.model.predict_proba(points)[:, 1]
         return proba
 
     def predict(self, points: Points) -> Labels:
@@ -66,9 +69,16 @@ def fit(points: Points, failed: Labels) -> Boundary | None:
         return None
     if bool(failed.all()) or not bool(failed.any()):
         return Boundary(None, bool(failed[0]))
+    # Imported on use: scikit-learn costs start-up that only a fit needs.
+    from sklearn.exceptions import ConvergenceWarning
+    from sklearn.gaussian_process import GaussianProcessClassifier
+    from sklearn.gaussian_process.kernels import RBF, ConstantKernel
+
     kernel = ConstantKernel(1.0, (1e-2, 1e3)) * RBF(INITIAL_LENGTH_SCALE, (1e-2, 10.0))
     model = GaussianProcessClassifier(kernel=kernel, n_restarts_optimizer=0, random_state=0)
-    with warnings.catch_warnings():
+    # One BLAS thread: the matrices are small, and on a busy node (simulators on every core)
+    # a thread per core makes a 200-point fit twenty times slower, not faster.
+    with warnings.catch_warnings(), threadpool_limits(limits=1):
         # A bound reached by the kernel optimiser is a property of the data, not an error.
         warnings.simplefilter("ignore", ConvergenceWarning)
         model.fit(points, failed.astype(int))

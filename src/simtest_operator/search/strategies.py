@@ -12,17 +12,18 @@ import dataclasses
 import logging
 import math
 from collections.abc import Sequence
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 import numpy.typing as npt
-import optuna
-from scipy.stats import qmc
 
 from simtest_operator.api.v1alpha1.search import SearchObjective, SearchSpec, SearchStrategy
 from simtest_operator.search import boundaries
 from simtest_operator.search.records import Outcome, criticality
 from simtest_operator.search.spaces import Points, SearchSpace
+
+if TYPE_CHECKING:
+    import optuna
 
 Point = tuple[float, ...]
 
@@ -109,6 +110,10 @@ class Tpe:
     """
 
     def __init__(self, space: SearchSpace, seed: int, objective: SearchObjective) -> None:
+        # Imported on use: optuna (with SQLAlchemy) costs a second of start-up nobody else pays.
+        import optuna
+
+        self._optuna = optuna
         self._space = space
         self._seed = seed
         self._objective = objective
@@ -124,6 +129,7 @@ class Tpe:
         return None
 
     def propose(self, history: History) -> Point:
+        optuna = self._optuna
         sampler = optuna.samplers.TPESampler(
             seed=int(_rng(self._seed, history.index).integers(2**31)),
             n_startup_trials=STARTUP_TRIALS,
@@ -178,6 +184,8 @@ class ActiveBoundary:
     def __init__(self, space: SearchSpace, seed: int) -> None:
         self._size = space.size
         self._seed = seed
+        from scipy.stats import qmc
+
         initial = max(10, 4 * space.size)
         sobol = qmc.Sobol(d=space.size, scramble=True, seed=seed)
         self._design: Points = sobol.random_base2(m=math.ceil(math.log2(initial)))
