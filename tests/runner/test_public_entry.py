@@ -17,7 +17,6 @@ import pytest
 
 from simtest_operator import runner
 
-
 LOCAL = {"engine", "search_section_of"}
 """Functions of the package module itself (they pick what to import)."""
 
