@@ -11,6 +11,7 @@ results UI; ``simtest search export`` writes the most critical ones as concrete 
 from __future__ import annotations
 
 import json
+import re
 import shutil
 import threading
 from pathlib import Path
@@ -112,7 +113,10 @@ def test_a_local_search_runs_its_proposals_in_waves_and_records_them(tmp_path: P
     fetch = FetchContext(base_dir=tmp_path, cache_dir=tmp_path / "cache")
     exported = searchresults.export(out, tmp_path / "regression", fetch=fetch, top=2)
     critical = json.loads((out / "search.json").read_text())["summary"]["critical"][:2]
-    assert [f"search-{c['index']}-" in p.name for c, p in zip(critical, exported, strict=True)] == [
+    assert [
+        re.search(rf"search-{c['index']}[_-]", p.name) is not None
+        for c, p in zip(critical, exported, strict=True)
+    ] == [
         True,
         True,
     ]
