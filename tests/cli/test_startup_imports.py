@@ -48,6 +48,7 @@ OTHERS = {
     "report": SUMO | KUBERNETES | {"numpy"},
     "run": SUMO | KUBERNETES | {"numpy"},
     "scenario": KUBERNETES | {"psycopg", "pydantic", "jinja2", "rich"},
+    "search": SUMO | KUBERNETES | {"numpy", "psycopg"},
     "submit": SUMO | {"kopf", "numpy"},
     "ui": SUMO | KUBERNETES | {"numpy", "psycopg"},
 }

@@ -156,13 +156,9 @@ def simulation(spec: environment.SimulatorSettings) -> SimulationSettings:
 
 def pinned_to_wire(pinned: PinnedScenario) -> v1alpha1.FrozenScenario:
     """A frozen-list entry as it appears in ScenarioBatch and SimEnvironment specs."""
-    return v1alpha1.FrozenScenario(
-        id=pinned.id, source=pinned.source, sha256=pinned.sha256, overrides=dict(pinned.overrides)
-    )
+    return v1alpha1.FrozenScenario.model_validate(pinned.to_json())
 
 
 def pinned_from_wire(wire: v1alpha1.FrozenScenario) -> PinnedScenario:
     """Inverse of :func:`pinned_to_wire`."""
-    return PinnedScenario(
-        id=wire.id, source=wire.source, sha256=wire.sha256, overrides=dict(wire.overrides)
-    )
+    return PinnedScenario.from_json(wire.to_wire(), where=f"frozen scenario {wire.id}")

@@ -207,6 +207,9 @@ def _add_object_defaults(node: JsonSchema, owner: type[ApiModel]) -> None:
         value = field.default_factory()  # type: ignore[call-arg]
         if isinstance(value, ApiModel):
             schema["default"] = {}
+        elif isinstance(value, list) and value:
+            # a list of objects (search.objectives) defaults to their wire form
+            schema["default"] = [v.to_wire() if isinstance(v, ApiModel) else v for v in value]
         elif value:
             schema["default"] = value
 

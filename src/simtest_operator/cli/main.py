@@ -75,6 +75,10 @@ COMMANDS = {
         "simtest_operator.cli.scenario:scenario",
         "Run OpenSCENARIO files on the SUMO-backed simulator stand-in.",
     ),
+    "search": Entry(
+        "simtest_operator.cli.search:search",
+        "What a finished search found: export its critical concrete scenarios.",
+    ),
     "submit": Entry(
         "simtest_operator.cli.submit:submit",
         "Create the TestCampaign in MANIFEST on the cluster (and wait for its verdict).",

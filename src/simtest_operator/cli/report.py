@@ -80,6 +80,7 @@ def report(
             compare_with=other,
             read_trajectories=runner.read_recording,
             hostname=socket.gethostname(),
+            search=runner.search_section_of,
         )
     except SimtestError as exc:
         click.echo(f"simtest report: {exc}", err=True)

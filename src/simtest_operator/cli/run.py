@@ -366,6 +366,11 @@ def _print_summary(console: Console, result: runner.LocalRunResult) -> None:
                 f"... and {len(problems) - LISTED} more (see {printable(result.output)})",
                 markup=False,
             )
+    if result.search is not None:
+        console.print("[bold]search[/]")
+        for line in runner.search_lines(result.search.search):
+            console.print(f"  {printable(line)}", markup=False, soft_wrap=True)
+        console.print(f"  summary {printable(result.search.path)}", markup=False, soft_wrap=True)
     for warning in result.warnings:
         console.print(f"[yellow]warning:[/] {markup(warning)}", soft_wrap=True)
     console.print(f"wall time {result.wall_seconds:.1f} s on {result.parallel} worker(s)")

@@ -39,7 +39,9 @@ def ui(database: str | None, host: str, port: int, artifacts: Path | None) -> No
     except SimtestError as exc:
         click.echo(f"simtest ui: {exc}", err=True)
         raise SystemExit(2) from None
-    context = views.Context(base_dir=base, read_trajectories=runner.read_recording)
+    context = views.Context(
+        base_dir=base, read_trajectories=runner.read_recording, search=runner.search_section_of
+    )
     try:
         httpd = server.Server(server.App(db, context), host=host, port=port)
     except OSError as exc:

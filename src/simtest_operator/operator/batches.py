@@ -19,6 +19,7 @@ final verdict (the seed paper's behaviour, kept for comparison).
 
 from __future__ import annotations
 
+import bisect
 import dataclasses
 import enum
 from collections.abc import Iterable, Mapping, Sequence
@@ -73,21 +74,38 @@ class Layout:
 
     ids: tuple[str, ...]
     batch_size: int
+    starts: tuple[int, ...] = ()
+    """First positions of the batches when they are not equal slices: a search's waves, one
+    batch each (:mod:`~simtest_operator.operator.searching`); empty for slices of
+    ``batch_size``."""
 
     def batch_of(self, position: int) -> int:
         """Batch index of a list position."""
+        if self.starts:
+            return bisect.bisect_right(self.starts, position) - 1
         return position // self.batch_size
 
     def slot_of(self, position: int) -> int:
         """Position inside its batch."""
+        if self.starts:
+            return position - self.starts[self.batch_of(position)]
         return position % self.batch_size
 
     def batch_count(self) -> int:
         """Number of batches."""
+        if self.starts:
+            return len(self.starts)
         return (len(self.ids) + self.batch_size - 1) // self.batch_size
 
     def positions(self, batch_index: int) -> range:
         """List positions of a batch."""
+        if self.starts:
+            end = (
+                self.starts[batch_index + 1]
+                if batch_index + 1 < len(self.starts)
+                else len(self.ids)
+            )
+            return range(self.starts[batch_index], end)
         start = batch_index * self.batch_size
         return range(start, min(start + self.batch_size, len(self.ids)))
 

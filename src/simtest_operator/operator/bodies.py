@@ -27,12 +27,7 @@ def owner(kind: str, name: str, uid: str, *, controller: bool = True) -> dict[st
 
 
 def _frozen(entry: PinnedScenario | ScenarioRef) -> dict[str, Any]:
-    return {
-        "id": entry.id,
-        "source": entry.source,
-        "sha256": entry.sha256,
-        "overrides": dict(sorted(entry.overrides.items())),
-    }
+    return entry.to_json()
 
 
 def batch(

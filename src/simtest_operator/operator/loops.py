@@ -22,7 +22,7 @@ import time
 from collections.abc import Callable
 
 from simtest_operator.errors import ClusterError, ScenarioError, SimtestError
-from simtest_operator.operator import planning, recording_results, resolving
+from simtest_operator.operator import planning, recording_results, resolving, searching
 from simtest_operator.operator.actions import Kind, Plan
 from simtest_operator.operator.applying import Applier
 from simtest_operator.operator.caching import Cache, CampaignKey
@@ -32,6 +32,7 @@ from simtest_operator.operator.metrics import Metrics
 from simtest_operator.operator.observed import CampaignView
 from simtest_operator.operator.scenariolists import StoredList
 from simtest_operator.render import EnvironmentRequest, RenderedEnvironment
+from simtest_operator.search import SearchSpace
 from simtest_operator.settings import OperatorSettings
 
 log = logging.getLogger(__name__)
@@ -68,6 +69,8 @@ class CampaignLoop:
         self.stored: StoredList | None = None
         self.resolution_error: str | None = None
         self.resolution_generation = 0
+        self.search: searching.CampaignSearch | None = None
+        """The campaign's searcher (``spec.search``), replayed from its batches once resolved."""
         self.refused: dict[tuple[Kind, str], str] = {}
         """Creates the API server refused for good while this loop ran (the planner words them
         where they matter: the evaluation Job)."""
@@ -135,7 +138,11 @@ class CampaignLoop:
         if self.stored is None and campaign.spec is not None:
             await self._resolve(campaign)
             now = shared.clock()
+        if self.search is None and self.stored is not None and campaign.spec is not None:
+            await self._replay(campaign)
         planning_started = time.perf_counter()  # reading the cache and planning: no API calls
+        if self.search is not None:
+            self.search.learn(cache.batches_of(self.key))
         inputs = planning.Inputs(
             campaign=campaign,
             stored=self.stored,
@@ -149,6 +156,7 @@ class CampaignLoop:
             jobs=cache.jobs_of(self.key),
             workload=cache.workload_of(self.key),
             refused=dict(self.refused),
+            search=self.search.progress() if self.search is not None else None,
         )
         plan = planning.plan(inputs, config=shared.config, render=shared.render)
         shared.metrics.plan.observe(time.perf_counter() - planning_started)
@@ -158,9 +166,18 @@ class CampaignLoop:
         if applied.campaign_written:
             self.last_status_write = now
         self._observe(plan)
-        self.recorder.observe(campaign, self.stored, inputs.batches)  # results DB, in background
-        shared.metrics.reconcile.observe(time.perf_counter() - started)
         self.wake_at = plan.wake_at
+        if self.search is not None:
+            wave = self.search.advance(campaign, inputs.batches, plan.observation)
+            if wave is not None:  # its batch shows up in the cache, and the next step starts it
+                created = await self.applier.apply(Plan(actions=(wave,)), now=now)
+                self.expectations.expect(created.expectations, now=now)
+                applied.failures += created.failures
+        searched = None
+        if self.search is not None and recording_results.finish_of(campaign) is not None:
+            searched = self.search.record(inputs.batches)
+        self.recorder.observe(campaign, self.stored, inputs.batches, search=searched)  # results DB
+        shared.metrics.reconcile.observe(time.perf_counter() - started)
         if applied.failures or applied.conflict:
             retry = now + datetime.timedelta(seconds=self.backoff if applied.failures else 0.2)
             self.wake_at = min(self.wake_at, retry) if self.wake_at else retry
@@ -178,6 +195,29 @@ class CampaignLoop:
             metrics.start_latency.observe(seconds)
         for seconds in observation.overheads:
             metrics.overhead.observe(seconds)
+
+    async def _replay(self, campaign: CampaignView) -> None:
+        """Rebuild the campaign's searcher from its waves (a new or restarted operator)."""
+        spec = campaign.spec
+        assert spec is not None and self.stored is not None
+        if spec.search is None or not self.stored.frozen.scenarios:
+            return
+        base = self.stored.frozen.scenarios[0]
+        try:
+            path = await resolving.locate(
+                self.shared.client, campaign, base, config=self.shared.config
+            )
+            space = await asyncio.to_thread(SearchSpace.from_spec, spec.search, path)
+        except (ScenarioError, OSError) as exc:
+            raise ClusterError(f"cannot fetch the search's logical scenario: {exc}") from exc
+        try:
+            self.search = searching.CampaignSearch.replayed(
+                spec.search, space, base, self.shared.cache.batches_of(self.key)
+            )
+        except SimtestError as exc:  # the record does not replay: it never will
+            self.stored = None
+            self.resolution_error = f"the search cannot be replayed from its batches: {exc}"
+            self.resolution_generation = campaign.generation
 
     async def _resolve(self, campaign: CampaignView) -> None:
         if self.resolution_error is not None and self.resolution_generation == campaign.generation:

@@ -22,10 +22,12 @@ from simtest_operator.api.v1alpha1 import (
     TestCampaignStatus,
     parse_campaign,
 )
+from simtest_operator.errors import SourceError
 from simtest_operator.operator import names
 from simtest_operator.operator.status import reading
 from simtest_operator.operator.status.records import ResultRecord
 from simtest_operator.render.inputs import SIMULATOR_RESOURCE, ScenarioRef
+from simtest_operator.scenarios.pinned import PinnedScenario
 
 Raw = Mapping[str, Any]
 SUT_CONTAINER = "sut"
@@ -338,6 +340,8 @@ class BatchView:
     scenario_ids: tuple[str, ...]
     results: tuple[ResultRecord, ...]
     """The recorded results (the typed ``status`` leaves them out: read once, here)."""
+    proposals: tuple[PinnedScenario, ...] = ()
+    """A search's wave: its concrete scenarios with their proposal records (empty otherwise)."""
     status: ScenarioBatchStatus
     """The status, typed (:mod:`~simtest_operator.operator.status.reading`)."""
     status_wire: Raw
@@ -358,9 +362,23 @@ def batch_view(body: Raw) -> BatchView:
             str(s.get("id", "")) for s in spec.get("scenarios") or () if isinstance(s, Mapping)
         ),
         results=_results(status.get("results")),
+        proposals=_proposals(spec.get("scenarios"), where=f"ScenarioBatch {meta.get('name')}"),
         status=reading.batch(status),
         status_wire=status,
     )
+
+
+def _proposals(entries: Any, *, where: str) -> tuple[PinnedScenario, ...]:
+    """The entries of a batch that are search proposals (a malformed one is left out: the
+    search then stops at the gap instead of the cache failing)."""
+    found = []
+    for entry in entries or ():
+        if isinstance(entry, Mapping) and entry.get("proposal") is not None:
+            try:
+                found.append(PinnedScenario.from_json(entry, where=where))
+            except SourceError:
+                continue
+    return tuple(found)
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)

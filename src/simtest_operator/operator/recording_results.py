@@ -18,7 +18,7 @@ import asyncio
 import base64
 import datetime
 import logging
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import Any, Protocol
 
 from simtest_operator import provenance, results
@@ -27,6 +27,7 @@ from simtest_operator.operator.observed import BatchView, CampaignView
 from simtest_operator.operator.scenariolists import StoredList
 from simtest_operator.operator.status import reading
 from simtest_operator.render import documents
+from simtest_operator.scenarios.pinned import PinnedScenario
 
 log = logging.getLogger(__name__)
 
@@ -57,7 +58,13 @@ def run_key(campaign: CampaignView) -> results.RunKey:
     )
 
 
-def campaign_info(campaign: CampaignView, *, now: datetime.datetime) -> results.CampaignInfo:
+SearchRecord = tuple[Sequence[PinnedScenario], Mapping[str, Any]]
+"""A finished search's frozen list (its proposals) and its record (``settings.search``)."""
+
+
+def campaign_info(
+    campaign: CampaignView, *, now: datetime.datetime, search: Mapping[str, Any] | None = None
+) -> results.CampaignInfo:
     """What the results record says about the campaign (its creation counts as its start)."""
     spec = campaign.spec
     assert spec is not None
@@ -71,7 +78,11 @@ def campaign_info(campaign: CampaignView, *, now: datetime.datetime) -> results.
         sut_name=environment.sut.name,
         sut_version=environment.sut.version,
         simulator_version=environment.simulator.image,
-        settings={**spec.execution.to_wire(), "seed": environment.simulator.seed},
+        settings={
+            **spec.execution.to_wire(),
+            "seed": environment.simulator.seed,
+            **({"search": search} if search is not None else {}),
+        },
     )
 
 
@@ -86,13 +97,18 @@ def finish_of(campaign: CampaignView) -> results.Finish | None:
     )
 
 
-def scenario_infos(stored: StoredList | None) -> list[results.ScenarioInfo]:
-    """The frozen list as the store's scenario records (no header labels: the pods add them)."""
+def scenario_infos(
+    stored: StoredList | None, search: SearchRecord | None = None, *, searching: bool = False
+) -> list[results.ScenarioInfo]:
+    """The frozen list as the store's scenario records (no header labels: the pods add them); a
+    search's list is its proposals, known once it is over (the pods add theirs as they run)."""
     if stored is None:
         return []
+    listed: Sequence[PinnedScenario] = stored.frozen.scenarios
+    if searching:
+        listed = search[0] if search is not None else ()
     return [
-        results.ScenarioInfo(scenario_id=s.id, sha256=s.sha256, source=s.source)
-        for s in stored.frozen.scenarios
+        results.ScenarioInfo(scenario_id=s.id, sha256=s.sha256, source=s.source) for s in listed
     ]
 
 
@@ -136,9 +152,12 @@ class CampaignRecorder:
         campaign: CampaignView,
         stored: StoredList | None,
         batches: Iterable[BatchView] = (),
+        *,
+        search: SearchRecord | None = None,
     ) -> None:
         """After a reconcile step: start recording what is due; never blocks, never raises.
-        ``batches`` give the final results whose SUT image goes into the pods' rows at the end."""
+        ``batches`` give the final results whose SUT image goes into the pods' rows at the end;
+        ``search``, a finished search's proposals and record."""
         spec = campaign.spec
         if spec is None or spec.results.database_secret_ref is None or self._finished:
             return
@@ -151,7 +170,7 @@ class CampaignRecorder:
             return
         versions = sut_images(batches) if finish is not None else {}
         self._task = asyncio.get_running_loop().create_task(
-            self._record(campaign, stored, finish, versions),
+            self._record(campaign, stored, finish, versions, search),
             name=f"results record {campaign.namespace}/{campaign.name}",
         )
 
@@ -166,13 +185,19 @@ class CampaignRecorder:
         stored: StoredList | None,
         finish: results.Finish | None,
         versions: Mapping[tuple[str, int], Mapping[str, str]],
+        search: SearchRecord | None,
     ) -> None:
         where = f"{campaign.namespace}/{campaign.name}"
         try:
             dsn = await self._dsn(campaign)
-            info = campaign_info(campaign, now=self._clock())
+            record = search[1] if search is not None and finish is not None else None
+            info = campaign_info(campaign, now=self._clock(), search=record)
             key = run_key(campaign)
-            infos = scenario_infos(stored)
+            infos = scenario_infos(
+                stored,
+                search,
+                searching=campaign.spec is not None and campaign.spec.search is not None,
+            )
             await asyncio.to_thread(self._write, dsn, key, info, infos, finish, versions)
         except Exception as exc:  # a record is never worth a crashed task
             if not isinstance(exc, SimtestError | OSError):

@@ -17,6 +17,7 @@ import base64
 import contextlib
 import dataclasses
 from collections.abc import Callable, Mapping
+from pathlib import Path
 
 from simtest_operator.api import converting
 from simtest_operator.errors import ClusterError, RenderError, ScenarioError
@@ -26,7 +27,8 @@ from simtest_operator.operator.client import AlreadyExistsError, Client, NotFoun
 from simtest_operator.operator.scenariolists import StoredList
 from simtest_operator.render import EnvironmentRequest, RenderedEnvironment, ScenarioRef
 from simtest_operator.runner import resolving as freezing
-from simtest_operator.scenarios import FetchContext, SecretRef
+from simtest_operator.scenarios import FetchContext, Locator, PinnedScenario, SecretRef
+from simtest_operator.search import SearchSpace
 from simtest_operator.settings import OperatorSettings
 
 
@@ -45,16 +47,11 @@ async def load(client: Client, campaign: observed.CampaignView) -> StoredList | 
     return scenariolists.read(body)
 
 
-async def resolve(
-    client: Client,
-    campaign: observed.CampaignView,
-    *,
-    config: OperatorSettings,
-    render: Callable[[EnvironmentRequest], RenderedEnvironment],
-) -> StoredList:
-    """Freeze the campaign's list, check it renders, and store it (or read what is stored)."""
-    assert campaign.spec is not None
-    spec = campaign.spec
+def fetch_context(
+    client: Client, campaign: observed.CampaignView, *, config: OperatorSettings
+) -> FetchContext:
+    """What fetching the campaign's sources may use: the operator's folders, and ConfigMaps and
+    Secrets read through its API client (from a worker thread: call this in the event loop)."""
     loop = asyncio.get_running_loop()
 
     def blocking(coro_factory: Callable[[], object]) -> object:
@@ -81,19 +78,60 @@ async def resolve(
             raise ResolutionError(f"Secret {ref.name!r} has no key {ref.key!r}")
         return base64.b64decode(raw).decode("utf-8").strip()
 
-    context = FetchContext(
+    return FetchContext(
         base_dir=config.inputs.sources_dir.absolute(),
         cache_dir=config.inputs.cache_dir / "sources",
         config_maps=config_maps,
         secrets=secrets,
     )
-    frozen = await asyncio.to_thread(
-        freezing.freeze,
-        converting.selection(spec.scenarios),
-        context,
-        campaign=campaign.name,
-        seed=spec.environment.simulator.seed,
-    )
+
+
+async def locate(
+    client: Client,
+    campaign: observed.CampaignView,
+    pinned: PinnedScenario,
+    *,
+    config: OperatorSettings,
+) -> Path:
+    """The operator's local copy of a pinned scenario (a search's logical scenario), fetched
+    and verified like a pod would."""
+    context = fetch_context(client, campaign, config=config)
+    return await asyncio.to_thread(Locator(context).locate, pinned)
+
+
+async def resolve(
+    client: Client,
+    campaign: observed.CampaignView,
+    *,
+    config: OperatorSettings,
+    render: Callable[[EnvironmentRequest], RenderedEnvironment],
+) -> StoredList:
+    """Freeze the campaign's list, check it renders, and store it (or read what is stored).
+
+    A search (``spec.search``) freezes only its logical scenario; the space is built once here,
+    so a parameter the file does not declare fails the campaign before anything runs."""
+    assert campaign.spec is not None
+    spec = campaign.spec
+    context = fetch_context(client, campaign, config=config)
+    if spec.search is None:
+        frozen = await asyncio.to_thread(
+            freezing.freeze,
+            converting.selection(spec.scenarios),
+            context,
+            campaign=campaign.name,
+            seed=spec.environment.simulator.seed,
+        )
+    else:
+        frozen = await asyncio.to_thread(
+            freezing.freeze_search,
+            converting.selection(spec.scenarios),
+            context,
+            campaign=campaign.name,
+            scenario=spec.search.scenario,
+            seed=spec.environment.simulator.seed,
+        )
+        path = await asyncio.to_thread(Locator(context).locate, frozen.scenarios[0])
+        await asyncio.to_thread(SearchSpace.from_spec, spec.search, path)
     stored = StoredList(frozen=frozen, batch_size=spec.execution.batch_size)
     if frozen.scenarios:
         _preflight(campaign, stored, config=config, render=render)

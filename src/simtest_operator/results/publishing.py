@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import datetime
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
 from simtest_operator.errors import ResultsError
@@ -25,6 +25,11 @@ from simtest_operator.results import (
     reportmodel,
     stores,
 )
+
+SearchSectionOf = Callable[
+    [records.CampaignRecord, Sequence[records.StoredOutcome]], reportmodel.SearchSection | None
+]
+"""Builds a searching run's *Search* section from the stored run (None: it did not search)."""
 
 REPORT_FILENAME = "report.html"
 JUNIT_FILENAME = "junit.xml"
@@ -111,8 +116,11 @@ def publish(
     compare_with: RunRef | None = None,
     read_trajectories: details.TrajectoryReader | None = None,
     hostname: str = "",
+    search: SearchSectionOf | reportmodel.SearchSection | None = None,
 ) -> Published:
-    """Write the report and/or JUnit file of one run (paths ``None`` skip that output)."""
+    """Write the report and/or JUnit file of one run (paths ``None`` skip that output), with
+    what its search found when it searched (the section, or how to build it from the run: the
+    search engine sits above this layer)."""
     with opening.open_store(run_ref.target, create=False) as store:
         run = load_run(store, run_ref.run_key)
     comparison = None
@@ -136,6 +144,7 @@ def publish(
                 run, run_ref.artifacts_base(), read_trajectories=read_trajectories
             ),
             comparison=comparison,
+            search=search(run.campaign, run.outcomes) if callable(search) else search,
         )
         document = reporting.render(view, source=dsn.describe(run_ref.target))
         written_report = reporting.write(report_path, document)

@@ -102,6 +102,20 @@ class Provenance:
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class SearchSection:
+    """What a search (``spec.search``) found, prepared by the caller that ran it: the search
+    engine sits above the results layer, so the report takes its findings as ready text and
+    pictures."""
+
+    facts: tuple[tuple[str, str], ...]
+    """(label, value): budget, strategy, failures, regions, boundary, best objective."""
+    critical: tuple[tuple[str, str, str], ...] = ()
+    """(scenario id, parameter values, verdict) of the most critical concrete scenarios."""
+    plots: tuple[tuple[str, str], ...] = ()
+    """(caption, ``data:`` URI of a PNG or SVG): pass/fail per parameter pair with the boundary."""
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
 class Report:
     """Everything the template renders."""
 
@@ -114,6 +128,7 @@ class Report:
     scenarios: tuple[ScenarioView, ...]
     comparison: comparing.Comparison | None
     provenance: Provenance = dataclasses.field(default_factory=Provenance)
+    search: SearchSection | None = None
     verdict_colours: Mapping[str, str] = dataclasses.field(
         default_factory=lambda: dict(plots.VERDICT_COLOURS)
     )
@@ -136,8 +151,10 @@ def build(
     generated_at: datetime.datetime,
     details_of: Mapping[str, details.ScenarioDetails] | None = None,
     comparison: comparing.Comparison | None = None,
+    search: SearchSection | None = None,
 ) -> Report:
-    """The view model of one run (with an optional comparison against another)."""
+    """The view model of one run (with an optional comparison against another, and what its
+    search found)."""
     final = comparing.final_outcomes(run.outcomes)
     attempts: dict[str, list[records.StoredOutcome]] = {}
     for stored in run.outcomes:
@@ -173,6 +190,7 @@ def build(
         scenarios=tuple(views),
         comparison=comparison,
         provenance=_provenance(run.campaign.info, [s.outcome.versions for s in final.values()]),
+        search=search,
     )
 
 

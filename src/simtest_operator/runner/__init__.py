@@ -19,9 +19,12 @@ YAML, Jinja) and ``simtest report`` without the simulator (numpy).
 from __future__ import annotations
 
 import importlib
+from collections.abc import Sequence
 from typing import TYPE_CHECKING, Literal
 
 if TYPE_CHECKING:
+    from simtest_operator.results.records import CampaignRecord, StoredOutcome
+    from simtest_operator.results.reportmodel import SearchSection
     from simtest_operator.runner.campaigns import Event as CampaignEvent
     from simtest_operator.runner.campaigns import LocalRunResult, Prepared, read_recording
     from simtest_operator.runner.campaigns import run as run_campaign
@@ -35,6 +38,10 @@ if TYPE_CHECKING:
         run_scenario,
     )
     from simtest_operator.runner.scheduling import Finished, Retrying
+    from simtest_operator.runner.searchresults import export as export_search
+    from simtest_operator.runner.searchresults import lines as search_lines
+    from simtest_operator.runner.searchresults import recorded as recorded_search
+    from simtest_operator.runner.searchresults import section as search_section
     from simtest_operator.runner.summaries import EXIT_ERROR, summarise
     from simtest_operator.runner.tasks import ExecuteFn
 
@@ -50,13 +57,18 @@ __all__ = [
     "RunReport",
     "RunRequest",
     "engine",
+    "export_search",
     "freeze",
     "read_manifest",
     "read_recording",
+    "recorded_search",
     "reevaluate",
     "run_campaign",
     "run_many",
     "run_scenario",
+    "search_lines",
+    "search_section",
+    "search_section_of",
     "summarise",
 ]
 
@@ -76,6 +88,10 @@ _HOMES = {
     "run_many": ("scenario_execution", "run_many"),
     "run_scenario": ("scenario_execution", "run_scenario"),
     "Finished": ("scheduling", "Finished"),
+    "export_search": ("searchresults", "export"),
+    "search_lines": ("searchresults", "lines"),
+    "recorded_search": ("searchresults", "recorded"),
+    "search_section": ("searchresults", "section"),
     "Retrying": ("scheduling", "Retrying"),
     "EXIT_ERROR": ("summaries", "EXIT_ERROR"),
     "summarise": ("summaries", "summarise"),
@@ -107,3 +123,15 @@ def engine(name: Literal["sumo", "fake"]) -> ExecuteFn:
     from simtest_operator.runner import engines
 
     return engines.execute
+
+
+def search_section_of(
+    campaign: CampaignRecord, stored: Sequence[StoredOutcome]
+) -> SearchSection | None:
+    """The *Search* section of a stored run for the report and the results UI; the search
+    engine (scikit-learn, matplotlib) is imported only for a run that searched."""
+    if "search" not in campaign.info.settings:
+        return None
+    from simtest_operator.runner import searchresults
+
+    return searchresults.section_of(campaign, stored)

@@ -21,8 +21,16 @@ from pathlib import Path
 
 from simtest_operator import recording
 from simtest_operator.errors import ResultsError, ScenarioError, SimtestError, SourceError
-from simtest_operator.results import details, dsn, publishing
-from simtest_operator.runner import outputs, scheduling, storing, summaries, tasks
+from simtest_operator.results import details, dsn, publishing, reportmodel
+from simtest_operator.runner import (
+    localsearch,
+    outputs,
+    scheduling,
+    searchresults,
+    storing,
+    summaries,
+    tasks,
+)
 from simtest_operator.runner import preparing as prep
 from simtest_operator.runner.workers import Worker
 from simtest_operator.scenarios import batching
@@ -72,6 +80,8 @@ class LocalRunResult:
     warnings: tuple[str, ...]
     not_passed: tuple[ScenarioOutcome, ...]
     """Final outcomes other than Passed, in frozen-list order (including earlier runs')."""
+    search: localsearch.Searched | None = None
+    """What the search found (``spec.search``)."""
 
 
 def run(
@@ -147,7 +157,9 @@ def _run_planned(
             Prepared(
                 campaign=plan.name,
                 output=out.root,
-                total=len(plan.frozen.scenarios),
+                total=len(plan.frozen.scenarios)
+                if plan.search is None
+                else plan.search.spec.budget,
                 finished=len(plan.finished),
                 parallel=parallel,
                 store=store.description,
@@ -159,6 +171,11 @@ def _run_planned(
             failed = ScenarioOutcome(scenario_id=pinned.id, verdict=Verdict.ERROR, reason=reason)
             results[pinned.id] = _finish(out, store, pinned, batch, failed, on_event)
 
+        search = None
+        if plan.search is not None:
+            search = localsearch.LocalSearch.start(plan, plan.search, store, paths, results,
+                                                 parallel=parallel)  # fmt: skip
+
         def forward(event: scheduling.Event) -> None:
             if isinstance(event, scheduling.Retrying):
                 tally.add(event.outcome)
@@ -169,10 +186,11 @@ def _run_planned(
                 results[event.pinned.id] = _finish(
                     out, store, event.pinned, event.batch, event.outcome, on_event, event.timing
                 )
+                if search is not None:
+                    search.feed.tell(event.pinned, event.outcome)
             else:
                 on_event(event)
 
-        batches = batching.plan(plan.frozen.scenarios, batch_size=plan.policy.batch_size)
         not_runnable = frozenset(s.id for s in plan.frozen.scenarios) - frozenset(paths)
         cpu_before = _children_cpu()
         executor = scheduling.Executor(
@@ -184,7 +202,12 @@ def _run_planned(
             on_event=forward,
             stop=stop,
         )
-        execution = executor.run(batching.without(batches, not_runnable))
+        if search is None:
+            batches = batching.plan(plan.frozen.scenarios, batch_size=plan.policy.batch_size)
+            execution = executor.run(batching.without(batches, not_runnable))
+        else:
+            execution = executor.run_feed(search.feed)
+        listed = plan.frozen if search is None else search.frozen
         worker_cpu = _children_cpu() - cpu_before
         for batch, pinned in execution.unfinished:
             skipped = ScenarioOutcome(
@@ -192,12 +215,18 @@ def _run_planned(
             )
             out.write_result(pinned, batch, skipped)
             results[pinned.id] = skipped
-        ids = [s.id for s in plan.frozen.scenarios]
+        ids = [s.id for s in listed.scenarios]
         summary = summaries.summarise(ids, results, interrupted=execution.interrupted)
-        store.finish(summary.phase, finished_at=now())
+        searched = None if search is None else search.finish(results)
+        store.finish(
+            summary.phase,
+            finished_at=now(),
+            search=None if searched is None else searched.record,
+        )
         wall = time.monotonic() - started
         _write_state(out, plan, store, summary, parallel, wall, now(), execution.interrupted)
-    report, junit = _publish(out, store, now(), notes)
+    section = None if searched is None else searchresults.section(searched.search)
+    report, junit = _publish(out, store, now(), notes, section)
     return LocalRunResult(
         output=out.root,
         summary=summary,
@@ -214,6 +243,7 @@ def _run_planned(
         not_passed=tuple(
             results[i] for i in ids if i in results and results[i].verdict is not Verdict.PASSED
         ),
+        search=searched,
     )
 
 
@@ -255,7 +285,8 @@ def _parallel(request: prep.LocalRunRequest, plan: prep.Plan) -> int:
     parallel = request.parallel or request.cpu_count
     if request.parallel is None and plan.policy.max_parallel is not None:
         parallel = min(parallel, plan.policy.max_parallel)
-    remaining = len(plan.frozen.scenarios) - len(plan.finished)
+    listed = len(plan.frozen.scenarios) if plan.search is None else plan.search.spec.budget
+    remaining = listed - len(plan.finished)
     return max(1, min(parallel, remaining))
 
 
@@ -349,6 +380,7 @@ def _publish(
     store: storing.ResultWriter,
     now: datetime.datetime,
     warnings: list[str],
+    search: reportmodel.SearchSection | None = None,
 ) -> tuple[Path | None, Path | None]:
     """Write the HTML report and JUnit XML from the store (a failure is a warning: the results
     themselves are safe in the store and the result files)."""
@@ -360,6 +392,7 @@ def _publish(
             junit_path=out.junit,
             read_trajectories=read_recording,
             hostname=os.uname().nodename,
+            search=search,
         )
     except (ResultsError, ScenarioError) as exc:
         warnings.append(f"report and JUnit not written: {exc}")

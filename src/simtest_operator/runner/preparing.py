@@ -15,16 +15,18 @@ from pathlib import Path
 from typing import Any
 
 from simtest_operator.api import converting, manifestfiles, v1alpha1
+from simtest_operator.api.v1alpha1.search import SearchSpec
 from simtest_operator.drivermodel import SutConfig
-from simtest_operator.errors import ScenarioError
+from simtest_operator.errors import ScenarioError, SourceError
 from simtest_operator.openscenario import headers
 from simtest_operator.runner import outputs, resolving, scheduling, suts, tasks
 from simtest_operator.scenarios import selecting, uris
 from simtest_operator.scenarios.batching import ExecutionPolicy
+from simtest_operator.scenarios.locating import Locator
 from simtest_operator.scenarios.pinned import FrozenList, PinnedScenario, sha256_hex
 from simtest_operator.scenarios.querying import SecretProvider
 from simtest_operator.scenarios.resolving import FetchContext
-from simtest_operator.scenarios.specs import DatabaseSource, GraphqlSource, RestSource
+from simtest_operator.scenarios.specs import DatabaseSource, GraphqlSource, RestSource, Selection
 from simtest_operator.settings import Settings
 from simtest_operator.verdicts import ScenarioOutcome, Verdict
 
@@ -52,6 +54,17 @@ class LocalRunRequest:
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class SearchPlan:
+    """What a local search starts from."""
+
+    spec: SearchSpec
+    base: PinnedScenario
+    """The logical scenario, pinned (id ``spec.scenario``)."""
+    path: Path
+    """Its file on this machine (sha256 verified)."""
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
 class Plan:
     """A run, fully decided, before anything executes."""
 
@@ -76,6 +89,9 @@ class Plan:
     sut: SutConfig
     record: bool
     notes: tuple[str, ...]
+    search: SearchPlan | None = None
+    """``spec.search`` when this run searches (not when it reruns a given list): the frozen list
+    then holds the proposals made so far and grows as the search proposes."""
 
 
 def prepare(request: LocalRunRequest, *, now: datetime.datetime) -> Plan:
@@ -98,6 +114,7 @@ def prepare(request: LocalRunRequest, *, now: datetime.datetime) -> Plan:
     graphql = tuple(s for s in selection.sources if isinstance(s, GraphqlSource | RestSource))
     resumed = out.exists()
     notes: list[str] = []
+    logical: PinnedScenario | None = None
     started_at, run_key = now, None
     if resumed:
         state = out.read_state()
@@ -117,11 +134,20 @@ def prepare(request: LocalRunRequest, *, now: datetime.datetime) -> Plan:
         run_key = state.run_key or None
     else:
         _check_empty(out.root)
-        frozen = _requested_list(request) or resolving.freeze(
-            selection, fetch, campaign=manifest.name, seed=spec.environment.simulator.seed
-        )
+        requested = _requested_list(request)
+        seed = spec.environment.simulator.seed
+        if requested is not None:
+            frozen = requested
+        elif spec.search is not None:
+            searched = resolving.freeze_search(
+                selection, fetch, campaign=manifest.name, scenario=spec.search.scenario, seed=seed
+            )
+            logical = searched.scenarios[0]
+            frozen = dataclasses.replace(searched, scenarios=())
+        else:
+            frozen = resolving.freeze(selection, fetch, campaign=manifest.name, seed=seed)
         notes.extend(frozen.notes)
-        if not frozen.scenarios:
+        if not frozen.scenarios and (spec.search is None or requested is not None):
             raise ScenarioError(
                 "no scenarios selected: the sources hold no file matching the include/exclude "
                 f"globs and selector{'; ' + '; '.join(frozen.notes) if frozen.notes else ''}"
@@ -138,6 +164,9 @@ def prepare(request: LocalRunRequest, *, now: datetime.datetime) -> Plan:
         )
     previous = out.read_results(frozen) if resumed else {}
     simulator = spec.environment.simulator
+    search = None
+    if spec.search is not None and request.frozen is None and request.rerun_failed is None:
+        search = _search_plan(spec.search, logical, frozen, selection, fetch)
     return Plan(
         name=manifest.name,
         manifest_sha256=digest,
@@ -157,7 +186,38 @@ def prepare(request: LocalRunRequest, *, now: datetime.datetime) -> Plan:
         sut=suts.reached_here(converting.sut(spec.environment.sut), request.settings),
         record=simulator.record and spec.artifacts.keep_recordings,
         notes=tuple(notes),
+        search=search,
     )
+
+
+def _search_plan(
+    spec: SearchSpec,
+    logical: PinnedScenario | None,
+    frozen: FrozenList,
+    selection: Selection,
+    fetch: FetchContext,
+) -> SearchPlan:
+    """The logical scenario of a search: as just resolved, else (a resumed run) pinned like the
+    proposals made so far."""
+    base = logical
+    if base is None:
+        if not frozen.scenarios:
+            raise ScenarioError(
+                "this output folder holds a search that proposed nothing yet; delete it and "
+                "start again"
+            )
+        made = frozen.scenarios[0]
+        base = PinnedScenario(
+            id=spec.scenario,
+            source=made.source,
+            sha256=made.sha256,
+            overrides=dict(selection.overrides),
+        )
+    try:
+        path = Locator(fetch).locate(base)
+    except SourceError as exc:
+        raise ScenarioError(f"spec.search.scenario {spec.scenario!r}: {exc}") from exc
+    return SearchPlan(spec=spec, base=base, path=path)
 
 
 def read_manifest(path: Path) -> tuple[str, v1alpha1.Manifest[v1alpha1.TestCampaignSpec]]:

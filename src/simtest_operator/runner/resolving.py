@@ -12,22 +12,32 @@ Rules (documented in docs/local-run.md):
   reason, which is more useful than a silently missing test;
 * a ParameterValueDistribution expands into one run per parameter assignment, with id
   ``<distribution path>#<k>-<hash>`` and the distribution's values over the campaign overrides;
-* ids are paths inside their source; a clash across sources gets the suffix ``~<source number>``.
+* ids are paths inside their source; a clash across sources gets the suffix ``~<source number>``;
+* a search (``spec.search``) pins only its logical scenario (:func:`freeze_search`); its concrete
+  scenarios enter the list as they are proposed (:func:`pin_proposal`), each with what replays
+  the search (:func:`replay_inputs`).
 """
 
 from __future__ import annotations
 
 import collections
 import dataclasses
-from collections.abc import Callable, Sequence
+import json
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from simtest_operator import openscenario
+from simtest_operator.api.v1alpha1.search import SearchSpec
 from simtest_operator.errors import ScenarioError
 from simtest_operator.openscenario import headers
 from simtest_operator.scenarios import resolving, selecting
-from simtest_operator.scenarios.pinned import FrozenList, PinnedScenario, sha256_hex
+from simtest_operator.scenarios.pinned import FrozenList, PinnedScenario, ProposalPin, sha256_hex
 from simtest_operator.scenarios.specs import Selection
+from simtest_operator.verdicts import Verdict
+
+if TYPE_CHECKING:  # the engine (scikit-learn, optuna) loads only where a search runs
+    from simtest_operator.search import Outcome, Proposal, SearchSpace, SearchSummary
 
 Expander = Callable[[Path, int], Sequence[openscenario.ConcreteRun]]
 """Expands a distribution file (with a seed for stochastic ones) into concrete runs."""
@@ -155,3 +165,123 @@ def _distribution(
             path=run.scenario,
             overrides=dict(run.overrides),
         )
+
+
+# --- searches (spec.search) ---------------------------------------------------------------------
+
+SEARCH_SUFFIX = "#search-"
+"""A search's concrete scenario has the id ``<logical scenario>#search-<index>``."""
+
+
+def freeze_search(
+    selection: Selection,
+    ctx: resolving.FetchContext,
+    *,
+    campaign: str,
+    scenario: str,
+    seed: int = 42,
+) -> FrozenList:
+    """The logical scenario a search varies, pinned: a one-entry list (id ``scenario``).
+
+    The selection is resolved as for any campaign, so the file is pinned from the same sources
+    on a laptop and in a cluster; ``scenario`` must be one of the files it selects."""
+    frozen = freeze(selection, ctx, campaign=campaign, seed=seed)
+    base = next((s for s in frozen.scenarios if s.id == scenario), None)
+    if base is None and any(s.id.startswith(f"{scenario}#") for s in frozen.scenarios):
+        raise ScenarioError(
+            f"spec.search.scenario {scenario!r} is a ParameterValueDistribution: a campaign "
+            "cannot search one yet; name the scenario file it varies and give the ranges as "
+            "spec.search.parameters"
+        )
+    if base is None:
+        listed = ", ".join(s.id for s in frozen.scenarios[:5]) or "none"
+        raise ScenarioError(
+            f"spec.search.scenario {scenario!r} is not among the {len(frozen.scenarios)} "
+            f"scenario(s) the selection resolves to (first: {listed}); name a file of "
+            "spec.scenarios as a path inside its source"
+        )
+    return dataclasses.replace(frozen, scenarios=(base,))
+
+
+def pin_proposal(
+    base: PinnedScenario, proposal: Proposal, *, told: Sequence[int]
+) -> PinnedScenario:
+    """The frozen-list entry of a proposal: the logical scenario with the proposal's parameter
+    values over the campaign's overrides, and what replays it (index, basis, the tells before)."""
+    return PinnedScenario(
+        id=f"{base.id}{SEARCH_SUFFIX}{proposal.index}",
+        source=base.source,
+        sha256=base.sha256,
+        overrides={**base.overrides, **proposal.overrides()},
+        proposal=ProposalPin(
+            index=proposal.index,
+            basis=proposal.basis,
+            told=tuple(told),
+            values={name: json.dumps(value) for name, value in proposal.values.items()},
+        ),
+    )
+
+
+def proposal_of(pin: ProposalPin) -> Proposal:
+    """The engine's proposal a frozen-list entry pins (values back from their JSON text)."""
+    from simtest_operator.search import Proposal
+
+    values: dict[str, float | str] = {}
+    for name, text in pin.values.items():
+        value = json.loads(text)
+        values[name] = value if isinstance(value, str) else float(value)
+    return Proposal(index=pin.index, values=values, basis=pin.basis)
+
+
+def replay_inputs(
+    pins: Sequence[ProposalPin], outcomes: Mapping[int, Outcome]
+) -> tuple[list[Proposal], list[tuple[int, Outcome]]]:
+    """(proposals, tells in the order told) for :meth:`Searcher.replay`, from the pinned
+    proposals in index order and the outcomes by proposal index; ScenarioError when a tell's
+    outcome is missing or the pins are not one unbroken sequence."""
+    proposals: list[Proposal] = []
+    tells: list[tuple[int, Outcome]] = []
+    for expected, pin in enumerate(sorted(pins, key=lambda p: p.index)):
+        if pin.index != expected:
+            raise ScenarioError(f"search proposal {expected} is missing from the frozen list")
+        for index in pin.told:
+            outcome = outcomes.get(index)
+            if outcome is None:
+                raise ScenarioError(
+                    f"search proposal {pin.index} was asked after the result of proposal "
+                    f"{index}, which is no longer recorded; the search cannot be replayed"
+                )
+            tells.append((index, outcome))
+        if len(tells) != pin.basis:
+            raise ScenarioError(
+                f"search proposal {pin.index} says {pin.basis} results were told before it, "
+                f"the frozen list records {len(tells)}"
+            )
+        proposals.append(proposal_of(pin))
+    return proposals, tells
+
+
+def search_outcome(verdict: Verdict, metrics: Mapping[str, float]) -> Outcome:
+    """What the searcher learns from a final result."""
+    from simtest_operator.search import Outcome
+
+    return Outcome(verdict=verdict, metrics=dict(metrics))
+
+
+def search_record(
+    spec: SearchSpec,
+    space: SearchSpace,
+    entries: Sequence[PinnedScenario],
+    summary: SearchSummary,
+) -> dict[str, Any]:
+    """What the results store keeps with a searching campaign (``settings.search``), written by
+    ``simtest run`` and the operator alike: enough to summarise, plot and export the search
+    again without the scenario file."""
+    return {
+        "spec": spec.to_wire(),
+        "dimensions": [dataclasses.asdict(d) for d in space.dimensions],
+        "proposals": [
+            {"id": p.id, **p.proposal.to_json()} for p in entries if p.proposal is not None
+        ],
+        "summary": summary.model_dump(mode="json"),
+    }

@@ -18,6 +18,7 @@ import multiprocessing.connection
 import threading
 import time
 from collections.abc import Callable, Sequence
+from typing import Protocol
 
 from simtest_operator.errors import SimulationError
 from simtest_operator.runner.tasks import ExecuteFn, ScenarioTask
@@ -75,6 +76,29 @@ class Finished:
 Event = Started | Retrying | Finished
 TaskFactory = Callable[[PinnedScenario, int], ScenarioTask]
 """Builds the task for (scenario, attempt number)."""
+
+
+class Feed(Protocol):
+    """Where the executor takes its work from: the frozen list's batches
+    (:class:`~simtest_operator.scenarios.batching.Dispatcher`) or a search proposing as results
+    come back (:class:`~simtest_operator.runner.searching.SearchFeed`)."""
+
+    def next(self) -> tuple[int, PinnedScenario] | None:
+        """The next scenario to start with its batch index, or None for now."""
+        ...
+
+    def done(self, batch: int) -> None:
+        """A scenario of ``batch`` has its final outcome."""
+        ...
+
+    def drain(self) -> list[tuple[int, PinnedScenario]]:
+        """Everything not handed out yet (to mark it as not run)."""
+        ...
+
+    @property
+    def exhausted(self) -> bool:
+        """Nothing more will be handed out, now or later."""
+        ...
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
@@ -137,8 +161,11 @@ class Executor:
 
     def run(self, batches: Sequence[Batch]) -> ExecutionResult:
         """Run every scenario of ``batches``; returns when all finished or the stop event is set."""
-        dispatcher = Dispatcher(tuple(batches), self._policy.policy)
-        self._pinned = {s.id: s for batch in batches for s in batch.scenarios}
+        return self.run_feed(Dispatcher(tuple(batches), self._policy.policy))
+
+    def run_feed(self, dispatcher: Feed) -> ExecutionResult:
+        """Run what ``dispatcher`` hands out until it is exhausted and every scenario finished,
+        or the stop event is set."""
         try:
             while not self._stop.is_set():
                 self._fill(dispatcher)
@@ -157,7 +184,7 @@ class Executor:
 
     # --- scheduling -----------------------------------------------------------------------------
 
-    def _fill(self, dispatcher: Dispatcher) -> None:
+    def _fill(self, dispatcher: Feed) -> None:
         busy = sum(1 for w in self._workers if w.busy)
         pending = len(self._retries) + (0 if dispatcher.exhausted else self._parallel)
         wanted = min(self._parallel, busy + pending)
@@ -183,13 +210,16 @@ class Executor:
             )
             self._on_event(started)
 
-    def _next_item(self, dispatcher: Dispatcher) -> _Item | None:
+    def _next_item(self, dispatcher: Feed) -> _Item | None:
         if self._retries:
             return self._retries.popleft()
         handed = dispatcher.next()
-        return None if handed is None else _Item(batch=handed[0], pinned=handed[1])
+        if handed is None:
+            return None
+        self._pinned[handed[1].id] = handed[1]
+        return _Item(batch=handed[0], pinned=handed[1])
 
-    def _wait_and_collect(self, dispatcher: Dispatcher) -> None:
+    def _wait_and_collect(self, dispatcher: Feed) -> None:
         now = self._clock()
         deadlines = [w.deadline for w in self._workers if w.busy]
         timeout = min([POLL_SECONDS, *(max(0.0, d - now) for d in deadlines)])
@@ -216,7 +246,7 @@ class Executor:
 
     # --- outcomes -------------------------------------------------------------------------------
 
-    def _result(self, worker: Worker, outcome: ScenarioOutcome, dispatcher: Dispatcher) -> None:
+    def _result(self, worker: Worker, outcome: ScenarioOutcome, dispatcher: Feed) -> None:
         task, batch = worker.task, worker.batch
         assert task is not None
         worker.task = None
@@ -225,7 +255,7 @@ class Executor:
             self._retire(worker)  # an errored engine may be in a bad state: start afresh
         self._conclude(task, batch, outcome, dispatcher, self._timing(worker))
 
-    def _lost(self, worker: Worker, dispatcher: Dispatcher) -> None:
+    def _lost(self, worker: Worker, dispatcher: Feed) -> None:
         task, batch = worker.task, worker.batch
         self._workers.remove(worker)
         description = worker.exit_description()
@@ -249,7 +279,7 @@ class Executor:
         )
         self._conclude(task, batch, outcome, dispatcher, self._timing(worker))
 
-    def _timed_out(self, worker: Worker, dispatcher: Dispatcher) -> None:
+    def _timed_out(self, worker: Worker, dispatcher: Feed) -> None:
         task, batch = worker.task, worker.batch
         assert task is not None
         self._workers.remove(worker)
@@ -272,7 +302,7 @@ class Executor:
         task: ScenarioTask,
         batch: int,
         outcome: ScenarioOutcome,
-        dispatcher: Dispatcher,
+        dispatcher: Feed,
         timing: Timing,
     ) -> None:
         pinned = self._pinned_of(task)
@@ -295,7 +325,7 @@ class Executor:
 
     # --- shutdown -------------------------------------------------------------------------------
 
-    def _shutdown(self, dispatcher: Dispatcher) -> tuple[tuple[int, PinnedScenario], ...]:
+    def _shutdown(self, dispatcher: Feed) -> tuple[tuple[int, PinnedScenario], ...]:
         unfinished: list[tuple[int, PinnedScenario]] = []
         for worker in self._workers:
             if worker.busy:

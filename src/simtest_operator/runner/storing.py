@@ -13,6 +13,7 @@ import dataclasses
 import datetime
 from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
+from typing import Any
 
 from simtest_operator import provenance, results
 from simtest_operator.errors import SourceError
@@ -30,7 +31,8 @@ class ResultWriter:
     store: results.Store
     target: str | Path
     key: results.RunKey
-    infos: Mapping[str, results.ScenarioInfo]
+    infos: dict[str, results.ScenarioInfo]
+    info: results.CampaignInfo
 
     @property
     def run_key(self) -> str:
@@ -79,15 +81,29 @@ class ResultWriter:
                 scenarios=list(infos.values()),
                 run_key=results.RunKey(plan.run_key) if plan.run_key else None,
             )
-            yield cls(store=store, target=target, key=key, infos=infos)
+            yield cls(store=store, target=target, key=key, infos=infos, info=info)
+
+    def register(self, pinned: PinnedScenario, path: Path) -> None:
+        """A scenario that joined the frozen list while the run goes on (a search's proposal)."""
+        self.infos[pinned.id] = scenario_info(pinned, path)
 
     def attempt(self, pinned: PinnedScenario, outcome: ScenarioOutcome) -> None:
         """Record one attempt (a retried Error, or the final one)."""
         self.store.add_outcome(self.key, self.infos[pinned.id], outcome)
 
-    def finish(self, phase: str, *, finished_at: datetime.datetime) -> None:
-        """Mark the campaign record finished with its phase (Cancelled when interrupted)."""
-        self.store.finish_campaign(self.key, finished_at=finished_at, phase=phase)
+    def finish(
+        self,
+        phase: str,
+        *,
+        finished_at: datetime.datetime,
+        search: Mapping[str, Any] | None = None,
+    ) -> None:
+        """Mark the campaign record finished with its phase (Cancelled when interrupted); a
+        search's record (proposals and summary) joins the campaign's settings."""
+        info = None
+        if search is not None:
+            info = dataclasses.replace(self.info, settings={**self.info.settings, "search": search})
+        self.store.finish_campaign(self.key, finished_at=finished_at, phase=phase, info=info)
 
 
 def scenario_info(pinned: PinnedScenario, path: Path | None) -> results.ScenarioInfo:

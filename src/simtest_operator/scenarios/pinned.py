@@ -28,6 +28,49 @@ def sha256_hex(data: bytes) -> str:
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class ProposalPin:
+    """Where a search's concrete scenario came from, so the search can be replayed exactly.
+
+    The searcher's proposals are a pure function of its spec and the sequence of asks and tells;
+    ``told`` (the outcomes told since the previous proposal, in order) and ``basis`` pin that
+    sequence, so a resumed run or a restarted operator rebuilds the same searcher."""
+
+    index: int
+    """0, 1, 2, ... in the order asked."""
+    basis: int
+    """Outcomes the searcher had been told when it proposed this."""
+    told: tuple[int, ...] = ()
+    """Indices of the proposals told since the previous proposal was asked, in the order told."""
+    values: Mapping[str, str] = dataclasses.field(default_factory=dict)
+    """Parameter name -> value as text (``repr`` of a float, a choice as is)."""
+
+    def to_json(self) -> dict[str, Any]:
+        """Wire form, identical to the API's ``SearchProposalRecord``."""
+        wire: dict[str, Any] = {
+            "index": self.index,
+            "basis": self.basis,
+            "values": dict(sorted(self.values.items())),
+        }
+        if self.told:
+            wire["told"] = list(self.told)
+        return wire
+
+    @classmethod
+    def from_json(cls, data: Any, *, where: str) -> ProposalPin:
+        """Inverse of :meth:`to_json`; raises SourceError naming ``where`` when malformed."""
+        try:
+            values = data.get("values") or {}
+            return cls(
+                index=int(data["index"]),
+                basis=int(data["basis"]),
+                told=tuple(int(i) for i in data.get("told") or ()),
+                values={str(k): str(v) for k, v in values.items()},
+            )
+        except (AttributeError, KeyError, TypeError, ValueError) as exc:
+            raise SourceError(f"{where}: malformed search proposal: {exc}") from exc
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
 class PinnedScenario:
     """One run of the frozen list."""
 
@@ -39,15 +82,20 @@ class PinnedScenario:
     """Digest of the scenario file; a changed file is a different scenario."""
     overrides: Mapping[str, str] = dataclasses.field(default_factory=dict)
     """OpenSCENARIO parameter values of this run (campaign overrides, then distribution values)."""
+    proposal: ProposalPin | None = None
+    """The search proposal this run is (``spec.search``); None for a listed scenario."""
 
     def to_json(self) -> dict[str, Any]:
         """Wire form, identical to the API's ``FrozenScenario``."""
-        return {
+        wire: dict[str, Any] = {
             "id": self.id,
             "source": self.source,
             "sha256": self.sha256,
             "overrides": dict(sorted(self.overrides.items())),
         }
+        if self.proposal is not None:
+            wire["proposal"] = self.proposal.to_json()
+        return wire
 
     @classmethod
     def from_json(cls, data: Any, *, where: str = "frozen list") -> PinnedScenario:
@@ -66,7 +114,14 @@ class PinnedScenario:
             isinstance(k, str) and isinstance(v, str) for k, v in overrides.items()
         ):
             raise SourceError(f"{where}: entry {ident!r} has 'overrides' that are not strings")
-        return cls(id=ident, source=source, sha256=digest, overrides=dict(overrides))
+        proposal = data.get("proposal")
+        return cls(
+            id=ident,
+            source=source,
+            sha256=digest,
+            overrides=dict(overrides),
+            proposal=None if proposal is None else ProposalPin.from_json(proposal, where=where),
+        )
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)

@@ -11,12 +11,20 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 from simtest_operator.errors import SimtestError
-from simtest_operator.results import comparing, details, evidence, history, plots
+from simtest_operator.results import (
+    comparing,
+    details,
+    evidence,
+    history,
+    plots,
+    records,
+    reportmodel,
+)
 from simtest_operator.results.querying import ReadOnlyDatabase
 from simtest_operator.ui import queries
 from simtest_operator.verdicts import Verdict
@@ -43,9 +51,15 @@ class Context:
     """Where relative artifact paths start (the output folder of a local run)."""
     read_trajectories: details.TrajectoryReader | None = None
     """The recording reader (wired by the CLI; ``ui`` does not import ``recording``)."""
+    search: SearchSectionOf | None = None
+    """A searching run's *Search* section (wired by the CLI: the search engine sits above
+    ``ui``)."""
 
 
 View = Callable[[ReadOnlyDatabase, Mapping[str, str], Context], dict[str, Any]]
+SearchSectionOf = Callable[
+    [records.CampaignRecord, Sequence[records.StoredOutcome]], reportmodel.SearchSection | None
+]
 
 
 def _int(params: Mapping[str, str], name: str, default: int, *, maximum: int) -> int:
@@ -128,7 +142,16 @@ def run(db: ReadOnlyDatabase, params: Mapping[str, str], context: Context) -> di
     scenarios.sort(
         key=lambda s: (s["verdict"] in ("Passed", "Skipped"), not s["flakiness"].flaky, s["id"])
     )
-    return {"run": row, "scenarios": scenarios, "previous": queries.previous_run(db, row.run_key)}
+    search = None
+    campaign = db.campaign(row.run_key) if context.search is not None else None
+    if context.search is not None and campaign is not None:
+        search = context.search(campaign, outcomes)
+    return {
+        "run": row,
+        "scenarios": scenarios,
+        "previous": queries.previous_run(db, row.run_key),
+        "search": search,
+    }
 
 
 def coverage(db: ReadOnlyDatabase, params: Mapping[str, str], context: Context) -> dict[str, Any]:

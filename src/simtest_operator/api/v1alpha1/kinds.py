@@ -18,6 +18,7 @@ from simtest_operator.api.v1alpha1.common import ApiModel, DnsLabel
 from simtest_operator.api.v1alpha1.environment import EnvironmentSpec, Provisioner
 from simtest_operator.api.v1alpha1.evaluation import EvaluationSpec
 from simtest_operator.api.v1alpha1.execution import ExecutionSpec, Isolation
+from simtest_operator.api.v1alpha1.search import SearchSpec
 from simtest_operator.api.v1alpha1.sources import ScenarioSelection
 from simtest_operator.api.v1alpha1.status import CommonStatus, ScenarioResult
 from simtest_operator.api.v1alpha1.storage import ArtifactsSpec, ResultsSpec
@@ -32,6 +33,10 @@ ScenarioId = Annotated[str, StringConstraints(min_length=1, max_length=1024)]
 
 # --- TestCampaign ------------------------------------------------------------------------------
 
+_SEARCH_WITHOUT_BARRIER = (
+    "spec.search proposes the next scenarios as results come back; spec.execution.batchBarrier "
+    "would hold every wave until the previous one is done (leave it false)"
+)
 _OFFLINE_NEEDS_DATABASE = (
     "spec.evaluation.offline needs spec.results.databaseSecretRef (the evaluation step re-scores "
     "the run stored in the results database)"
@@ -50,10 +55,21 @@ class TestCampaignSpec(ApiModel):
             _OFFLINE_NEEDS_DATABASE,
             field_path=".evaluation.offline",
         ),
+        common.cel(
+            "!has(self.search) || !has(self.execution) || !has(self.execution.batchBarrier) || "
+            "!self.execution.batchBarrier",
+            _SEARCH_WITHOUT_BARRIER,
+            field_path=".search",
+        ),
     )
 
     scenarios: ScenarioSelection
-    """Scenario sources and selection; frozen (id + sha256) when the campaign starts."""
+    """Scenario sources and selection; frozen (id + sha256) when the campaign starts. With
+    ``search`` they name the sources the logical scenario file comes from."""
+    search: SearchSpec | None = None
+    """Search a logical scenario for failures instead of running the selection: the campaign
+    runs the searcher's proposals (concrete scenarios of ``search.scenario``, which the selection
+    must contain) and nothing else, proposing the next as results come back."""
     environment: EnvironmentSpec = Field(default_factory=EnvironmentSpec)
     """Environment template, values, system under test and simulator settings."""
     execution: ExecutionSpec = Field(default_factory=ExecutionSpec)
@@ -83,6 +99,12 @@ class TestCampaignSpec(ApiModel):
             raise ValueError(_OFFLINE_NEEDS_DATABASE)
         return self
 
+    @model_validator(mode="after")
+    def _search_without_barrier(self) -> TestCampaignSpec:
+        if self.search is not None and self.execution.batch_barrier:
+            raise ValueError(_SEARCH_WITHOUT_BARRIER)
+        return self
+
 
 class OfflineEvaluationStatus(ApiModel):
     """The campaign's evaluation step (``spec.evaluation.offline``); its outcome is the condition
@@ -92,6 +114,24 @@ class OfflineEvaluationStatus(ApiModel):
     """The evaluation Job (``<campaign>-evaluate``), created once."""
     id: Annotated[str, StringConstraints(max_length=253)] | None = None
     """The evaluation's id in the results database (``simtest compare --evaluation ID``)."""
+
+
+class SearchStatus(ApiModel):
+    """How far a campaign's search is: bounded, whatever the budget."""
+
+    strategy: Annotated[str, StringConstraints(max_length=63)]
+    budget: Annotated[int, Field(ge=0)]
+    """Simulations the search may propose (``spec.search.budget``)."""
+    asked: Annotated[int, Field(ge=0)] = 0
+    """Concrete scenarios proposed so far (each in a ScenarioBatch)."""
+    told: Annotated[int, Field(ge=0)] = 0
+    """Results the searcher has learned from."""
+    failures: Annotated[int, Field(ge=0)] = 0
+    """Results with verdict Failed or Timeout."""
+    best: float | None = None
+    """Best value of the first objective so far (its metric, or the failures for ``verdict``)."""
+    best_scenario: ScenarioId | None = None
+    """The concrete scenario that reached ``best``."""
 
 
 class TestCampaignStatus(CommonStatus):
@@ -108,9 +148,25 @@ class TestCampaignStatus(CommonStatus):
     """Finished scenarios per minute since the start."""
     evaluation: OfflineEvaluationStatus | None = None
     """The evaluation step, once started (``spec.evaluation.offline``)."""
+    search: SearchStatus | None = None
+    """Progress of ``spec.search`` (counts only; every run is in the batches and the results
+    store)."""
 
 
 # --- ScenarioBatch -----------------------------------------------------------------------------
+
+
+class SearchProposalRecord(ApiModel):
+    """A search proposal as the frozen list keeps it."""
+
+    index: Annotated[int, Field(ge=0)]
+    """0, 1, 2, ... in the order asked."""
+    basis: Annotated[int, Field(ge=0)]
+    """Results the searcher had been told when it proposed this."""
+    told: list[Annotated[int, Field(ge=0)]] = Field(default_factory=list)
+    """Proposals whose results were told since the previous proposal, in the order told."""
+    values: dict[str, str] = Field(default_factory=dict)
+    """Parameter name -> value as text."""
 
 
 class FrozenScenario(ApiModel):
@@ -124,6 +180,8 @@ class FrozenScenario(ApiModel):
     """Digest of the file content; a changed file is a different scenario."""
     overrides: dict[str, str] = Field(default_factory=dict)
     """OpenSCENARIO parameter values for this run (from the campaign and distributions)."""
+    proposal: SearchProposalRecord | None = None
+    """Set on a search's concrete scenario: what pins the search so it replays exactly."""
 
 
 class ScenarioBatchSpec(ApiModel):

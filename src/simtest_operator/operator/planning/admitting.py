@@ -15,13 +15,17 @@ def admit(step: Step, window: int, *, complete: bool, in_flight: int) -> admissi
     """What admission allows this step (the window unchanged without ``queueName``)."""
     campaign = step.campaign
     name = admission.workload_name(campaign.name)
+    search = step.inputs.search
+    # A search's list grows as it proposes: its Workload is sized by the budget, not by the
+    # proposals so far (which are none when the Workload is created).
+    scenarios = search.budget if search is not None else len(step.frozen)
     return admission.gate(
         step.spec,
         campaign=campaign.name,
         namespace=campaign.namespace,
         campaign_uid=campaign.uid,
         window=window,
-        scenarios=len(step.frozen),
+        scenarios=scenarios,
         workload=step.inputs.workload,
         complete=complete,
         in_flight=in_flight,

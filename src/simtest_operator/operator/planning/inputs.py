@@ -25,6 +25,7 @@ from simtest_operator.operator.observed import (
     PodView,
 )
 from simtest_operator.operator.scenariolists import StoredList
+from simtest_operator.operator.status.searchstatus import SearchProgress
 from simtest_operator.render import EnvironmentRequest, RenderedEnvironment
 from simtest_operator.scenarios.pinned import PinnedScenario
 from simtest_operator.settings import OperatorSettings
@@ -55,6 +56,9 @@ class Inputs:
     """Creates the API server refused for good, by kind and name: its status code and message
     (the applier's :attr:`~simtest_operator.operator.applying.Applied.refused`, kept by the
     loop; the cache cannot show an object that was never created)."""
+    search: SearchProgress | None = None
+    """The campaign's searcher (``spec.search``), as the loop's
+    :class:`~simtest_operator.operator.searching.CampaignSearch` reports it."""
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
@@ -96,15 +100,34 @@ def step(
 ) -> Step:
     """The step of a campaign whose spec is valid and whose list is frozen."""
     campaign = inputs.campaign
-    frozen = stored.frozen.scenarios
+    batches = {b.index: b for b in inputs.batches if b.campaign == campaign.name}
+    if spec.search is None:
+        frozen = stored.frozen.scenarios
+        layout = Layout(ids=tuple(s.id for s in frozen), batch_size=stored.batch_size)
+    else:
+        frozen, starts = waves(batches)
+        layout = Layout(ids=tuple(s.id for s in frozen), batch_size=1, starts=starts)
     return Step(
         inputs=inputs,
         spec=spec,
         config=config,
         render=render,
         frozen=frozen,
-        layout=Layout(ids=tuple(s.id for s in frozen), batch_size=stored.batch_size),
-        batches={b.index: b for b in inputs.batches if b.campaign == campaign.name},
+        layout=layout,
+        batches=batches,
         envs=tuple(e for e in inputs.envs if e.campaign == campaign.name),
         run_key=recording_results.run_key(campaign) if spec.results.database_secret_ref else "",
     )
+
+
+def waves(batches: Mapping[int, BatchView]) -> tuple[tuple[PinnedScenario, ...], tuple[int, ...]]:
+    """A search's frozen list so far and where each wave starts: its batches' proposals, in
+    batch order up to the first one not yet seen (each wave is one batch, created complete)."""
+    frozen: list[PinnedScenario] = []
+    starts: list[int] = []
+    index = 0
+    while index in batches and batches[index].proposals:
+        starts.append(len(frozen))
+        frozen.extend(batches[index].proposals)
+        index += 1
+    return tuple(frozen), tuple(starts)

@@ -40,6 +40,8 @@ def plan(given: inputs.Inputs, *, config: OperatorSettings, render: inputs.Rende
         if given.resolution_error is not None:
             return _halt(given, "Error", "ResolutionFailed", given.resolution_error)
         return _halt(given, "Resolving", "Resolving", "resolving scenario sources", final=False)
+    if campaign.spec.search is not None and given.search is None:
+        return _halt(given, "Resolving", "Resolving", "replaying the search", final=False)
     step = inputs.step(given, given.stored, campaign.spec, config=config, render=render)
     return _run(step)
 
@@ -58,7 +60,8 @@ def _run(step: inputs.Step) -> Plan:
     judged = assessing.assessments(step, cancellation)
     states = assessing.states(step, judged, cancellation)
     counts = counting.counters(states)
-    complete = all(s.state.settled for s in states)
+    searching = step.inputs.search is not None and step.inputs.search.open
+    complete = all(s.state.settled for s in states) and not (searching and cancellation is None)
     in_flight = assessing.in_flight(step, judged)
     gate = admitting.admit(step, starting.window(step), complete=complete, in_flight=in_flight)
     window = gate.window
@@ -128,5 +131,6 @@ def _campaign(
         evaluation=evaluation,
         admission=admitted.condition,
         waiting=admission.now_waiting(admitted, in_flight=in_flight),
+        search=step.inputs.search,
     )
     return Outcome(actions=update.actions, wakes=(update.due,) if update.due is not None else ())

@@ -19,6 +19,7 @@ from simtest_operator.operator.actions import Action, Emit, Kind, PatchStatus
 from simtest_operator.operator.observed import CampaignView
 from simtest_operator.operator.status import conditions, counting, patches, reading
 from simtest_operator.operator.status.evaluationstatus import EvaluationState
+from simtest_operator.operator.status.searchstatus import SearchProgress
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
@@ -87,14 +88,17 @@ def progressed(
     evaluation: EvaluationState | None = None,
     admission: conditions.Desired | None = None,
     waiting: str | None = None,
+    search: SearchProgress | None = None,
 ) -> Update:
     """Status of a resolved campaign from its scenario counters (and its evaluation step, when
-    that has something to say). ``admission`` is the ``Admitted`` condition of a campaign with a
-    Kueue queue; ``waiting`` its message while nothing is admitted and nothing runs (phase
-    Pending, reason ``Queued``; no ``startTime`` yet)."""
+    that has something to say, and its search's progress). ``admission`` is the ``Admitted``
+    condition of a campaign with a Kueue queue; ``waiting`` its message while nothing is admitted
+    and nothing runs (phase Pending, reason ``Queued``; no ``startTime`` yet)."""
     wire = campaign.status_wire
     total = counts["total"]
-    if total == 0:
+    if total == 0 and search is not None and search.open and cancellation is None:
+        phase, reason, message = "Running", "Running", search.message()
+    elif total == 0:
         phase, reason, message = "Error", "NoScenarios", "the selection matched no scenarios"
         complete = True
     elif cancellation is not None:
@@ -132,6 +136,8 @@ def progressed(
         desired["completionTime"] = wire.get("completionTime") or conditions.rfc3339(now)
     if evaluation is not None:
         desired["evaluation"] = evaluation.wire()
+    if search is not None:
+        desired["search"] = search.wire()
     desired["conditions"] = _conditions(
         campaign, counts, phase=phase, reason=reason, message=message, complete=complete,
         cancelling_=cancellation is not None, now=now,

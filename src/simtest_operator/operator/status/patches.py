@@ -20,4 +20,4 @@ def changed_fields(desired: Mapping[str, Any], current: Mapping[str, Any]) -> di
 
 def only_progress(patch: Mapping[str, Any]) -> bool:
     """A patch that changes counters/progress/throughput only (may be deferred and coalesced)."""
-    return set(patch) <= {*counting.COUNTER_KEYS, "progress", "throughput", "batches"}
+    return set(patch) <= {*counting.COUNTER_KEYS, "progress", "throughput", "batches", "search"}

@@ -1,0 +1,207 @@
+"""A search campaign through the planner on the in-memory cluster: waves sized to the window.
+
+Covers: each wave is one ScenarioBatch, created complete, its entries carrying the proposal
+records (index, values, basis, the results told before it); the first wave fills the window and
+each result is followed by a new proposal (no barrier), so the slots stay busy; the campaign ends
+when the budget is spent, not when the first wave is done; the status stays bounded
+(``status.search``); a restarted operator replays the searcher from the batches at any step and
+gets the proposals the batches hold; the same seed and results give the same waves.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import datetime
+import json
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+from simtest_operator.operator import observed, planning
+from simtest_operator.operator.actions import Kind, Plan
+from simtest_operator.operator.batches import Layout
+from simtest_operator.operator.searching import CampaignSearch
+from simtest_operator.scenarios import FrozenList, PinnedScenario, sha256_hex
+from simtest_operator.search import SearchSpace
+from tests.operator.fakecluster import FakeCluster, Script, campaign_body
+
+CUT_IN = Path(__file__).parents[2] / "scenarios/library/cut-in/cut-in_highway_v25_gap15_dv10.xosc"
+SEARCH = {
+    "scenario": "cut-in.xosc",
+    "parameters": [
+        {"name": "EgoSpeed", "min": 15, "max": 35},
+        {"name": "CutInGap", "min": 5, "max": 40},
+    ],
+    "strategy": "random",
+    "budget": 20,
+    "seed": 3,
+}
+
+
+class SearchCluster(FakeCluster):
+    """The fake cluster plus what the campaign loop does for a search after every step."""
+
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__(script=self._sut, **kwargs)
+        self.search: CampaignSearch | None = None
+        self.base = PinnedScenario(
+            id="cut-in.xosc", source=CUT_IN.as_uri(), sha256=sha256_hex(CUT_IN.read_bytes())
+        )
+        self.busy: list[tuple[int, int]] = []
+        """(pods running, slots) at each kubelet step while the search still proposes."""
+
+    def start(self, search: Mapping[str, Any] = SEARCH, **execution: Any) -> None:
+        body = campaign_body(**execution)
+        body["spec"]["search"] = dict(search)
+        self.start_campaign(
+            body, FrozenList(campaign="camp", scenarios=(self.base,)), batch_size=10
+        )
+
+    def restart(self) -> None:
+        """A new operator: the searcher rebuilt from the batches alone."""
+        view = observed.campaign_view(self.get(Kind.CAMPAIGN, "camp") or {})
+        assert view.spec is not None and view.spec.search is not None
+        space = SearchSpace.from_spec(view.spec.search, CUT_IN)
+        batches = [observed.batch_view(b) for b in self.of(Kind.BATCH)]
+        self.search = CampaignSearch.replayed(view.spec.search, space, self.base, batches)
+
+    def inputs(self, name: str = "camp") -> planning.Inputs:
+        given = super().inputs(name)
+        return dataclasses.replace(given, search=self.search.progress() if self.search else None)
+
+    def step(self, seconds: float = 1.0, *, rounds: int = 4, limit: int | None = None) -> None:
+        self.now += datetime.timedelta(seconds=seconds)
+        for _ in range(rounds):
+            self.kubelet()
+            if self.search is None:
+                self.restart()
+            assert self.search is not None
+            self.search.learn([observed.batch_view(b) for b in self.of(Kind.BATCH)])
+            plan = self.plan()
+            self.apply(plan, limit=limit)
+            assert self.search is not None
+            view = observed.campaign_view(self.get(Kind.CAMPAIGN, "camp") or {})
+            batches = [observed.batch_view(b) for b in self.of(Kind.BATCH)]
+            wave = self.search.advance(view, batches, plan.observation)
+            if wave is not None:
+                self.apply(Plan(actions=(wave,)))
+        running = sum(1 for p in self.of(Kind.POD) if p["status"]["phase"] == "Running")
+        if self.search is not None and self.search.progress().open:
+            self.busy.append((running, sum(self.nodes.values())))
+
+    def _sut(self, scenario_id: str, attempt: int) -> Script:
+        """Fails where the gap is short and ego fast; minTTC shrinks towards that corner."""
+        values = self.values()[scenario_id]
+        margin = (
+            max(float(values["CutInGap"]) - 15.0, 0.0) / 5
+            + max(30.0 - float(values["EgoSpeed"]), 0.0) / 5
+        )
+        verdict = "Failed" if margin == 0.0 else "Passed"
+        seconds = 3.0 + int(scenario_id.rsplit("-", 1)[1]) % 4  # results come back one by one
+        message = {"scenarioId": scenario_id, "verdict": verdict, "wallSeconds": seconds,
+                   "metrics": {"minTTC": margin}}  # fmt: skip
+        return Script(seconds=seconds, message=json.dumps(message))
+
+    def values(self) -> dict[str, dict[str, float]]:
+        return {
+            p.id: {k: json.loads(v) for k, v in p.proposal.values.items()}
+            for batch in self.of(Kind.BATCH)
+            for p in observed.batch_view(batch).proposals
+            if p.proposal is not None
+        }
+
+    def proposals(self) -> list[tuple[int, int, tuple[int, ...], dict[str, str]]]:
+        """(index, basis, told, values) of every proposal, wave by wave."""
+        out = []
+        for batch in sorted(self.of(Kind.BATCH), key=lambda b: b["spec"]["index"]):
+            for entry in batch["spec"]["scenarios"]:
+                record = entry["proposal"]
+                out.append(
+                    (
+                        record["index"],
+                        record["basis"],
+                        tuple(record.get("told", ())),
+                        record["values"],
+                    )
+                )
+        return out
+
+
+def test_a_search_runs_its_budget_in_waves_that_keep_the_slots_busy() -> None:
+    cluster = SearchCluster(nodes={"n0": 2, "n1": 2})
+    cluster.start(maxParallel=4)
+    cluster.run()
+    status = cluster.status()
+    assert status["total"] == 20 and len(cluster.results()) == 20
+    assert status["phase"] in ("Failed", "Succeeded")
+    search = status["search"]
+    assert (search["asked"], search["told"], search["budget"]) == (20, 20, 20)
+    assert search["failures"] == status["failed"]
+    waves = sorted(cluster.of(Kind.BATCH), key=lambda b: b["spec"]["index"])
+    assert len(waves[0]["spec"]["scenarios"]) == 4  # the first wave fills the window
+    assert len(waves) > 5  # later waves follow the results, a few at a time
+    proposals = cluster.proposals()
+    assert [p[0] for p in proposals] == list(range(20))
+    for index, basis, told, _ in proposals:
+        assert basis == sum(len(p[2]) for p in proposals[: index + 1])
+        assert all(t < index for t in told)
+    assert proposals[-1][1] >= 12  # later proposals learnt from the results before them
+    assert cluster.search is not None
+    frozen, record = cluster.search.record([observed.batch_view(b) for b in cluster.of(Kind.BATCH)])
+    assert [p.id for p in frozen] == [f"cut-in.xosc#search-{i}" for i in range(20)]
+    assert record["summary"]["runs"] == 20 and record["summary"]["failures"] == status["failed"]
+    assert [p["index"] for p in record["proposals"]] == list(range(20))
+    assert [d["name"] for d in record["dimensions"]] == ["EgoSpeed", "CutInGap"]
+    running, slots = map(sum, zip(*cluster.busy, strict=True))
+    assert running / slots >= 0.9, f"slots busy {running / slots:.0%} while searching"
+
+
+def test_an_operator_restart_at_any_step_replays_the_searcher_from_the_batches() -> None:
+    cluster = SearchCluster(nodes={"n0": 3})
+    cluster.start(maxParallel=3)
+    original = cluster.search
+
+    def forget(step: int) -> None:
+        cluster.search = None  # every step a new operator: replay must reproduce every wave
+
+    for step in range(1, 200):
+        forget(step)
+        cluster.step(1.0)
+        if cluster.status().get("phase") in ("Failed", "Succeeded") and not cluster.of(
+            Kind.ENVIRONMENT
+        ):
+            break
+    assert original is None
+    assert cluster.status()["search"]["asked"] == 20
+    assert [p[0] for p in cluster.proposals()] == list(range(20))
+
+
+def test_the_same_seed_and_results_give_the_same_waves() -> None:
+    runs = []
+    for _ in range(2):
+        cluster = SearchCluster(nodes={"n0": 2})
+        cluster.start(maxParallel=2)
+        cluster.run()
+        runs.append(cluster.proposals())
+    assert runs[0] == runs[1]
+    other = SearchCluster(nodes={"n0": 2})
+    other.start({**SEARCH, "seed": 4}, maxParallel=2)
+    other.run()
+    assert other.proposals() != runs[0]
+
+
+def test_a_search_campaign_is_not_complete_before_it_proposed_anything() -> None:
+    cluster = SearchCluster(nodes={"n0": 2})
+    cluster.start(maxParallel=2)
+    cluster.restart()
+    plan = cluster.plan()
+    assert not plan.finished
+    assert cluster.status().get("phase") != "Error"
+
+
+def test_waves_lay_out_as_batches_of_their_own_sizes() -> None:
+    layout = Layout(ids=tuple("abcdefg"), batch_size=1, starts=(0, 4, 5))
+    assert [layout.batch_of(p) for p in range(7)] == [0, 0, 0, 0, 1, 2, 2]
+    assert [layout.slot_of(p) for p in range(7)] == [0, 1, 2, 3, 0, 0, 1]
+    assert [list(layout.positions(i)) for i in range(3)] == [[0, 1, 2, 3], [4], [5, 6]]
+    assert layout.batch_count() == 3
