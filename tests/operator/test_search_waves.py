@@ -205,3 +205,14 @@ def test_waves_lay_out_as_batches_of_their_own_sizes() -> None:
     assert [layout.slot_of(p) for p in range(7)] == [0, 1, 2, 3, 0, 0, 1]
     assert [list(layout.positions(i)) for i in range(3)] == [[0, 1, 2, 3], [4], [5, 6]]
     assert layout.batch_count() == 3
+
+
+def test_a_queued_search_asks_kueue_for_its_window_not_for_the_proposals_so_far() -> None:
+    """Before a search proposed anything its list is empty: its Workload is sized by the
+    budget (capped by the window), else Kueue would admit one simulator for the whole search."""
+    cluster = SearchCluster(nodes={"n0": 2, "n1": 2})
+    cluster.start(maxParallel=4, queueName="team-a")
+    cluster.step()
+    workload = cluster.get(Kind.WORKLOAD, "camp-simulators")
+    assert workload is not None
+    assert workload["spec"]["podSets"][0]["count"] == 4
