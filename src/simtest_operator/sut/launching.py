@@ -21,7 +21,7 @@ from simtest_operator.drivermodel import ExternalSut, Lifetime
 from simtest_operator.settings import SUT_ENDPOINT
 from simtest_operator.sut import client
 from simtest_operator.sut.errors import SutError
-from simtest_operator.sut.output import take_files
+from simtest_operator.sut.output import files_said, take_files
 from simtest_operator.sut.processes import OUTPUT_TAIL, SutProcess, SutProcesses
 
 
@@ -78,9 +78,14 @@ def open_pilot(
                 alive=process.fate if process is not None else None,
             )
         except SutError as exc:
-            said = process.output.last(OUTPUT_TAIL) if process is not None else ""
-            if said and said not in str(exc):
-                raise SutError(f"{exc}; the SUT process said last: {said}") from exc
+            if process is not None:
+                said = process.output.last(OUTPUT_TAIL)
+                if said and said not in str(exc):
+                    raise SutError(f"{exc}; the SUT process said last: {said}") from exc
+            elif external.output_dir is not None:
+                sidecars = files_said(external.output_dir, OUTPUT_TAIL)
+                if sidecars:
+                    raise SutError(f"{exc}; {sidecars}") from exc
             raise
         pilot = client.RemotePilot(
             sock,
@@ -90,6 +95,9 @@ def open_pilot(
         )
         if process is not None:
             pilot.postmortem = process.postmortem
+        elif external.output_dir is not None:
+            folder = external.output_dir
+            pilot.postmortem = lambda: files_said(folder, OUTPUT_TAIL)
         with pilot:
             pilot.handshake(hello, timeout=external.startup_timeout)
             yield pilot

@@ -130,4 +130,22 @@ def take_files(folder: Path, log: Path) -> bool:
     return True
 
 
-__all__ = ["BoundedOutput", "take_files"]
+def files_said(folder: Path, chars: int) -> str | None:
+    """For an error: the last ``chars`` characters each sidecar printed into ``folder`` during
+    this run (whitespace folded), by container; None when they printed nothing."""
+    said = []
+    for path in sorted(folder.glob("*.log")):
+        try:
+            with path.open("rb") as stream:
+                size = os.fstat(stream.fileno()).st_size
+                stream.seek(max(size - 4 * chars, 0))
+                text = stream.read().decode("utf-8", "replace")
+        except OSError:
+            continue
+        tail = " ".join(text.split())[-chars:]
+        if tail:
+            said.append(f"{path.stem}: {tail}")
+    return "the SUT's sidecars said last: " + " | ".join(said) if said else None
+
+
+__all__ = ["BoundedOutput", "files_said", "take_files"]
