@@ -48,7 +48,7 @@ def _campaign(base: Path, name: str, sut: dict[str, Any], **environment: Any) ->
     spec = body["spec"]
     spec["environment"]["sut"].update(sut)
     spec["environment"].update(environment)
-    spec["environment"]["simulator"]["record"] = False
+    spec["environment"].setdefault("simulator", {})["record"] = False
     spec["execution"].update(
         isolation="Reuse",
         batchSize=3,
