@@ -9,7 +9,7 @@ behind the OSI protocol, both campaigns at once on the real node's two simulator
 pods. It records each scenario's verdict and reason both ways, the scenarios whose ``sut.log``
 lacks the stack's run line, and each campaign's wall time.
 
-    python bench/ros2_real_node.py [--campaign scenarios/seed-experiment-campaign.yaml]
+    python bench/ros2_real_node.py [--campaign scenarios/seed-experiment-campaign.yaml] [--batch 10]
 
 Needs root and what ``make test`` builds (toolchain, images). Results go to
 ``bench/results/ros2_real_node.json`` and ``.md``.
@@ -50,7 +50,7 @@ def _sut_log(folder: Path, campaign: str, scenario: str) -> str:
     return found[-1].read_text(errors="replace") if found else ""
 
 
-def run(base: Path, work: Path) -> dict[str, Any]:
+def run(base: Path, work: Path, batch: int) -> dict[str, Any]:
     settings = Settings.from_env()
     toolchain = Toolchain(root=settings.cache.toolchain)
     setup = images.real_node_setup(
@@ -90,8 +90,8 @@ def run(base: Path, work: Path) -> dict[str, Any]:
         ):
             k8s = support.Cluster(api, namespace)
             started = time.monotonic()
-            k8s.create(ros2_campaign(base))
-            k8s.create(osi_campaign(base))
+            k8s.create(ros2_campaign(base, batch))
+            k8s.create(osi_campaign(base, batch))
             seconds = {}
             for name in ("ros2", "osi"):
                 k8s.wait_complete(name, timeout=6 * 3600)
@@ -114,6 +114,7 @@ def run(base: Path, work: Path) -> dict[str, Any]:
     return {
         "campaign": str(base.relative_to(REPO)),
         "scenarios": len(rows),
+        "batch": batch,
         "verdicts": {
             name: dict(collections.Counter(r[name][0] for r in rows.values()))
             for name in ("ros2", "osi")
@@ -130,7 +131,7 @@ def markdown(report: dict[str, Any]) -> str:
         f"# ROS 2 stack vs OSI protocol on the real node: `{report['campaign']}`",
         "",
         f"{report['scenarios']} scenarios, both campaigns at once on {SLOTS} simulator slots, "
-        "warm pods (`isolation: Reuse`).",
+        f"warm pods of {report['batch']} scenarios (`isolation: Reuse`).",
         "",
         "| SUT | verdicts | wall time since creation (s) |",
         "|---|---|---|",
@@ -153,12 +154,13 @@ def main() -> None:
     parser.add_argument(
         "--campaign", type=Path, default=REPO / "scenarios" / "seed-experiment-campaign.yaml"
     )
+    parser.add_argument("--batch", type=int, default=10, help="scenarios per warm pod")
     parser.add_argument(
         "--json", type=Path, default=REPO / "bench" / "results" / "ros2_real_node.json"
     )
     args = parser.parse_args()
     with tempfile.TemporaryDirectory(prefix="ros2-real-node-") as tmp:
-        report = run(args.campaign.resolve(), Path(tmp))
+        report = run(args.campaign.resolve(), Path(tmp), args.batch)
     args.json.parent.mkdir(parents=True, exist_ok=True)
     args.json.write_text(json.dumps(report, indent=2) + "\n")
     args.json.with_suffix(".md").write_text(markdown(report))

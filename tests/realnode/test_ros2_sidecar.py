@@ -40,9 +40,11 @@ STEP_DEADLINE_MS = 2000
 moment misses would turn a verdict into Error, and this test is about verdicts)."""
 
 
-def _campaign(base: Path, name: str, sut: dict[str, Any], **environment: Any) -> dict[str, Any]:
-    """``base``'s scenarios and criteria in warm pods, artifacts on the claim ``artifacts``, no
-    retries (an Error shows)."""
+def _campaign(
+    base: Path, name: str, sut: dict[str, Any], batch: int, **environment: Any
+) -> dict[str, Any]:
+    """``base``'s scenarios and criteria in warm pods of ``batch`` scenarios, artifacts on the
+    claim ``artifacts``, no retries (an Error shows)."""
     body: dict[str, Any] = yaml.safe_load(base.read_text())
     body["metadata"]["name"] = name
     spec = body["spec"]
@@ -51,7 +53,7 @@ def _campaign(base: Path, name: str, sut: dict[str, Any], **environment: Any) ->
     spec["environment"].setdefault("simulator", {})["record"] = False
     spec["execution"].update(
         isolation="Reuse",
-        batchSize=3,
+        batchSize=batch,
         retries=0,
         timeoutSeconds=120,
         resources={"requests": {"cpu": "500m"}},
@@ -60,7 +62,7 @@ def _campaign(base: Path, name: str, sut: dict[str, Any], **environment: Any) ->
     return body
 
 
-def osi_campaign(base: Path = SMOKE) -> dict[str, Any]:
+def osi_campaign(base: Path = SMOKE, batch: int = 3) -> dict[str, Any]:
     """``base`` with the reference SUT (the driver model behind the OSI protocol) as sidecar."""
     return _campaign(
         base,
@@ -75,10 +77,11 @@ def osi_campaign(base: Path = SMOKE) -> dict[str, Any]:
                 "startupTimeoutSeconds": 60,
             },
         },
+        batch,
     )
 
 
-def ros2_campaign(base: Path = SMOKE) -> dict[str, Any]:
+def ros2_campaign(base: Path = SMOKE, batch: int = 3) -> dict[str, Any]:
     """``base`` with the test stack (the same driver model over DDS) and the bridge in the pod."""
     control = {
         "command": ["python", "-c", LOADER],
@@ -102,6 +105,7 @@ def ros2_campaign(base: Path = SMOKE) -> dict[str, Any]:
                 "startupTimeoutSeconds": 120,  # READY waits for the stack's nodes
             },
         },
+        batch,
         template="ros2",
         values={
             "stack": {
