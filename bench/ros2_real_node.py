@@ -44,11 +44,17 @@ from tests.realnode.test_ros2_sidecar import osi_campaign, ros2_campaign
 SLOTS = 2
 
 
-def _sut_log(folder: Path, campaign: str, scenario: str) -> str:
-    """The scenario's sut.log on the artifacts claim (below ``<campaign>/``, in its run's
-    folder)."""
-    found = sorted((folder / "runs" / campaign).glob(f"**/{scenario}/sut.log"))
-    return found[-1].read_text(errors="replace") if found else ""
+def _sut_log(folder: Path, result: dict[str, Any]) -> str:
+    """The scenario's sut.log on the artifacts claim: the path its result names, below the
+    pods' ``/artifacts`` mount (the claim's ``runs`` folder)."""
+    named = result.get("artifacts", {}).get("sutLog")
+    if not named:
+        return ""
+    try:
+        path = folder / "runs" / Path(named).relative_to("/artifacts")
+    except ValueError:  # not a path in the pod (an s3:// URI)
+        return ""
+    return path.read_text(errors="replace") if path.is_file() else ""
 
 
 def run(base: Path, work: Path, batch: int) -> dict[str, Any]:
@@ -103,7 +109,7 @@ def run(base: Path, work: Path, batch: int) -> dict[str, Any]:
                         seconds[name] = round(time.monotonic() - started, 1)
                 time.sleep(1.0)
             found = {name: k8s.results(name) for name in ("ros2", "osi")}
-        logs = {s: _sut_log(artifacts, "ros2", s) for s in found["ros2"]}
+        logs = {s: _sut_log(artifacts, r) for s, r in found["ros2"].items()}
     finally:
         api.close()  # type: ignore[no-untyped-call]
         cluster.down()
