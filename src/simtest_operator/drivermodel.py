@@ -22,6 +22,7 @@ import dataclasses
 import enum
 import math
 from collections.abc import Mapping
+from pathlib import Path
 
 
 class Takeover(enum.StrEnum):
@@ -122,6 +123,10 @@ class ExternalSut:
     """Free-form configuration sent to the SUT in the handshake."""
     lifetime: Lifetime = Lifetime.SCENARIO
     """How long a process started from ``command`` lives."""
+    output_dir: Path | None = None
+    """Folder where a pod's sidecars print (``<container>.log`` each): what they printed during
+    a run becomes its ``sut.log``. None: nothing there to keep (a local process's output is
+    kept from its pipe)."""
 
 
 IDM_DELTA = 4.0

@@ -29,6 +29,10 @@ RESULTS_RUN_KEY = f"{ENV_PREFIX}RESULTS_RUN_KEY"
 SUT_ENDPOINT = f"{ENV_PREFIX}SUT_ENDPOINT"
 """The variable a simulator pod's template sets to where its external SUT listens: the sidecar
 on loopback, or the Service of a composed SUT stack (template ``composed-sut``)."""
+SUT_OUTPUT_DIR = f"{ENV_PREFIX}SUT_OUTPUT_DIR"
+"""The variable a simulator pod's template sets to the folder its sidecars print into (one
+``<container>.log`` each): the runner keeps what they printed during a scenario as its
+``sut.log``."""
 
 
 def _default_cache_dir(env: Mapping[str, str]) -> Path:
@@ -250,6 +254,9 @@ class Settings:
     (``SIMTEST_SUT_ENDPOINT``; unset or empty: none): the pod's template knows where its SUT
     listens, so this wins over the campaign's ``endpoint``. Applied where run requests are built
     (the pod's runner, ``simtest run``)."""
+    sut_output: Path | None = None
+    """Folder of the pod's sidecar output files (``SIMTEST_SUT_OUTPUT_DIR``; unset: none, as
+    outside a pod, where the runner keeps a SUT process's output itself)."""
 
     @classmethod
     def from_env(
@@ -289,6 +296,7 @@ class Settings:
                 else None,
             ),
             sut_endpoint=env.get(SUT_ENDPOINT, "").strip() or None,
+            sut_output=Path(output) if (output := env.get(SUT_OUTPUT_DIR, "").strip()) else None,
         )
 
 

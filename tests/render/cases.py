@@ -151,4 +151,34 @@ CASES = {
             },
         },
     ),
+    "ros2-stack-in-pod": request(
+        template="ros2",
+        sut={
+            "name": "acme-stack",
+            "version": "3.1.0",
+            "image": "ghcr.io/acme/stack:3.1.0",
+            "external": {
+                "image": "ghcr.io/simtest-dev/simtest-runner:0.1.0",
+                "command": ["simtest-ros2-bridge", "--port", "{port}"],
+                "startupTimeoutSeconds": 120,
+            },
+        },
+        values={
+            "stack": {
+                "placement": "pod",
+                "components": {
+                    "perception": {"enabled": False},
+                    "planning": {"enabled": False},
+                    "evaluator": {"enabled": False},
+                    "control": {
+                        "chartValues": {
+                            "command": ["ros2", "launch"],
+                            "args": ["acme_control", "control.launch.py"],
+                            "env": {"ACME_PROFILE": "highway"},
+                        }
+                    },
+                },
+            },
+        },
+    ),
 }

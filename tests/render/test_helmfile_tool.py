@@ -52,6 +52,7 @@ def test_helmfile_template_installs_the_rendered_pod_unchanged(
     assert pods == [rendered.pod]
     others = [d for d in docs if d["kind"] != "Pod"]
     simulator_only = ("minimal", "gpu-pvc-placement", "s3-artifacts", "scenario-sources")
+    simulator_only += ("ros2-stack-in-pod",)  # the stack's components are the pod's sidecars
     assert bool(others) == (case not in simulator_only)  # SUT/stack releases
     domain = rendered.values.get("ros", {}).get("domainId")
     for doc in others:

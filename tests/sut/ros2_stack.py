@@ -294,6 +294,11 @@ class Stack:
         if self.model is None:
             start = self.target if self.target is not None else speed
             self.model = DriverModel(self.config, set_speed=start)
+            print(
+                f"stack: run from t={nanos / 1e9:.3f} s, set speed {start:.2f} m/s",
+                file=sys.stderr,
+                flush=True,
+            )
         command = self.model.command(
             speed=speed, leader=leader(ego, others, self.config.sensor_range)
         )

@@ -41,17 +41,18 @@ def reached_here(sut: SutConfig, settings: Settings) -> SutConfig:
     """``sut`` as this machine reaches it, for the run requests: its image digest where known
     (:func:`with_image_id`) and, for a ``sidecar`` or ``endpoint`` SUT, the endpoint the settings
     name (``SIMTEST_SUT_ENDPOINT``: a pod's template knows where its SUT listens), which wins
-    over the campaign's."""
+    over the campaign's, and the folder the pod's sidecars print into
+    (``SIMTEST_SUT_OUTPUT_DIR``)."""
     sut = with_image_id(sut, settings.cache.image_index)
     external = sut.external
-    if (
-        external is None
-        or settings.sut_endpoint is None
-        or external.launch not in (Launch.SIDECAR, Launch.ENDPOINT)
-    ):
+    if external is None or external.launch not in (Launch.SIDECAR, Launch.ENDPOINT):
         return sut
-    located = dataclasses.replace(external, endpoint=settings.sut_endpoint)
-    return dataclasses.replace(sut, external=located)
+    located = dataclasses.replace(
+        external,
+        endpoint=settings.sut_endpoint or external.endpoint,
+        output_dir=settings.sut_output or external.output_dir,
+    )
+    return sut if located == external else dataclasses.replace(sut, external=located)
 
 
 class SutLink:

@@ -4,7 +4,8 @@ endpoint), wait until it is ready, hand out a connected :class:`RemotePilot`, cl
 Readiness is two checks, no sleeps: the SUT accepts the TCP connection (polled) and answers the
 HELLO with READY within the start-up timeout. A local process that exits while we wait ends the
 wait at once with its exit code and the tail of its output; every SUT error quotes that tail,
-and the process's whole output (bounded) becomes the scenario's ``sut.log``.
+and the process's whole output (bounded) becomes the scenario's ``sut.log``; in a pod, what the
+sidecars printed during the run (:func:`~simtest_operator.sut.output.take_files`).
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from simtest_operator.drivermodel import ExternalSut, Lifetime
 from simtest_operator.settings import SUT_ENDPOINT
 from simtest_operator.sut import client
 from simtest_operator.sut.errors import SutError
+from simtest_operator.sut.output import files_said, take_files
 from simtest_operator.sut.processes import OUTPUT_TAIL, SutProcess, SutProcesses
 
 
@@ -42,8 +44,9 @@ def open_pilot(
 ) -> Iterator[client.RemotePilot]:
     """A connected, handshaken pilot for one run (SutError when the SUT cannot be reached).
 
-    A SUT process started here leaves what it printed during the run in ``log`` (bounded). With
-    ``processes`` and ``lifetime: worker`` it may be one already running, and may stay running.
+    A SUT process started here leaves what it printed during the run in ``log`` (bounded), and
+    so do a pod's sidecars that print into ``external.output_dir``. With ``processes`` and
+    ``lifetime: worker`` it may be one already running, and may stay running.
     """
     process: SutProcess | None = None
     pilot: client.RemotePilot | None = None
@@ -75,9 +78,14 @@ def open_pilot(
                 alive=process.fate if process is not None else None,
             )
         except SutError as exc:
-            said = process.output.last(OUTPUT_TAIL) if process is not None else ""
-            if said and said not in str(exc):
-                raise SutError(f"{exc}; the SUT process said last: {said}") from exc
+            if process is not None:
+                said = process.output.last(OUTPUT_TAIL)
+                if said and said not in str(exc):
+                    raise SutError(f"{exc}; the SUT process said last: {said}") from exc
+            elif external.output_dir is not None:
+                sidecars = files_said(external.output_dir, OUTPUT_TAIL)
+                if sidecars:
+                    raise SutError(f"{exc}; {sidecars}") from exc
             raise
         pilot = client.RemotePilot(
             sock,
@@ -87,10 +95,15 @@ def open_pilot(
         )
         if process is not None:
             pilot.postmortem = process.postmortem
+        elif external.output_dir is not None:
+            folder = external.output_dir
+            pilot.postmortem = lambda: files_said(folder, OUTPUT_TAIL)
         with pilot:
             pilot.handshake(hello, timeout=external.startup_timeout)
             yield pilot
     finally:
+        if process is None and external.output_dir is not None and log is not None:
+            take_files(external.output_dir, log)
         if process is not None:
             reusable = pilot is not None and not pilot.failed and pilot.identity.resets
             if warm and processes is not None and reusable and process.fate() is None:

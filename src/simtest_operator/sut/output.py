@@ -82,6 +82,11 @@ class BoundedOutput:
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(text, encoding="utf-8")
 
+    def skipped(self, count: int) -> None:
+        """Count ``count`` bytes left out before what is fed next (read past, never kept)."""
+        with self._lock:
+            self._skipped += count
+
     def _pump(self, stream: IO[bytes]) -> None:
         try:
             while chunk := os.read(stream.fileno(), READ_CHUNK):
@@ -92,4 +97,55 @@ class BoundedOutput:
             stream.close()
 
 
-__all__ = ["BoundedOutput"]
+def take_files(folder: Path, log: Path) -> bool:
+    """Move what a pod's sidecars printed since the last call into ``log``; False: nothing there.
+
+    Each sidecar appends to ``<container>.log`` in ``folder`` (the pod template's output
+    capture). Each file gives its first ``HEAD_BYTES`` and last ``TAIL_BYTES`` under a header
+    naming the container, read without loading what lies between, and is then emptied: its
+    writer appends (``O_APPEND``), so what it prints next starts the next run's log. A line
+    printed between the read and the truncation is lost; runs of one pod follow each other, so
+    that is the moment between two scenarios.
+    """
+    parts = []
+    for path in sorted(folder.glob("*.log")):
+        kept = BoundedOutput()
+        try:
+            with path.open("r+b") as stream:
+                size = os.fstat(stream.fileno()).st_size
+                kept.feed(stream.read(min(size, HEAD_BYTES)))
+                if size > HEAD_BYTES + TAIL_BYTES:
+                    kept.skipped(size - HEAD_BYTES - TAIL_BYTES)
+                    stream.seek(size - TAIL_BYTES)
+                while chunk := stream.read(READ_CHUNK):
+                    kept.feed(chunk)
+                stream.truncate(0)
+        except OSError:
+            continue
+        parts.append(f"==> {path.stem} <==\n{kept.text()}")
+    if not parts:
+        return False
+    log.parent.mkdir(parents=True, exist_ok=True)
+    log.write_text("\n".join(parts), encoding="utf-8")
+    return True
+
+
+def files_said(folder: Path, chars: int) -> str | None:
+    """For an error: the last ``chars`` characters each sidecar printed into ``folder`` during
+    this run (whitespace folded), by container; None when they printed nothing."""
+    said = []
+    for path in sorted(folder.glob("*.log")):
+        try:
+            with path.open("rb") as stream:
+                size = os.fstat(stream.fileno()).st_size
+                stream.seek(max(size - 4 * chars, 0))
+                text = stream.read().decode("utf-8", "replace")
+        except OSError:
+            continue
+        tail = " ".join(text.split())[-chars:]
+        if tail:
+            said.append(f"{path.stem}: {tail}")
+    return "the SUT's sidecars said last: " + " | ".join(said) if said else None
+
+
+__all__ = ["BoundedOutput", "files_said", "take_files"]

@@ -234,30 +234,43 @@ def await_stack(endpoints: Endpoints, config: BridgeConfig) -> None:
         )
 
 
+def _log(line: str) -> None:
+    """One line of the bridge's own log (stderr: beside the stack's in the scenario's sut.log)."""
+    print(f"{NAME}: {line}", file=sys.stderr, flush=True)
+
+
 def serve_connection(conn: socket.socket, endpoints: Endpoints, config: BridgeConfig) -> None:
     """Serve one run; returns on GOODBYE, a closed connection or an error it reported."""
     conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
     run: Run | None = None
+    scenario, steps = "?", 0
     while True:
         try:
             frame = framing.receive(conn)
-        except SutError:
+        except SutError as exc:
+            _log(f"run {scenario}: connection ended after {steps} steps ({exc})")
             return
         try:
             if frame.kind is Kind.HELLO:
-                run = Run(endpoints, config, json.loads(frame.payload))
+                hello = json.loads(frame.payload)
+                scenario = str(hello.get("scenario", "?"))
+                run = Run(endpoints, config, hello)
                 await_stack(endpoints, config)
+                _log(f"run {scenario}: the stack is there (DDS domain {config.domain_id})")
                 ready = {"protocol": framing.PROTOCOL_VERSION, "name": NAME, "version": VERSION}
                 framing.send(conn, Kind.READY, 0, json.dumps(ready).encode())
             elif frame.kind is Kind.TRAFFIC_COMMAND and run is not None:
                 run.target_speed(frame.payload)
             elif frame.kind is Kind.SENSOR_VIEW and run is not None:
                 framing.send(conn, Kind.MOTION_REQUEST, frame.sequence, run.step(frame.payload))
+                steps += 1
             elif frame.kind is Kind.GOODBYE:
+                _log(f"run {scenario}: done after {steps} steps")
                 return
             else:
                 raise ValueError(f"unexpected {frame.kind.name} frame")
         except (ValueError, KeyError, TypeError) as exc:
+            _log(f"run {scenario}: giving up at step {frame.sequence}: {exc}")
             framing.send(conn, Kind.ERROR, frame.sequence, str(exc).encode())
             return
 
@@ -266,6 +279,7 @@ def serve(host: str, port: int, config: BridgeConfig, *, once: bool = False) -> 
     """Join the DDS domain, then serve runs one after the other."""
     endpoints = Endpoints(config)
     with socket.create_server((host, port)) as server:
+        _log(f"{VERSION} listening on {host}:{port}, DDS domain {config.domain_id}")
         while True:
             conn, _ = server.accept()
             with conn:
