@@ -17,6 +17,7 @@ from typing import Any
 
 from simtest_operator.errors import SourceError
 from simtest_operator.operator import names
+from simtest_operator.operator.batches import Layout
 from simtest_operator.scenarios import FrozenList
 
 DATA_KEY = "scenarios.json.gz"
@@ -30,6 +31,12 @@ class StoredList:
 
     frozen: FrozenList
     batch_size: int
+    layout: Layout = dataclasses.field(init=False, repr=False, compare=False)
+    """How the list is sliced into batches (indexed once here, not on every step)."""
+
+    def __post_init__(self) -> None:
+        layout = Layout(ids=tuple(s.id for s in self.frozen.scenarios), batch_size=self.batch_size)
+        object.__setattr__(self, "layout", layout)
 
 
 def config_map(

@@ -7,11 +7,11 @@ overhead its scenarios paid.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 
 from simtest_operator.operator import helmfileteardown
 from simtest_operator.operator.actions import Action, Delete, Kind
-from simtest_operator.operator.batches import ScenarioState, State
+from simtest_operator.operator.batches import Progress, State
 from simtest_operator.operator.environments import Assessment
 from simtest_operator.operator.planning.inputs import Step
 from simtest_operator.operator.planning.outcomes import Outcome
@@ -34,20 +34,17 @@ def teardowns(step: Step) -> Outcome:
     )
 
 
-def removals(
-    step: Step, judged: Mapping[str, Assessment], states: Sequence[ScenarioState]
-) -> Outcome:
+def removals(step: Step, judged: Mapping[str, Assessment], states: Progress) -> Outcome:
     """Deletes of finished environments whose verdicts are all folded into their batches,
     unless the configuration keeps them."""
     actions: list[Action] = []
     overheads: list[float] = []
     if step.config.keep_finished_environments:
         return Outcome()
-    folded = {s.id for s in states if s.state is State.FOLDED}
     for env in step.envs:
         if env.deleting or not env.finished:
             continue
-        if not all(scenario_id in folded for scenario_id in env.scenario_ids):
+        if not all(_folded(step, states, scenario_id) for scenario_id in env.scenario_ids):
             continue
         if not helmfileteardown.torn_down(env, step.inputs.jobs):
             continue
@@ -58,3 +55,8 @@ def removals(
             ran = sum(r.duration_seconds for r in judged[env.name].results or ())
             overheads.append(max(wall - ran, 0.0) / max(len(env.scenarios), 1))
     return Outcome(actions=tuple(actions), overheads=tuple(overheads))
+
+
+def _folded(step: Step, states: Progress, scenario_id: str) -> bool:
+    position = step.layout.index.get(scenario_id)
+    return position is not None and states.state(position).state is State.FOLDED

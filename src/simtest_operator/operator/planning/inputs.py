@@ -24,6 +24,7 @@ from simtest_operator.operator.observed import (
     PodView,
 )
 from simtest_operator.operator.scenariolists import StoredList
+from simtest_operator.operator.status.counting import Tally
 from simtest_operator.render import EnvironmentRequest, RenderedEnvironment
 from simtest_operator.scenarios.pinned import PinnedScenario
 from simtest_operator.settings import OperatorSettings
@@ -52,6 +53,9 @@ class Inputs:
     """Creates the API server refused for good, by kind and name: its status code and message
     (the applier's :attr:`~simtest_operator.operator.applying.Applied.refused`, kept by the
     loop; the cache cannot show an object that was never created)."""
+    tally: Tally | None = None
+    """The closed batches' counters as the campaign loop keeps them across steps (None: count
+    them afresh; the same answer at a cost that grows with the campaign)."""
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
@@ -67,6 +71,8 @@ class Step:
     layout: Layout
     batches: Mapping[int, BatchView]
     """This campaign's batches by index."""
+    closed: Tally
+    """Which of them are closed (every result in the status), and their counters."""
     envs: Sequence[EnvironmentView]
     """This campaign's environments."""
     run_key: str
@@ -94,14 +100,17 @@ def step(
     """The step of a campaign whose spec is valid and whose list is frozen."""
     campaign = inputs.campaign
     frozen = stored.frozen.scenarios
+    batches = {b.index: b for b in inputs.batches if b.campaign == campaign.name}
+    tally = inputs.tally if inputs.tally is not None else Tally()
     return Step(
         inputs=inputs,
         spec=spec,
         config=config,
         render=render,
         frozen=frozen,
-        layout=Layout(ids=tuple(s.id for s in frozen), batch_size=stored.batch_size),
-        batches={b.index: b for b in inputs.batches if b.campaign == campaign.name},
+        layout=stored.layout,
+        batches=batches,
+        closed=tally.sync(batches, stored.layout),
         envs=tuple(e for e in inputs.envs if e.campaign == campaign.name),
         run_key=recording_results.run_key(campaign) if spec.results.database_secret_ref else "",
     )

@@ -55,8 +55,8 @@ def _run(step: inputs.Step) -> Plan:
     cancellation = cancelling.decide(step.spec, step.campaign.status, now=step.now)
     judged = assessing.assessments(step, cancellation)
     states = assessing.states(step, judged, cancellation)
-    counts = counting.counters(states)
-    complete = all(s.state.settled for s in states)
+    counts = counting.progress_counters(states)
+    complete = states.complete
     in_flight = assessing.in_flight(step, judged)
     window = starting.window(step)
     outcome = (
