@@ -9,15 +9,16 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-from simtest_operator.operator import helmfileteardown
+from simtest_operator.operator import helmfileteardown, names
 from simtest_operator.operator.actions import Action, Delete, Kind
 from simtest_operator.operator.batches import Progress, State
 from simtest_operator.operator.environments import Assessment
+from simtest_operator.operator.observed import BatchView
 from simtest_operator.operator.planning.inputs import Step
 from simtest_operator.operator.planning.outcomes import Outcome
 
 
-def teardowns(step: Step) -> Outcome:
+def teardowns(step: Step, states: Progress) -> Outcome:
     """helmfile destroy Jobs (and their bookkeeping) of finished Helmfile environments."""
     return Outcome(
         actions=tuple(
@@ -26,7 +27,7 @@ def teardowns(step: Step) -> Outcome:
                 step.envs,
                 jobs=step.inputs.jobs,
                 pods=step.inputs.pods,
-                batches=step.batches.values(),
+                batches=_named(step, states),
                 render=step.render,
                 config=step.config,
             )
@@ -55,6 +56,17 @@ def removals(step: Step, judged: Mapping[str, Assessment], states: Progress) -> 
             ran = sum(r.duration_seconds for r in judged[env.name].results or ())
             overheads.append(max(wall - ran, 0.0) / max(len(env.scenarios), 1))
     return Outcome(actions=tuple(actions), overheads=tuple(overheads))
+
+
+def _named(step: Step, states: Progress) -> list[BatchView]:
+    """The batches a teardown may name: the open ones (every live environment's) and those of
+    the helmfile Jobs -- a lookup each, not a pass over every batch of the campaign."""
+    chosen = {i: step.batches[i] for i in states.open if i in step.batches}
+    for job in step.inputs.jobs.values():
+        parsed = names.parse_environment(job.environment)
+        if parsed is not None and parsed.batch_index in step.batches:
+            chosen[parsed.batch_index] = step.batches[parsed.batch_index]
+    return list(chosen.values())
 
 
 def _folded(step: Step, states: Progress, scenario_id: str) -> bool:

@@ -61,7 +61,7 @@ def _run(step: inputs.Step) -> Plan:
     window = starting.window(step)
     outcome = (
         tending.tend(step, judged)
-        + cleaning.teardowns(step)
+        + cleaning.teardowns(step, states)
         + folding.fold(step, states)
         + cleaning.removals(step, judged, states)
     )

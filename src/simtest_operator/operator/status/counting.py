@@ -66,7 +66,7 @@ class Tally:
     """
 
     def __init__(self) -> None:
-        self._seen: dict[int, tuple[str, dict[str, int] | None]] = {}
+        self._seen: dict[int, tuple[BatchView, dict[str, int] | None]] = {}
         self._open: set[int] = set()
         self._total = dict.fromkeys(COUNTER_KEYS, 0)
 
@@ -88,13 +88,12 @@ class Tally:
     def sync(self, batches: Mapping[int, BatchView], layout: Layout) -> Tally:
         """Take in the batches as they are now (returns itself)."""
         for index, batch in batches.items():
-            version = f"{batch.uid}/{batch.resource_version}"
             seen = self._seen.get(index)
-            if seen is not None and seen[0] == version:
-                continue
+            if seen is not None and (seen[0] is batch or _same(seen[0], batch)):
+                continue  # the cache hands the same view until the object changes
             self._forget(index)
             counts = _closed_counts(batch, layout.positions(index), layout)
-            self._seen[index] = (version, counts)
+            self._seen[index] = (batch, counts)
             if counts is None:
                 self._open.add(index)
             else:
@@ -117,6 +116,10 @@ class Tally:
     def _add(self, counts: Mapping[str, int], sign: int) -> None:
         for key, value in counts.items():
             self._total[key] += sign * value
+
+
+def _same(old: BatchView, new: BatchView) -> bool:
+    return old.uid == new.uid and old.resource_version == new.resource_version
 
 
 def _closed_counts(batch: BatchView, positions: range, layout: Layout) -> dict[str, int] | None:
