@@ -376,6 +376,8 @@ def summarize(
     return {
         "config": dataclasses.asdict(config),
         "label": config.label,
+        "scenarios": config.scenarios,
+        "nodes": config.nodes,
         "slots": slots,
         "complete": complete,
         "passed": int(status.get("passed", 0) or 0),
