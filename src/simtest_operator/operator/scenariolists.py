@@ -55,11 +55,9 @@ def config_maps(
     """The ConfigMap bodies, in the order to create them: the chunks, then the head."""
     head_document = {**stored.frozen.to_json(), "batchSize": stored.batch_size}
     entries = head_document.pop("scenarios")
-    parts = _cut(entries, head_document)
-    head_packed = _pack({**head_document, "scenarios": parts[0]})
+    head_packed, *parts = _cut(entries, head_document)
     chunks: list[dict[str, Any]] = []
-    for index, part in enumerate(parts[1:], start=1):
-        packed = _pack({"scenarios": part})
+    for index, packed in enumerate(parts, start=1):
         name = names.scenario_list_chunk(campaign, index, hashlib.sha256(packed).hexdigest())
         chunks.append(_body(name, namespace, campaign, owner, packed, {"index": str(index)}))
     data = {"count": str(len(entries)), "batchSize": str(stored.batch_size)}
@@ -100,19 +98,22 @@ def read(body: Mapping[str, Any], chunks: Sequence[Mapping[str, Any]] = ()) -> S
     )
 
 
-def _cut(entries: list[Any], head: Mapping[str, Any]) -> list[list[Any]]:
-    """The entries in as few equal consecutive parts as fit, the first with the ``head``
-    fields (provenance, batch size) beside it. The first guess is the whole list's size over
-    the budget; parts of equal entry counts compress alike, so it rarely needs a second."""
+def _cut(entries: list[Any], head: Mapping[str, Any]) -> list[bytes]:
+    """The entries in as few equal consecutive parts as fit, packed, the first with the
+    ``head`` fields (provenance, batch size) beside it. The first guess is the whole list's
+    size over the budget; parts of equal entry counts compress alike, so it rarely needs a
+    second."""
     whole = _pack({**head, "scenarios": entries})
-    parts = max(-(-len(whole) * 4 // 3 // MAX_BYTES), 1)
+    if _fits(whole):
+        return [whole]
+    parts = max(-(-len(whole) * 4 // 3 // MAX_BYTES), 2)
     while parts <= MAX_CHUNKS:
-        size = max(-(-len(entries) // parts), 1)
-        cut = [entries[i : i + size] for i in range(0, len(entries), size)] or [[]]
-        if _fits(_pack({**head, "scenarios": cut[0]})) and all(
-            _fits(_pack({"scenarios": part})) for part in cut[1:]
-        ):
-            return cut
+        size = -(-len(entries) // parts)
+        cut = [entries[i : i + size] for i in range(0, len(entries), size)]
+        packed = [_pack({**head, "scenarios": cut[0]})]
+        packed += [_pack({"scenarios": part}) for part in cut[1:]]
+        if all(_fits(p) for p in packed):
+            return packed
         parts += max(parts // 8, 1)
     raise SourceError(
         f"the frozen list of {len(entries)} scenarios does not fit in {MAX_CHUNKS} ConfigMaps "
