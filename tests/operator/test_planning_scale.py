@@ -3,7 +3,8 @@
 Covers: a step of a campaign with 10,000 scenarios and one with 1,000, each with every batch
 before the window closed (all results in the status) and the same window running, builds the
 same number of scenario states, and with the loop's tally re-reads no unchanged batch (counted
-operations, not time); both steps still count every closed scenario in the campaign's status.
+operations, not time); both steps still count every closed scenario in the campaign's status;
+the tally moves by the difference when a batch changes and forgets a deleted one.
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ from typing import Any
 
 import pytest
 
-from simtest_operator.operator import batches, bodies, planning
+from simtest_operator.operator import batches, bodies, observed, planning
 from simtest_operator.operator.actions import Kind, Plan
 from simtest_operator.operator.status import counting
 from simtest_operator.operator.status.records import ResultRecord
@@ -110,3 +111,37 @@ def test_the_closed_batches_still_count() -> None:
     assert status["failed"] == failed
     assert status["passed"] >= closed - failed
     assert status["queued"] + status["running"] <= OPEN * BATCH
+
+
+def _batch(index: int, verdicts: list[Verdict], version: str) -> observed.BatchView:
+    ids = [f"s{index * BATCH + i:03d}.xosc" for i in range(BATCH)]
+    return observed.batch_view(
+        {
+            "metadata": {
+                "name": f"camp-b{index:05d}",
+                "uid": f"u{index}",
+                "resourceVersion": version,
+            },
+            "spec": {"campaign": "camp", "index": index, "scenarios": [{"id": i} for i in ids]},
+            "status": {
+                "results": [
+                    ResultRecord(id=i, verdict=v).to_wire()
+                    for i, v in zip(ids, verdicts, strict=False)
+                ]
+            },
+        }
+    )
+
+
+def test_the_tally_moves_by_the_difference_and_forgets_deleted_batches() -> None:
+    layout = batches.Layout(ids=tuple(f"s{i:03d}.xosc" for i in range(3 * BATCH)), batch_size=BATCH)
+    tally = counting.Tally()
+    passed, failed = [Verdict.PASSED] * BATCH, [Verdict.FAILED] * BATCH
+    first = {0: _batch(0, passed, "1"), 1: _batch(1, passed[:4], "1")}
+    tally.sync(first, layout)
+    assert (tally.total["total"], tally.total["passed"], set(tally.open)) == (10, 10, {1})
+    second = {0: first[0], 1: _batch(1, failed, "2"), 2: _batch(2, passed, "1")}
+    tally.sync(second, layout)
+    assert (tally.total["passed"], tally.total["failed"], set(tally.open)) == (20, 10, set())
+    tally.sync({1: second[1]}, layout)  # batches 0 and 2 deleted
+    assert (tally.total["total"], tally.total["passed"], tally.counts(0)) == (10, 0, None)
