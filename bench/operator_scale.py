@@ -149,6 +149,39 @@ def count_objects(api: client.ApiClient, namespace: str) -> dict[str, int]:
     return counts
 
 
+def object_sizes(api: client.ApiClient, namespace: str) -> dict[str, int]:
+    """The largest object of each kind the campaign writes, in bytes of JSON (etcd refuses a
+    request over 1.5 MiB; a ConfigMap's data may hold 1 MiB), and the frozen list's objects."""
+    custom = client.CustomObjectsApi(api)
+    maps = client.CoreV1Api(api).list_namespaced_config_map(namespace).items
+    lists = [m for m in maps if (m.metadata.name or "").startswith(f"{CAMPAIGN}-scenarios")]
+    campaign = custom.get_namespaced_custom_object(
+        GROUP, VERSION, namespace, "testcampaigns", CAMPAIGN
+    )
+    largest_batch = 0
+    token = None
+    while True:
+        page: Any = custom.list_namespaced_custom_object(
+            GROUP, VERSION, namespace, "scenariobatches", limit=500, _continue=token
+        )
+        for item in page.get("items") or ():
+            largest_batch = max(largest_batch, len(json.dumps(item)))
+        token = (page.get("metadata") or {}).get("continue")
+        if not token:
+            break
+
+    def size(obj: Any) -> int:
+        return len(json.dumps(api.sanitize_for_serialization(obj)))
+
+    return {
+        "scenario_list_objects": len(lists),
+        "scenario_list_max_bytes": max((size(m) for m in lists), default=0),
+        "scenario_list_total_bytes": sum(size(m) for m in lists),
+        "campaign_bytes": size(campaign),
+        "batch_max_bytes": largest_batch,
+    }
+
+
 def event_sources(api: client.ApiClient, namespace: str) -> dict[str, int]:
     """Events in the namespace by reporting component, at the end of a run."""
     out: dict[str, int] = {}
@@ -289,6 +322,7 @@ def _campaign(
         ops_after = operator_metrics(port)
         components_after = cpu_seconds(pids)
         final_live = count_objects(api, namespace)
+        sizes = object_sizes(api, namespace)
         sources_of_events = event_sources(api, namespace)
     return summarize(
         config,
@@ -305,6 +339,7 @@ def _campaign(
             k: round(components_after.get(k, 0.0) - v, 1) for k, v in components_before.items()
         },
         final_live=final_live,
+        sizes=sizes,
         event_sources=sources_of_events,
     )
 
@@ -343,6 +378,7 @@ def summarize(
     operator_metrics_text: tuple[str, str],
     components: dict[str, float],
     final_live: dict[str, int],
+    sizes: dict[str, int],
     event_sources: dict[str, int],
 ) -> dict[str, Any]:
     slots = config.nodes * SLOTS_PER_NODE
@@ -376,6 +412,8 @@ def summarize(
     return {
         "config": dataclasses.asdict(config),
         "label": config.label,
+        "scenarios": config.scenarios,
+        "nodes": config.nodes,
         "slots": slots,
         "complete": complete,
         "passed": int(status.get("passed", 0) or 0),
@@ -390,6 +428,11 @@ def summarize(
         if samples
         else {},
         "live_final": final_live,
+        "object_sizes": sizes,
+        "finished": sum(
+            int(status.get(k, 0) or 0)
+            for k in ("passed", "failed", "errored", "timedOut", "invalid")
+        ),
         "event_sources": event_sources,
         "window": max((s["in_flight"] for s in samples), default=0),
         "operator_idle_rss_mib": round(idle_rss, 1),

@@ -18,9 +18,16 @@ def _api(verb: str, field: str) -> Callable[[Run], float]:
     return lambda r: float(r["apiserver"].get(verb, {}).get(field, math.nan))
 
 
+def _kib(key: str) -> Callable[[Run], float]:
+    return lambda r: float(r["object_sizes"][key]) / 1024
+
+
 ROWS: tuple[tuple[str, Callable[[Run], float]], ...] = (
     ("scenarios", lambda r: r["config"]["scenarios"]),
     ("kwok nodes (3 slots each)", lambda r: r["config"]["nodes"]),
+    ("complete (1 = yes)", lambda r: float(r["complete"])),
+    ("scenarios finished", lambda r: r["finished"]),
+    ("scenarios passed", lambda r: r["passed"]),
     ("makespan s", lambda r: r["makespan"]),
     ("lower bound s", lambda r: r["bound"]),
     ("slot efficiency (bound / makespan)", lambda r: r["bound_efficiency"]),
@@ -37,6 +44,13 @@ ROWS: tuple[tuple[str, Callable[[Run], float]], ...] = (
     ("peak live ScenarioBatches", _live("scenariobatches")),
     ("peak live ConfigMaps", _live("configmaps")),
     ("Events at the end", _live("events", "live_final")),
+    ("frozen-list ConfigMaps", lambda r: r["object_sizes"]["scenario_list_objects"]),
+    (
+        "largest frozen-list ConfigMap KiB",
+        lambda r: r["object_sizes"]["scenario_list_max_bytes"] / 1024,
+    ),
+    ("TestCampaign object KiB", lambda r: r["object_sizes"]["campaign_bytes"] / 1024),
+    ("largest ScenarioBatch KiB", lambda r: r["object_sizes"]["batch_max_bytes"] / 1024),
     ("operator RSS idle MiB", lambda r: r["operator_idle_rss_mib"]),
     ("operator RSS peak MiB", lambda r: r["operator_peak_rss_mib"]),
     ("operator RSS growth MiB", lambda r: r["operator_rss_growth_mib"]),

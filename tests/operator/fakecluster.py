@@ -149,13 +149,13 @@ class FakeCluster:
             "name": campaign["metadata"]["name"],
             "uid": campaign["metadata"]["uid"],
         }
-        cm = scenariolists.config_map(
+        for cm in scenariolists.config_maps(
             scenariolists.StoredList(frozen=frozen, batch_size=batch_size),
             namespace=NAMESPACE,
             campaign=campaign["metadata"]["name"],
             owner=owner,
-        )
-        self.add(Kind.CONFIG_MAP, cm)
+        ):
+            self.add(Kind.CONFIG_MAP, cm)
 
     # --- planning ----------------------------------------------------------------------------
 
@@ -165,7 +165,7 @@ class FakeCluster:
         cm = self.get(Kind.CONFIG_MAP, f"{name}-scenarios")
         return planning.Inputs(
             campaign=observed.campaign_view(campaign),
-            stored=scenariolists.read(cm) if cm else None,
+            stored=self._stored(cm) if cm else None,
             batches=[observed.batch_view(b) for b in self.of(Kind.BATCH)],
             envs=[observed.environment_view(e) for e in self.of(Kind.ENVIRONMENT)],
             pods={p["metadata"]["name"]: observed.pod_view(p) for p in self.of(Kind.POD)},
@@ -181,6 +181,10 @@ class FakeCluster:
         """The campaign's Kueue Workload (admitted by a test's hand: no Kueue here)."""
         body = self.get(Kind.WORKLOAD, admission.workload_name(campaign))
         return admission.workload_view(body) if body is not None else None
+
+    def _stored(self, head: Mapping[str, Any]) -> scenariolists.StoredList:
+        chunks = [self.get(Kind.CONFIG_MAP, n) for n in scenariolists.chunk_names(head)]
+        return scenariolists.read(head, [c for c in chunks if c is not None])
 
     def _node_view(self, name: str) -> observed.NodeView:
         return observed.NodeView(

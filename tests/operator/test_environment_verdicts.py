@@ -353,9 +353,19 @@ def test_environment_without_pod() -> None:
     fresh = env(status={})
     assert assess(fresh, None).needs_pod
     provisioned = env()
-    assert assess(provisioned, None, now=5).results is None
-    gone = assess(provisioned, None, now=11)
+    seen = env(status={**provisioned.status_wire, "node": "n0"})
+    assert assess(seen, None, now=5).results is None
+    gone = assess(seen, None, now=11)
     assert gone.results is not None and "disappeared" in gone.reason
+
+
+def test_a_pod_the_cache_never_showed_gets_the_pending_time_not_the_missing_grace() -> None:
+    provisioned = env()  # created and recorded, never seen scheduled: the watch may lag
+    lagging = assess(provisioned, None, now=11)
+    assert lagging.results is None and lagging.wake_at == at(300)
+    never = assess(provisioned, None, now=301)
+    assert never.results is not None and never.results[0].verdict is Verdict.ERROR
+    assert "never appeared in 300s" in never.reason
 
 
 def test_deleted_environment_is_an_error() -> None:

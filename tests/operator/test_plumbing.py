@@ -19,7 +19,14 @@ from typing import Any, cast
 import pytest
 
 from simtest_operator.errors import SourceError
-from simtest_operator.operator import client, names, observed, planning, scenariolists
+from simtest_operator.operator import (
+    client,
+    names,
+    observed,
+    planning,
+    resolving,
+    scenariolists,
+)
 from simtest_operator.operator.actions import Create, Emit, Kind, PatchStatus, Plan
 from simtest_operator.operator.applying import Applier
 from simtest_operator.operator.caching import ALL_NODES, Cache
@@ -86,12 +93,15 @@ def test_frozen_list_config_map_round_trip() -> None:
     body = scenariolists.config_map(stored, namespace="ns", campaign="c", owner=owner)
     assert body == scenariolists.config_map(stored, namespace="ns", campaign="c", owner=owner)
     assert body["immutable"] is True and body["data"]["count"] == "500"
+    assert scenariolists.config_maps(stored, namespace="ns", campaign="c", owner=owner) == [body]
     assert scenariolists.read(json.loads(json.dumps(body))) == stored
     with pytest.raises(SourceError, match="not a frozen scenario list"):
         scenariolists.read({"metadata": {"name": "x"}, "binaryData": {}})
 
 
-def test_frozen_list_too_big_for_a_config_map() -> None:
+def test_a_long_frozen_list_is_cut_into_chunks_below_the_object_limit(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
     huge = FrozenList(
         campaign="c",
         scenarios=tuple(
@@ -103,13 +113,47 @@ def test_frozen_list_too_big_for_a_config_map() -> None:
             for i in range(8000)
         ),
     )
+    stored = scenariolists.StoredList(frozen=huge, batch_size=10)
+    bodies = scenariolists.config_maps(stored, namespace="n", campaign="c", owner={})
+    *chunks, head = bodies
+    assert len(chunks) >= 1 and head["metadata"]["name"] == "c-scenarios"  # the head last
+    assert scenariolists.chunk_names(head) == tuple(c["metadata"]["name"] for c in chunks)
+    for body in bodies:
+        assert len(json.dumps(body)) < scenariolists.MAX_BYTES + 4096  # the object, as sent
+    assert scenariolists.read(head, chunks) == stored
+    assert head["data"]["count"] == "8000"
+    with pytest.raises(SourceError, match="chunks named"):
+        scenariolists.read(head, chunks[1:])
+    monkeypatch.setattr(scenariolists, "MAX_CHUNKS", 1)
     with pytest.raises(SourceError, match="split the campaign"):
-        scenariolists.config_map(
-            scenariolists.StoredList(frozen=huge, batch_size=10),
-            namespace="n",
-            campaign="c",
-            owner={},
-        )
+        scenariolists.config_maps(stored, namespace="n", campaign="c", owner={})
+
+
+class _ConfigMaps:
+    """A client that serves GETs of a few ConfigMaps."""
+
+    def __init__(self, bodies: list[dict[str, Any]]) -> None:
+        self.bodies = {b["metadata"]["name"]: b for b in bodies}
+
+    async def get(self, kind: Kind | str, namespace: str | None, name: str) -> dict[str, Any]:
+        if name not in self.bodies:
+            raise client.NotFoundError(404, "NotFound", name)
+        return self.bodies[name]
+
+
+def test_a_restarted_operator_loads_a_chunked_list(monkeypatch: pytest.MonkeyPatch) -> None:
+    stored = scenariolists.StoredList(frozen=frozen_list(500), batch_size=7)
+    bodies = scenariolists.config_maps(stored, namespace="tests", campaign="camp", owner={})
+    monkeypatch.setattr(scenariolists, "MAX_BYTES", 1024)  # 500 entries then need chunks
+    chunked = scenariolists.config_maps(stored, namespace="tests", campaign="camp", owner={})
+    assert len(bodies) == 1 and len(chunked) > 1
+    campaign = observed.campaign_view(
+        {**campaign_body(), "metadata": {"name": "camp", "namespace": "tests"}}
+    )
+    for served in (bodies, chunked):
+        fake = cast(client.Client, _ConfigMaps(served))
+        assert asyncio.run(resolving.load(fake, campaign)) == stored
+    assert asyncio.run(resolving.load(cast(client.Client, _ConfigMaps([])), campaign)) is None
 
 
 def test_names() -> None:

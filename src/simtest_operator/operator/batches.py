@@ -22,7 +22,10 @@ from __future__ import annotations
 import bisect
 import dataclasses
 import enum
-from collections.abc import Iterable, Mapping, Sequence
+import itertools
+from collections.abc import Iterable, Iterator, Mapping, Sequence
+from collections.abc import Set as AbstractSet
+from typing import Protocol
 
 from simtest_operator.operator.environments import Assessment
 from simtest_operator.operator.observed import BatchView, EnvironmentView, NodeView
@@ -70,7 +73,7 @@ class ScenarioState:
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
 class Layout:
-    """How the frozen list is sliced."""
+    """How the frozen list is sliced (built once per frozen list: it indexes every id)."""
 
     ids: tuple[str, ...]
     batch_size: int
@@ -78,6 +81,12 @@ class Layout:
     """First positions of the batches when they are not equal slices: a search's waves, one
     batch each (:mod:`~simtest_operator.operator.searching`); empty for slices of
     ``batch_size``."""
+    index: Mapping[str, int] = dataclasses.field(init=False, repr=False, compare=False)
+    """List position of each id."""
+
+    def __post_init__(self) -> None:
+        index = {scenario_id: position for position, scenario_id in enumerate(self.ids)}
+        object.__setattr__(self, "index", index)
 
     def batch_of(self, position: int) -> int:
         """Batch index of a list position."""
@@ -110,47 +119,190 @@ class Layout:
         return range(start, min(start + self.batch_size, len(self.ids)))
 
 
-def scenario_states(
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class Progress:
+    """Every scenario's state, kept sparse: a step costs what is open, not the campaign's size.
+
+    Each batch of the layout is one of three kinds. *Closed*: its object's status holds every
+    result and no environment refers to it, so its scenarios are all ``FOLDED`` and only their
+    counters matter (``closed``, kept across steps by
+    :class:`~simtest_operator.operator.status.counting.Tally`). *Absent*: no object and no
+    environment, so its scenarios are all ``PENDING`` (or ``SKIPPED`` under a cancellation).
+    *Open*: everything else -- at most the batches of the live environments plus the newest --
+    whose states are listed in ``explicit``. The three cover the list, so this says what a dense
+    tuple of every state says.
+    """
+
+    layout: Layout
+    explicit: Mapping[int, ScenarioState]
+    """The states of every position of the open batches, in list order."""
+    open: tuple[int, ...]
+    """The open batches' indices, ascending."""
+    present: Mapping[int, BatchView]
+    """The batch objects by index (closed ones included)."""
+    closed: Mapping[str, int]
+    """Counters (wire names) of the closed batches' scenarios."""
+    closed_scenarios: int
+    """How many scenarios the closed batches hold."""
+    tail: int
+    """The first batch of the absent tail: no batch from here on is open or present."""
+    gaps: tuple[int, ...] = ()
+    """Absent batches before the tail (a batch object deleted from under the campaign)."""
+    skipped_absent: bool = False
+    """A cancellation ended the absent batches' scenarios ``SKIPPED``."""
+
+    @classmethod
+    def dense(cls, states: Sequence[ScenarioState], layout: Layout) -> Progress:
+        """Every state given, every batch open (tests, small lists)."""
+        open_ = tuple(sorted({layout.batch_of(s.position) for s in states}))
+        return cls(
+            layout=layout,
+            explicit={s.position: s for s in states},
+            open=open_,
+            present={},
+            closed={},
+            closed_scenarios=0,
+            tail=layout.batch_count(),
+        )
+
+    @property
+    def absent_scenarios(self) -> int:
+        """Scenarios of the absent batches."""
+        return len(self.layout.ids) - self.closed_scenarios - len(self.explicit)
+
+    def absent(self) -> Iterator[int]:
+        """The absent batches' indices, ascending (lazily: usually the tail of the list)."""
+        yield from self.gaps
+        yield from range(self.tail, self.layout.batch_count())
+
+    def state(self, position: int) -> ScenarioState:
+        """The state of one position, explicit or implied by its batch's kind."""
+        known = self.explicit.get(position)
+        if known is not None:
+            return known
+        scenario_id = self.layout.ids[position]
+        batch = self.present.get(self.layout.batch_of(position))
+        record = next((r for r in batch.results if r.id == scenario_id), None) if batch else None
+        if record is None:
+            state = State.SKIPPED if self.skipped_absent else State.PENDING
+            return ScenarioState(position=position, id=scenario_id, state=state)
+        return ScenarioState(
+            position=position,
+            id=scenario_id,
+            state=State.FOLDED,
+            attempt=record.attempts,
+            result=record,
+            durable=True,
+        )
+
+    def of_batch(self, index: int) -> list[ScenarioState]:
+        """The states of one open batch, in list order."""
+        return [self.explicit[p] for p in self.layout.positions(index)]
+
+    @property
+    def complete(self) -> bool:
+        """Nothing more will happen to any scenario."""
+        if self.absent_scenarios and not self.skipped_absent:
+            return False
+        return all(s.state.settled for s in self.explicit.values())
+
+
+class Closed(Protocol):
+    """The batches whose status holds every result, as
+    :class:`~simtest_operator.operator.status.counting.Tally` keeps them across steps."""
+
+    @property
+    def open(self) -> AbstractSet[int]:
+        """Indices of the batch objects that are not closed."""
+        ...
+
+    @property
+    def total(self) -> Mapping[str, int]:
+        """Counters (wire names) of every closed batch's scenarios."""
+        ...
+
+    def counts(self, index: int) -> Mapping[str, int] | None:
+        """Counters of one closed batch (None: not closed)."""
+        ...
+
+
+def progress(
     layout: Layout,
     *,
-    batches: Iterable[BatchView],
+    batches: Mapping[int, BatchView],
+    closed: Closed,
     envs: Iterable[EnvironmentView],
     assessments: Mapping[str, Assessment],
     retries: int,
-) -> tuple[ScenarioState, ...]:
-    """The state of every scenario in list order."""
-    folded: dict[str, ResultRecord] = {}
-    for batch in batches:
-        for record in batch.results:
-            folded.setdefault(record.id, record)
+) -> Progress:
+    """Every scenario's state, looking only at the open batches: those of ``closed.open`` and
+    those of the live environments (open whatever their status says)."""
     latest: dict[str, tuple[int, EnvironmentView]] = {}
+    busy: set[int] = set()
     for env in envs:
         for scenario_id in env.scenario_ids:
+            position = layout.index.get(scenario_id)
+            if position is not None:
+                busy.add(layout.batch_of(position))
             seen = latest.get(scenario_id)
             if seen is None or env.attempt > seen[0]:
                 latest[scenario_id] = (env.attempt, env)
-    states = []
-    for position, scenario_id in enumerate(layout.ids):
-        kept = folded.get(scenario_id)
-        if kept is not None:
-            states.append(
-                ScenarioState(
-                    position=position,
-                    id=scenario_id,
-                    state=State.FOLDED,
-                    attempt=kept.attempts,
-                    result=kept,
-                    durable=True,
-                )
+    counts = dict(closed.total)
+    for index in busy:
+        held = closed.counts(index)
+        for key, value in (held or {}).items():
+            counts[key] -= value
+    explicit: dict[int, ScenarioState] = {}
+    open_ = tuple(sorted(busy | closed.open))
+    for index in open_:
+        batch = batches.get(index)
+        folded: dict[str, ResultRecord] = {}
+        for record in batch.results if batch is not None else ():
+            folded.setdefault(record.id, record)
+        for position in layout.positions(index):
+            explicit[position] = _state(
+                position, layout.ids[position], folded, latest, assessments, retries
             )
-            continue
-        entry = latest.get(scenario_id)
-        if entry is None:
-            states.append(ScenarioState(position=position, id=scenario_id, state=State.PENDING))
-            continue
-        attempt, env = entry
-        states.append(_attempt_state(position, scenario_id, attempt, env, assessments, retries))
-    return tuple(states)
+    top = max(max(batches, default=-1), max(busy, default=-1))
+    covered = len(batches) + sum(1 for i in busy if i not in batches)
+    gaps: tuple[int, ...] = ()
+    if covered <= top:  # a batch object went missing in the middle (rare: a full pass)
+        gaps = tuple(i for i in range(top) if i not in batches and i not in busy)
+    return Progress(
+        layout=layout,
+        explicit=explicit,
+        open=open_,
+        present=batches,
+        closed=counts,
+        closed_scenarios=counts.get("total", 0),
+        tail=top + 1,
+        gaps=gaps,
+    )
+
+
+def _state(
+    position: int,
+    scenario_id: str,
+    folded: Mapping[str, ResultRecord],
+    latest: Mapping[str, tuple[int, EnvironmentView]],
+    assessments: Mapping[str, Assessment],
+    retries: int,
+) -> ScenarioState:
+    kept = folded.get(scenario_id)
+    if kept is not None:
+        return ScenarioState(
+            position=position,
+            id=scenario_id,
+            state=State.FOLDED,
+            attempt=kept.attempts,
+            result=kept,
+            durable=True,
+        )
+    entry = latest.get(scenario_id)
+    if entry is None:
+        return ScenarioState(position=position, id=scenario_id, state=State.PENDING)
+    attempt, env = entry
+    return _attempt_state(position, scenario_id, attempt, env, assessments, retries)
 
 
 def _attempt_state(
@@ -237,30 +389,39 @@ class Selection:
     suspended: bool
 
 
+Run = tuple[int, int, Sequence[int]]
+"""(batch index, attempt, positions): consecutive candidates of one batch and attempt."""
+
+
 def select(
-    states: Sequence[ScenarioState], layout: Layout, selection: Selection
+    states: Progress | Sequence[ScenarioState], layout: Layout, selection: Selection
 ) -> tuple[Unit, ...]:
-    """Units to start now, in order."""
+    """Units to start now, in order (only as many candidates are looked at as they take)."""
     if selection.suspended:
         return ()
-    candidates = [s for s in states if s.state is State.RETRY] + [
-        s for s in states if s.state is State.PENDING
-    ]
+    known = states if isinstance(states, Progress) else Progress.dense(states, layout)
     if selection.barrier:
-        open_batch = next((layout.batch_of(s.position) for s in states if not s.state.final), None)
+        open_batch = _first_unfinished(known)
         if open_batch is None:
             return ()
-        candidates = [c for c in candidates if layout.batch_of(c.position) == open_batch]
+        listed = list(_runs_of_batch(known, open_batch))
+        runs: Iterable[Run] = listed
+        total = sum(len(positions) for _, _, positions in listed)
         budget = (
-            len(candidates)
+            total
             if selection.barrier_limit is None
             else max(selection.barrier_limit - selection.in_flight, 0)
         )
     else:
+        retries = [s for s in known.explicit.values() if s.state is State.RETRY]
+        pending = sum(1 for s in known.explicit.values() if s.state is State.PENDING)
+        total = len(retries) + pending + known.absent_scenarios
+        runs = itertools.chain(_grouped(retries, layout), _pending_runs(known))
         budget = max(selection.free_slots, 0)
     return tuple(
         _group(
-            candidates,
+            runs,
+            total,
             layout,
             chunk=max(selection.chunk, 1),
             spread=max(selection.spread, 1),
@@ -269,59 +430,86 @@ def select(
     )
 
 
+def _first_unfinished(known: Progress) -> int | None:
+    """The batch of the first scenario in list order without a final verdict."""
+    first = next(
+        (known.layout.batch_of(p) for p, s in known.explicit.items() if not s.state.final), None
+    )
+    absent = next(known.absent(), None) if known.absent_scenarios else None
+    found = [i for i in (first, absent) if i is not None]
+    return min(found) if found else None
+
+
+def _runs_of_batch(known: Progress, index: int) -> Iterator[Run]:
+    """One batch's candidates: its retries, then its pending scenarios."""
+    if index not in known.open:
+        yield (index, 0, known.layout.positions(index))
+        return
+    mine = known.of_batch(index)
+    yield from _grouped([s for s in mine if s.state is State.RETRY], known.layout)
+    yield from _grouped([s for s in mine if s.state is State.PENDING], known.layout)
+
+
+def _pending_runs(known: Progress) -> Iterator[Run]:
+    """Pending scenarios in list order: the open batches' and the absent batches' merged."""
+    absent = known.absent()
+    following = next(absent, None)
+    for index in known.open:
+        while following is not None and following < index:
+            yield (following, 0, known.layout.positions(following))
+            following = next(absent, None)
+        pending = [s for s in known.of_batch(index) if s.state is State.PENDING]
+        yield from _grouped(pending, known.layout)
+    while following is not None:
+        yield (following, 0, known.layout.positions(following))
+        following = next(absent, None)
+
+
+def _grouped(states: Sequence[ScenarioState], layout: Layout) -> Iterator[Run]:
+    """Consecutive states of one batch and attempt as runs."""
+    start = 0
+    for i in range(1, len(states) + 1):
+        if i == len(states) or (
+            layout.batch_of(states[i].position) != layout.batch_of(states[start].position)
+            or states[i].attempt != states[start].attempt
+        ):
+            first = states[start]
+            yield (
+                layout.batch_of(first.position),
+                first.attempt,
+                [s.position for s in states[start:i]],
+            )
+            start = i
+
+
 def _group(
-    candidates: Sequence[ScenarioState], layout: Layout, *, chunk: int, spread: int, limit: int
+    runs: Iterable[Run], total: int, layout: Layout, *, chunk: int, spread: int, limit: int
 ) -> list[Unit]:
-    """Consecutive candidates of one batch and attempt, at most ``chunk`` and at most the
-    remaining candidates over ``spread`` at a time, split evenly within the batch (9 as 5 + 4,
+    """Units of at most ``chunk`` consecutive candidates of one run, and at most the remaining
+    candidates (``total`` at first) over ``spread``, each run's rest split evenly (9 as 5 + 4,
     not 8 + 1); at most ``limit`` units (the rest of a long queue is not even looked at)."""
     units: list[Unit] = []
-    current: list[ScenarioState] = []
-    size = 0
-    in_run = _run_lengths(candidates, layout)
-
-    def flush() -> None:
-        if current:
-            first = current[0]
+    left = total
+    for batch_index, attempt, positions in runs:
+        taken = 0
+        while taken < len(positions):
+            if len(units) >= limit:
+                return units
+            rest = len(positions) - taken
+            size = min(chunk, -(-left // spread))
+            size = -(-rest // -(-rest // size))  # the run's rest in equal parts of <= size
+            part = tuple(positions[taken : taken + size])
             units.append(
                 Unit(
-                    batch_index=layout.batch_of(first.position),
-                    first=layout.slot_of(first.position),
-                    attempt=first.attempt + 1,
-                    positions=tuple(s.position for s in current),
+                    batch_index=batch_index,
+                    first=layout.slot_of(part[0]),
+                    attempt=attempt + 1,
+                    positions=part,
                 )
             )
-            current.clear()
-
-    for left, candidate in zip(range(len(candidates), 0, -1), candidates, strict=True):
-        if len(units) >= limit:
-            break
-        if current and (
-            len(current) >= size
-            or layout.batch_of(candidate.position) != layout.batch_of(current[0].position)
-            or candidate.attempt != current[0].attempt
-        ):
-            flush()
-        if not current:
-            size = min(chunk, -(-left // spread))
-            rest = in_run[len(candidates) - left]
-            size = -(-rest // -(-rest // size))  # the batch's rest in equal parts of <= size
-        current.append(candidate)
-    if len(units) < limit:
-        flush()
+            taken += len(part)
+            left -= len(part)
     return units
-
-
-def _run_lengths(candidates: Sequence[ScenarioState], layout: Layout) -> list[int]:
-    """For each candidate, how many candidates from it on share its batch and attempt."""
-    lengths = [0] * len(candidates)
-    for i in range(len(candidates) - 1, -1, -1):
-        same = i + 1 < len(candidates) and (
-            layout.batch_of(candidates[i + 1].position) == layout.batch_of(candidates[i].position)
-            and candidates[i + 1].attempt == candidates[i].attempt
-        )
-        lengths[i] = lengths[i + 1] + 1 if same else 1
-    return lengths
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)

@@ -174,7 +174,15 @@ def _without_pod(
             phase=EnvironmentPhase.PENDING, node=None, timings=timings, results=None, needs_pod=True
         )
     since = env.provisioned_at or queued or now
-    grace_end = since + datetime.timedelta(seconds=limits.missing_grace)
+    recorded = env.status.timings
+    seen = env.status.node is not None or recorded.started is not None
+    seen = seen or recorded.scheduled is not None
+    # A pod the cache never showed may exist behind a lagging watch (a starved operator under
+    # load: 10,000 scenarios on 2 busy cores lost 6 running pods to a 10 s grace). Until the
+    # cache has shown it once, its absence is no evidence of a delete: it gets the time a
+    # Pending pod gets to start.
+    grace = limits.missing_grace if seen else max(limits.missing_grace, limits.pending_seconds)
+    grace_end = since + datetime.timedelta(seconds=grace)
     if now < grace_end:
         return Assessment(
             phase=env.status.phase,
@@ -183,7 +191,13 @@ def _without_pod(
             results=None,
             wake_at=grace_end,
         )
-    reason = f"simulator pod {env.status.pod or env.name} disappeared before it finished (deleted)"
+    name = env.status.pod or env.name
+    reason = (
+        f"simulator pod {name} disappeared before it finished (deleted)"
+        if seen
+        else f"simulator pod {name} never appeared in {grace:.0f}s after it was created "
+        "(pendingTimeoutSeconds; deleted?)"
+    )
     return Assessment(
         phase=EnvironmentPhase.FINISHED,
         node=env.status.node,

@@ -31,6 +31,7 @@ from simtest_operator.operator.expectations import Expectations
 from simtest_operator.operator.metrics import Metrics
 from simtest_operator.operator.observed import CampaignView
 from simtest_operator.operator.scenariolists import StoredList
+from simtest_operator.operator.status.counting import Tally
 from simtest_operator.render import EnvironmentRequest, RenderedEnvironment
 from simtest_operator.search import SearchSpace
 from simtest_operator.settings import OperatorSettings
@@ -67,6 +68,9 @@ class CampaignLoop:
         self.wake = asyncio.Event()
         self.expectations = Expectations()
         self.stored: StoredList | None = None
+        self.tally = Tally()
+        """The closed batches' counters, carried from step to step (a step then reads only the
+        batches that changed)."""
         self.resolution_error: str | None = None
         self.resolution_generation = 0
         self.search: searching.CampaignSearch | None = None
@@ -157,6 +161,7 @@ class CampaignLoop:
             workload=cache.workload_of(self.key),
             refused=dict(self.refused),
             search=self.search.progress() if self.search is not None else None,
+            tally=self.tally,
         )
         plan = planning.plan(inputs, config=shared.config, render=shared.render)
         shared.metrics.plan.observe(time.perf_counter() - planning_started)

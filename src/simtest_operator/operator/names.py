@@ -5,7 +5,8 @@ cache is a harmless ``409 AlreadyExistsError``) and let a restarted operator fin
 
 ::
 
-    <campaign>-scenarios            ConfigMap with the frozen list
+    <campaign>-scenarios            ConfigMap with the frozen list (its head, when chunked)
+    <campaign>-scenarios-3-1a2b3c4d ConfigMap with chunk 3 of a long frozen list (by content)
     <campaign>-simulator            ServiceAccount of the simulator pods (no RBAC bindings)
     <campaign>-evaluate             Job of the evaluation step (spec.evaluation.offline)
     <campaign>-b00042               ScenarioBatch 42
@@ -30,6 +31,12 @@ _ENV = re.compile(r"^(?P<batch>.+-b(?P<index>\d{5}))-e(?P<first>\d{3})-a(?P<atte
 def scenario_list(campaign: str) -> str:
     """ConfigMap holding the campaign's frozen scenario list."""
     return f"{campaign}-scenarios"
+
+
+def scenario_list_chunk(campaign: str, index: int, digest: str) -> str:
+    """ConfigMap holding chunk ``index`` (from 1) of a frozen list too long for one object,
+    named by its content, so a resolution retried after a crash never meets a stale chunk."""
+    return f"{scenario_list(campaign)}-{index}-{digest[:8]}"
 
 
 def service_account(campaign: str) -> str:

@@ -1,4 +1,4 @@
-"""Resolving a campaign once: freeze its scenario list into a ConfigMap child.
+"""Resolving a campaign once: freeze its scenario list into ConfigMap children.
 
 The frozen list is computed by :func:`simtest_operator.runner.resolving.freeze` — the same code
 ``simtest run`` uses, so a campaign selects the same scenarios on a laptop and in a cluster —
@@ -44,7 +44,11 @@ async def load(client: Client, campaign: observed.CampaignView) -> StoredList | 
         )
     except NotFoundError:
         return None
-    return scenariolists.read(body)
+    chunks = [
+        await client.get(Kind.CONFIG_MAP, campaign.namespace, name)
+        for name in scenariolists.chunk_names(body)
+    ]  # the head exists only once every chunk does (created last)
+    return scenariolists.read(body, chunks)
 
 
 def fetch_context(
@@ -136,7 +140,7 @@ async def resolve(
     if frozen.scenarios:
         _preflight(campaign, stored, config=config, render=render)
     owner = bodies.owner("TestCampaign", campaign.name, campaign.uid)
-    body = scenariolists.config_map(
+    *chunks, head = scenariolists.config_maps(
         stored, namespace=campaign.namespace, campaign=campaign.name, owner=owner
     )
     account = bodies.service_account(
@@ -144,8 +148,11 @@ async def resolve(
     )
     with contextlib.suppress(AlreadyExistsError):
         await client.create(Kind.SERVICE_ACCOUNT, campaign.namespace, account)
+    for chunk in chunks:  # named by content: one that exists holds exactly this
+        with contextlib.suppress(AlreadyExistsError):
+            await client.create(Kind.CONFIG_MAP, campaign.namespace, chunk)
     try:
-        await client.create(Kind.CONFIG_MAP, campaign.namespace, body)
+        await client.create(Kind.CONFIG_MAP, campaign.namespace, head)
     except AlreadyExistsError:
         existing = await load(client, campaign)
         if existing is None:

@@ -6,10 +6,11 @@ attempt and each unstarted scenario ends (:mod:`simtest_operator.operator.cancel
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping
 
 from simtest_operator.operator import cancelling, provisioning
-from simtest_operator.operator.batches import ScenarioState, scenario_states
+from simtest_operator.operator.batches import Progress, progress
 from simtest_operator.operator.environments import Assessment, Limits
 from simtest_operator.operator.observed import EnvironmentView
 from simtest_operator.operator.planning.inputs import Step
@@ -57,18 +58,24 @@ def states(
     step: Step,
     judged: Mapping[str, Assessment],
     cancellation: cancelling.Cancellation | None,
-) -> tuple[ScenarioState, ...]:
-    """Every scenario's state, in frozen-list order."""
-    current = scenario_states(
+) -> Progress:
+    """Every scenario's state (only the open batches' spelled out)."""
+    current = progress(
         step.layout,
-        batches=step.batches.values(),
+        batches=step.batches,
+        closed=step.closed,
         envs=step.envs,
         assessments=judged,
         retries=step.spec.execution.retries,
     )
     if cancellation is None:
         return current
-    return cancelling.states(current, step.layout, cancellation, batches=step.batches.keys())
+    ended = cancelling.states(
+        tuple(current.explicit.values()), step.layout, cancellation, batches=step.batches.keys()
+    )
+    return dataclasses.replace(
+        current, explicit={s.position: s for s in ended}, skipped_absent=True
+    )
 
 
 def in_flight(step: Step, judged: Mapping[str, Assessment]) -> int:

@@ -11,7 +11,12 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from simtest_operator.operator.actions import Action, Emit, Kind, PatchStatus
-from simtest_operator.operator.batches import ScenarioState, State, unstored_by_environment
+from simtest_operator.operator.batches import (
+    Progress,
+    ScenarioState,
+    State,
+    unstored_by_environment,
+)
 from simtest_operator.operator.observed import BatchView
 from simtest_operator.operator.planning.inputs import Step
 from simtest_operator.operator.planning.outcomes import Outcome
@@ -20,15 +25,18 @@ from simtest_operator.operator.status import batchstatus, patches
 _FINAL_PHASES = ("Succeeded", "Failed", "Error")
 
 
-def fold(step: Step, states: Sequence[ScenarioState]) -> Outcome:
-    """Status patches and events of every batch whose status changes, by index."""
+def fold(step: Step, states: Progress) -> Outcome:
+    """Status patches and events of every batch whose status changes, by index (only open
+    batches can change: a closed one holds every result and nothing runs for it)."""
     busy = {env.batch for env in step.envs}
     actions: list[Action] = []
-    for index, batch in sorted(step.batches.items()):
-        positions = step.layout.positions(index)
-        if batch.name not in busy and len(batch.results) == len(positions):
+    for index in states.open:
+        batch = step.batches.get(index)
+        if batch is None:
+            continue
+        if batch.name not in busy and len(batch.results) == len(step.layout.positions(index)):
             continue  # every result recorded and nothing running: the status is final
-        actions.extend(_batch(step, index, batch, [states[p] for p in positions]))
+        actions.extend(_batch(step, index, batch, states.of_batch(index)))
     return Outcome(actions=tuple(actions))
 
 

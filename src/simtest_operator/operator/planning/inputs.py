@@ -25,6 +25,7 @@ from simtest_operator.operator.observed import (
     PodView,
 )
 from simtest_operator.operator.scenariolists import StoredList
+from simtest_operator.operator.status.counting import Tally
 from simtest_operator.operator.status.searchstatus import SearchProgress
 from simtest_operator.render import EnvironmentRequest, RenderedEnvironment
 from simtest_operator.scenarios.pinned import PinnedScenario
@@ -59,6 +60,9 @@ class Inputs:
     search: SearchProgress | None = None
     """The campaign's searcher (``spec.search``), as the loop's
     :class:`~simtest_operator.operator.searching.CampaignSearch` reports it."""
+    tally: Tally | None = None
+    """The closed batches' counters as the campaign loop keeps them across steps (None: count
+    them afresh; the same answer at a cost that grows with the campaign)."""
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
@@ -74,6 +78,8 @@ class Step:
     layout: Layout
     batches: Mapping[int, BatchView]
     """This campaign's batches by index."""
+    closed: Tally
+    """Which of them are closed (every result in the status), and their counters."""
     envs: Sequence[EnvironmentView]
     """This campaign's environments."""
     run_key: str
@@ -103,10 +109,11 @@ def step(
     batches = {b.index: b for b in inputs.batches if b.campaign == campaign.name}
     if spec.search is None:
         frozen = stored.frozen.scenarios
-        layout = Layout(ids=tuple(s.id for s in frozen), batch_size=stored.batch_size)
+        layout = stored.layout
     else:
         frozen, starts = waves(batches)
         layout = Layout(ids=tuple(s.id for s in frozen), batch_size=1, starts=starts)
+    tally = inputs.tally if inputs.tally is not None else Tally()
     return Step(
         inputs=inputs,
         spec=spec,
@@ -115,6 +122,7 @@ def step(
         frozen=frozen,
         layout=layout,
         batches=batches,
+        closed=tally.sync(batches, layout),
         envs=tuple(e for e in inputs.envs if e.campaign == campaign.name),
         run_key=recording_results.run_key(campaign) if spec.results.database_secret_ref else "",
     )

@@ -8,13 +8,12 @@ then unstarted scenarios; batch objects are created one ahead so the window neve
 from __future__ import annotations
 
 import datetime
-from collections.abc import Sequence
 
 from simtest_operator.operator import bodies, names, observed, provisioning, requests
 from simtest_operator.operator.actions import Action, Create, Kind
 from simtest_operator.operator.batches import (
     Capacity,
-    ScenarioState,
+    Progress,
     Selection,
     State,
     cluster_slots,
@@ -62,7 +61,7 @@ def window(step: Step) -> int:
     return capacity.slots + prefetch
 
 
-def start(step: Step, states: Sequence[ScenarioState], *, in_flight: int, window: int) -> Outcome:
+def start(step: Step, states: Progress, *, in_flight: int, window: int) -> Outcome:
     """Batch and environment objects to create (at most ``maxStartsPerStep`` environments;
     the rest in the next step, once these are applied)."""
     spec = step.spec
@@ -141,7 +140,7 @@ def _filling(running: int, in_flight: int, window: int) -> int:
     return free if 0 < free < window - in_flight else window
 
 
-def _lookahead(step: Step, states: Sequence[ScenarioState]) -> set[int]:
+def _lookahead(step: Step, states: Progress) -> set[int]:
     """Create the next batch object once every scenario of the newest one has started, so
     the window never waits for a batch to appear."""
     if not step.batches:
@@ -150,5 +149,5 @@ def _lookahead(step: Step, states: Sequence[ScenarioState]) -> set[int]:
     following = newest + 1
     if following >= step.layout.batch_count():
         return set()
-    started = all(states[p].state is not State.PENDING for p in step.layout.positions(newest))
+    started = all(states.state(p).state is not State.PENDING for p in step.layout.positions(newest))
     return {following} if started else set()

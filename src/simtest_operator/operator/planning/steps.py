@@ -59,16 +59,16 @@ def _run(step: inputs.Step) -> Plan:
     cancellation = cancelling.decide(step.spec, step.campaign.status, now=step.now)
     judged = assessing.assessments(step, cancellation)
     states = assessing.states(step, judged, cancellation)
-    counts = counting.counters(states)
+    counts = counting.progress_counters(states)
     searching = step.inputs.search is not None and step.inputs.search.open
-    complete = all(s.state.settled for s in states) and not (searching and cancellation is None)
+    complete = states.complete and not (searching and cancellation is None)
     in_flight = assessing.in_flight(step, judged)
     gate = admitting.admit(step, starting.window(step), complete=complete, in_flight=in_flight)
     window = gate.window
     outcome = (
         Outcome(actions=gate.actions)
         + tending.tend(step, judged)
-        + cleaning.teardowns(step)
+        + cleaning.teardowns(step, states)
         + folding.fold(step, states)
         + cleaning.removals(step, judged, states)
     )
