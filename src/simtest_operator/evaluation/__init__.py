@@ -6,8 +6,9 @@ Public API: :class:`Criteria` (defaults plus per-scenario overrides), :class:`On
 (evaluator plus :class:`RunFacts` -> :class:`Judgement`).
 """
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from simtest_operator import lazyimports
 
 if TYPE_CHECKING:
     from simtest_operator.evaluation.carla_criteria import Outcome, ScenarioCriteria, Status
@@ -38,11 +39,7 @@ _MODULES = {
 }
 
 
-def __getattr__(name: str) -> Any:
-    module = _MODULES.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    return getattr(importlib.import_module(f"{__name__}.{module}"), name)
+__getattr__ = lazyimports.loader(__name__, _MODULES)
 
 
 __all__ = [

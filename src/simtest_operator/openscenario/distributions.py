@@ -66,29 +66,14 @@ def dimensions(path: Path) -> tuple[Path, list[Dimension]]:
     distributions have no range, so both raise UnsupportedFeatureError. Names the scenario
     does not declare raise ScenarioError.
     """
-    path = path.resolve()
-    file = str(path)
-    root = xmlsafe.parse_file(path)
-    ctx = reading.Context(
-        file=file,
-        scope=parameters.EMPTY,
-        catalogs=Catalogs.empty(scenario_file=file),
-        findings=reading.Findings(),
-    )
-    dist = reading.child(root, "ParameterValueDistribution")
-    if dist is None:
-        raise ScenarioError("not a ParameterValueDistribution file", file=file)
-    scenario_el = ctx.require(dist, "ScenarioFile")
-    scenario = (path.parent / ctx.string(scenario_el, "filepath")).resolve()
-    if not scenario.is_file():
-        raise ctx.error(scenario_el, f"scenario file {scenario} not found")
+    ctx, dist, scenario = _opened(path)
     found: list[Dimension] = []
     for block in (reading.child(dist, "Deterministic"), reading.child(dist, "Stochastic")):
         for node in reading.children(block) if block is not None else ():
             if node.tag == "DeterministicMultiParameterDistribution":
                 raise UnsupportedFeatureError(
                     "a multi-parameter value set varies parameters jointly: not a search dimension",
-                    file=file,
+                    file=ctx.file,
                     element=str(node.tag),
                     line=node.sourceline,
                 )
@@ -136,18 +121,9 @@ def declared_parameters(root: Element) -> dict[str, str]:
     return {str(decl.get("name")): str(decl.get("value") or "") for decl in decls}
 
 
-def is_distribution(path: Path) -> bool:
-    """True when ``path`` is a ParameterValueDistribution file."""
-    return loading.file_kind(path) is headers.FileKind.DISTRIBUTION
-
-
-def expand_distribution(path: Path, *, seed: int | None = None) -> list[ConcreteRun]:
-    """Expand the distribution file at ``path`` into concrete runs, in a stable order.
-
-    ``seed`` is used for stochastic distributions that declare no ``randomSeed`` (default 0).
-    Raises ScenarioError for malformed files or parameters the scenario does not declare, and
-    UnsupportedFeatureError for user-defined distributions.
-    """
+def _opened(path: Path) -> tuple[reading.Context, Element, Path]:
+    """A distribution file's reading context, its ParameterValueDistribution element and the
+    scenario file it names (which must exist)."""
     path = path.resolve()
     file = str(path)
     root = xmlsafe.parse_file(path)
@@ -164,6 +140,22 @@ def expand_distribution(path: Path, *, seed: int | None = None) -> list[Concrete
     scenario = (path.parent / ctx.string(scenario_el, "filepath")).resolve()
     if not scenario.is_file():
         raise ctx.error(scenario_el, f"scenario file {scenario} not found")
+    return ctx, dist, scenario
+
+
+def is_distribution(path: Path) -> bool:
+    """True when ``path`` is a ParameterValueDistribution file."""
+    return loading.file_kind(path) is headers.FileKind.DISTRIBUTION
+
+
+def expand_distribution(path: Path, *, seed: int | None = None) -> list[ConcreteRun]:
+    """Expand the distribution file at ``path`` into concrete runs, in a stable order.
+
+    ``seed`` is used for stochastic distributions that declare no ``randomSeed`` (default 0).
+    Raises ScenarioError for malformed files or parameters the scenario does not declare, and
+    UnsupportedFeatureError for user-defined distributions.
+    """
+    ctx, dist, scenario = _opened(path)
     declared = _declared_names(scenario)
     deterministic = reading.child(dist, "Deterministic")
     stochastic = reading.child(dist, "Stochastic")
@@ -179,7 +171,7 @@ def expand_distribution(path: Path, *, seed: int | None = None) -> list[Concrete
             raise ctx.error(where, f"{scenario.name} declares no parameter(s) {', '.join(unknown)}")
     return [
         ConcreteRun(
-            id=f"{path.stem}#{k}-{_digest(assignment)}",
+            id=f"{path.resolve().stem}#{k}-{_digest(assignment)}",
             scenario=scenario,
             overrides=types.MappingProxyType(dict(assignment)),
         )

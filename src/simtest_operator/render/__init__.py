@@ -6,8 +6,9 @@ writes its termination message through :mod:`.runspecs` and :mod:`.messages` and
 nothing, so it does not import the renderer's Jinja and YAML.
 """
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from simtest_operator import lazyimports
 
 if TYPE_CHECKING:
     from simtest_operator.render.inputs import (
@@ -44,11 +45,7 @@ _MODULES = {
 }
 
 
-def __getattr__(name: str) -> Any:
-    module = _MODULES.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    return getattr(importlib.import_module(f"{__name__}.{module}"), name)
+__getattr__ = lazyimports.loader(__name__, _MODULES)
 
 
 __all__ = [

@@ -8,8 +8,9 @@ of its run spec and should not build the kinds, manifests and status models (abo
 every runner's start-up) to get them.
 """
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from simtest_operator import lazyimports
 
 if TYPE_CHECKING:
     from simtest_operator.api.v1alpha1.common import API_VERSION, GROUP, VERSION, Condition
@@ -101,11 +102,7 @@ _MODULES = {
 }
 
 
-def __getattr__(name: str) -> Any:
-    module = _MODULES.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    return getattr(importlib.import_module(f"{__name__}.{module}"), name)
+__getattr__ = lazyimports.loader(__name__, _MODULES)
 
 
 __all__ = [
