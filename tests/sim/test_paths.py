@@ -118,12 +118,28 @@ def test_follow_mode_speeds_change_linearly_and_reach_every_vertex_on_time() -> 
     path = build(
         [(100.0, 0.0), (120.0, 0.0), (125.0, 0.0), (130.0, 0.0), (130.0, 0.0)],
         [0.0, 2.0, 2.5, 3.5, 4.0],
-    ).following()
+    ).following(10.0)
     assert path.speeds == (10.0, 10.0, 10.0, 0.0, 0.0)
     for t, d in ((2.5, 25.0), (3.5, 30.0), (4.0, 30.0)):
         assert path.distance_at_time(t) == pytest.approx(d)
     assert path.distance_at_time(3.0) == pytest.approx(28.75)  # esmini: x = 128.75 at t = 3
     assert path.speed_at_time(3.0) == pytest.approx(5.0)
+
+
+def test_follow_mode_starts_at_the_entity_speed_so_a_braking_profile_stays_a_braking_one() -> None:
+    # esmini's brake_by_trajectory_100-0: 100 km/h braked at 10 m/s² to 50 km/h, then at
+    # 6 m/s² to a stop; the vertex times and distances describe exactly that deceleration.
+    v1, v2 = 100 / 3.6, 50 / 3.6
+    t1, t2 = (v1 - v2) / 10.0, v2 / 6.0
+    d1, d2 = v1 * t1 - 5.0 * t1**2, v2 * t2 - 3.0 * t2**2
+    path = build(
+        [(0.0, 0.0), (d1, 0.0), (d1 + d2, 0.0), (d1 + d2, 0.0)],
+        [0.0, t1, t1 + t2, t1 + t2 + 1.0],
+    ).following(-v1)  # the magnitude counts (a reversing entity)
+    assert path.speeds == pytest.approx((v1, v2, 0.0, 0.0), abs=1e-9)
+    assert path.speed_at_time(1.0) == pytest.approx(v1 - 10.0)
+    assert path.distance_at_time(1.0) == pytest.approx(v1 - 5.0)
+    assert path.distance_at_time(t1 + 1.0) == pytest.approx(d1 + v2 - 3.0)
 
 
 def test_nurbs_time_follows_the_peaks_of_the_basis_functions() -> None:

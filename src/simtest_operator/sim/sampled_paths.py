@@ -117,20 +117,20 @@ class Path:
         f = (d - d0) / (d1 - d0) if d1 > d0 else 0.0
         return self.times[i - 1] + f * (self.times[i] - self.times[i - 1])
 
-    def following(self) -> Path:
-        """This path driven in ``follow`` mode: the speed starts at the first interval's mean
-        and changes linearly in time so that each sample is reached at its time (the speed at
-        the next sample is twice the interval's mean minus the speed at its start, never
-        below zero)."""
+    def following(self, start_speed: float) -> Path:
+        """This path driven in ``follow`` mode by an entity moving at ``start_speed`` (its
+        magnitude) when the action starts: the speed changes linearly in time so that each
+        sample is reached at its time (the speed at the next sample is twice the interval's
+        mean minus the speed at its start, never below zero). As in the reference player, a
+        car braking along a trajectory whose times describe its deceleration keeps the
+        deceleration instead of jumping to the first interval's mean speed."""
         if self.times is None or len(self.times) < 2:
             return self
         times, lengths = self.times, self.lengths
-        speeds: list[float] = []
+        speeds = [abs(start_speed)]
         for i in range(1, len(times)):
             span = times[i] - times[i - 1]
             mean = (lengths[i] - lengths[i - 1]) / span if span > 0 else 0.0
-            if not speeds:
-                speeds.append(mean)
             speeds.append(max(2.0 * mean - speeds[-1], 0.0) if span > 0 else speeds[-1])
         return dataclasses.replace(self, speeds=tuple(speeds))
 

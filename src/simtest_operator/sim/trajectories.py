@@ -43,7 +43,7 @@ class PathRun(Run):
         self._path = shapes.sample(trajectory.shape, lambda p: positions.resolve(world, p), start)
         self._timing = action.timing if self._path.times is not None else None
         if self._timing is not None and action.following_mode is model.FollowingMode.FOLLOW:
-            self._path = self._path.following()
+            self._path = self._path.following(actor.speed)
         super().__init__(actor, BOTH if self._timing is not None else LATERAL)
         self._t0 = world.time
         self._distance = min(max(action.initial_distance_offset or 0.0, 0.0), self._path.length)
