@@ -99,3 +99,15 @@ def test_follow_mode_honours_the_initial_acceleration() -> None:
     got = speeds([(5.0, 4.0)], [0.4, 5.0, 5.2], speed=10.0, follow=True, limits=limits,
                  start=0.1, acceleration=1.0)  # fmt: skip
     assert got == pytest.approx([10.12, 4.025, 4.0], abs=1e-3)
+
+
+def test_follow_mode_entries_asking_for_more_than_the_limits_are_reached_later() -> None:
+    # esmini's speed-profile_test Car2: from a stop, 10 m/s "in 2 s" under maxAcceleration 1:
+    # the car accelerates at 1 m/s² (after a 2 m/s³ ramp) and reaches 10 m/s after ~10.75 s
+    # (esmini: 0.75, 1.75, 9.72 and 10.0 m/s at 1, 2, 10 and 11 s).
+    limits = profiles.Limits(
+        acceleration=1.0, deceleration=10.0, acceleration_rate=2.0, deceleration_rate=1.0
+    )
+    got = speeds([(2.0, 10.0), (10.0, 10.0)], [1.0, 2.0, 10.0, 11.0], speed=0.0, follow=True,
+                 limits=limits)  # fmt: skip
+    assert got == pytest.approx([0.75, 1.75, 9.71875, 10.0])

@@ -1,7 +1,8 @@
 """Speed profiles (SpeedProfileAction) planned into piecewise speed segments.
 
 Entry times are durations from the previous entry (an entry without a time is reached at the
-allowed acceleration or deceleration). The entries become vertices (time, speed) joined by
+allowed acceleration or deceleration; in ``follow`` mode one whose time asks for more is reached
+later, at the allowed rate). The entries become vertices (time, speed) joined by
 straight speed lines; collinear middle vertices are merged.
 
 ``position`` mode drives the lines themselves (speed piecewise linear in time). ``follow`` mode
@@ -82,11 +83,15 @@ def vertices(
     for i in range(index, len(entries)):
         duration, target = entries[i]
         last = out[-1]
+        dv = target - last.v
+        least = dv / (limits.acceleration if dv > 0 else -limits.deceleration)
         if duration is None:
-            dv = target - last.v
             if abs(dv) <= EPSILON:
                 continue
-            time += dv / (limits.acceleration if dv > 0 else -limits.deceleration)
+            time += least
+        elif follow:
+            # a vehicle cannot change speed faster than its limits: it arrives later
+            time = max(time + duration, last.t + least)
         else:
             time += duration
         span = time - last.t
