@@ -1,13 +1,15 @@
 """Scenarios of the development corpus whose paths and end time match the reference player
 (esmini 3.6) with the ego scripted: each behaviour fixed against the reference keeps a scenario
 here that exercises it (clothoid and clothoid-spline trajectories with jumps, offsets and
-per-segment timing; NURBS timing; follow-mode timed polylines with a stop; reversing along a
-trajectory and road-position headings in a parking lot; jerk-limited follow-mode speed
-profiles; spring-model distance keeping with jerk limits; time-gap distance keeping in free
-space behind a reference that moves first in the step, and synchronizing with a master that
-moves first (within 0.1 m); lane changes on a circle with a
-headway trigger; end-of-road teleports restarting acts; lateral distance keeping; lane
-clearance on a 2+1 road; traffic signal states with edge-triggered events)."""
+per-segment timing; NURBS timing; follow-mode timed polylines with a stop and braking from the
+entity's speed; reversing along a trajectory and road-position headings in a parking lot;
+jerk-limited follow-mode speed profiles (entries asking for more than the limits arrive
+later); a continuous relative speed tracked within the vehicle's performance; spring-model
+distance keeping with jerk limits; time-gap distance keeping in free space behind a reference
+that moves first in the step, and synchronizing with a master that moves first (within 0.1 m);
+lane changes on a circle with a headway trigger; end-of-road teleports restarting acts; lateral
+distance keeping; lane clearance on a 2+1 road; traffic signal states with edge-triggered
+events)."""
 
 from __future__ import annotations
 
@@ -78,6 +80,9 @@ def compare(relative: str, tmp_path: Path) -> references.Comparison:
         "xosc/cut-in_cr.xosc",  # ends 10 s after a "continuous" lane offset ended (Event::Action)
         "test_action_dynamics.xosc",
         "direction_dimension_trig.xosc",  # longitudinal relative speed in the reference's frame
+        "brake_by_trajectory_100-0.xosc",  # follow-mode trajectory from the entity's speed
+        "speed-profile_test.xosc",  # follow-mode entries beyond maxAcceleration arrive later
+        "relative_speed_phases.xosc",  # continuous relative speed within the performance
     ],
 )
 def test_matches_the_reference_player(relative: str, tmp_path: Path) -> None:

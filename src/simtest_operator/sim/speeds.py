@@ -5,7 +5,8 @@ A transition runs from the speed at the action start to the target with the dyna
 duration derived from the dimension: ``time`` is the duration, ``distance`` the distance covered
 (duration = distance / mean speed), ``rate`` the mean acceleration (duration = |dv| / rate). A
 ``continuous`` relative target is re-read each step, so the transition bends towards a moving
-target, and the action keeps tracking it after the transition and never ends by itself; a relative
+target (its pace re-derived from it), and the action keeps tracking it after the transition and
+never ends by itself, never changing speed faster than the vehicle's performance; a relative
 target that is not continuous is the reference's speed at the action start (as esmini).
 """
 
@@ -70,13 +71,15 @@ def transition_duration(
 class SpeedRun(Run):
     """A running SpeedAction on one actor."""
 
-    __slots__ = ("_action", "_duration", "_elapsed", "_sampled", "_v0")
+    __slots__ = ("_action", "_duration", "_elapsed", "_progress", "_sampled", "_v0")
 
     def __init__(self, world: World, actor: Actor, action: model.SpeedAction) -> None:
         super().__init__(actor, LONGITUDINAL)
         self._action = action
         self._v0 = actor.speed
         self._elapsed = 0.0
+        self._progress = 0.0
+        """Fraction of a continuous transition done (its pace follows the moving target)."""
         target = target_speed(world, action.target)
         self._sampled = None if self._continuous else target
         """A relative target that is not continuous is the reference's speed at the start
@@ -98,6 +101,9 @@ class SpeedRun(Run):
         target = self._sampled
         if target is None:
             target = target_speed(world, self._action.target)
+        if self._continuous:
+            self._track(target, dt)
+            return
         self._elapsed += dt
         if self._duration <= 0.0 or self._elapsed >= self._duration:
             self.actor.speed = target
@@ -105,6 +111,29 @@ class SpeedRun(Run):
             return
         fraction = shape_fraction(self._action.dynamics.shape, self._elapsed / self._duration)
         self.actor.speed = self._v0 + (target - self._v0) * fraction
+
+    def _track(self, target: float, dt: float) -> None:
+        """One step towards a continuous (moving) target, as the reference player does: the
+        transition's pace is re-derived from the current target each step (a target that ran
+        away stretches it to the vehicle's performance), and no step changes the speed by more
+        than the performance allows, during the transition or while tracking after it (a
+        follower cannot copy a harder braking than its own maxDeceleration)."""
+        actor = self.actor
+        assert actor is not None
+        dynamics = self._action.dynamics
+        performance = actor.obj.performance
+        if self._progress < 1.0:
+            duration = transition_duration(dynamics, self._v0, target, performance)
+            self._progress = min(self._progress + dt / duration, 1.0) if duration > 0 else 1.0
+        wanted = self._v0 + (target - self._v0) * shape_fraction(dynamics.shape, self._progress)
+        if self._progress >= 1.0:
+            wanted = target
+        if performance is not None and dynamics.shape is not model.DynamicsShape.STEP:
+            if performance.max_deceleration > 0:
+                wanted = max(wanted, actor.speed - performance.max_deceleration * dt)
+            if performance.max_acceleration > 0:
+                wanted = min(wanted, actor.speed + performance.max_acceleration * dt)
+        actor.speed = wanted
 
 
 class SpeedProfileRun(Run):
