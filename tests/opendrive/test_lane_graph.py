@@ -150,3 +150,16 @@ def test_every_junction_connection_is_in_the_graph(name: str, xodr_dir: Path) ->
             }
             for link in connection.lane_links:
                 assert (connection.connecting_road, link.to_lane) in reached
+
+
+def test_a_route_leads_on_through_another_connector_joining_the_same_roads(
+    xodr_dir: Path,
+) -> None:
+    # esmini's route_lane_change: a car planned from road 0 onto road 2 through connector 9
+    # changed onto road 0's oncoming lane -1 and drives it back into the junction. Connector 9
+    # does not continue that lane; connector 14 (road 2 -> road 0) does, and it joins road 2,
+    # so the route takes it (esmini too), not the first declared connector 5 (to road 1).
+    net = RoadNetwork.from_file(xodr_dir / "fabriksgatan.xodr")
+    into = net.advance("0", 2.0, -1, -4.0, prefer_roads=("9", "2"))
+    assert (into.road_id, into.lane_id) == ("14", -1)
+    assert net.advance("0", 2.0, -1, -4.0).road_id == "5"  # no route: the first declared one

@@ -210,3 +210,23 @@ def test_relative_target_speed_not_continuous_is_sampled_at_the_start() -> None:
     bench.start("Lead", speed(20.0))
     bench.step(round(3.0 / DT))
     assert bench.actor("Car").speed == pytest.approx(12.0)
+
+
+def test_a_lane_change_rate_is_its_peak_lateral_speed() -> None:
+    # esmini (TransitionDynamics, dimension rate): a sinusoidal change of 3.5 m at 2 m/s
+    # lasts pi/2 * 3.5 / 2 = 2.75 s (not 3.5 / 2 = 1.75 s: the rate is not the mean).
+    bench = Bench("Car")
+    bench.start("Car", teleport(lane(-1, 500.0)))
+    bench.start("Car", speed(10.0))
+    change = model.LaneChangeAction(
+        dynamics=model.TransitionDynamics(
+            shape=model.DynamicsShape.SINUSOIDAL, dimension=model.DynamicsDimension.RATE, value=2.0
+        ),
+        target=model.RelativeTargetLane(entity_ref="Car", value=-1),
+    )
+    bench.start("Car", change)
+    bench.step(round(1.375 / DT))
+    car = bench.actor("Car")
+    assert (car.lane_id, abs(car.offset)) == (-1, pytest.approx(1.75, abs=0.1))
+    bench.step(round(1.45 / DT))
+    assert (bench.actor("Car").lane_id, bench.actor("Car").offset) == (-2, 0.0)

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Collection, Mapping
+from collections.abc import Collection, Mapping, Sequence
 from pathlib import Path
 
 from simtest_operator.errors import ScenarioError
@@ -267,7 +267,7 @@ class RoadNetwork:
             entries = self._graph.next_lanes(road.id, lane_id, end)
             if not entries:
                 return self._stuck(road.id, end_s, lane_id, direction, remaining)
-            entry = next((e for e in entries if e.road_id in prefer_roads), entries[0])
+            entry = self._preferred(entries, prefer_roads)
             road = self._roads[entry.road_id]
             layout = self._layouts[self._slot(road.id)]
             lane_id = entry.lane_id
@@ -276,6 +276,29 @@ class RoadNetwork:
             else:
                 direction, s = -1, road.length
         raise ScenarioError(f"lane walk from road {road_id!r} does not terminate")
+
+    def _preferred(
+        self, entries: Sequence[topology.LaneEntry], prefer_roads: Collection[str]
+    ) -> topology.LaneEntry:
+        """The successor a route prefers: one on a preferred road, else one whose lane leads on
+        to a preferred road (another connecting road of the junction that joins the same two
+        roads: an entity in a lane the planned connector does not continue, as after a change
+        onto the oncoming lane, still takes the junction towards its route), else the first
+        declared one."""
+        for entry in entries:
+            if entry.road_id in prefer_roads:
+                return entry
+        if prefer_roads:
+            for entry in entries:
+                far = (
+                    models.ContactPoint.END
+                    if entry.contact_point is models.ContactPoint.START
+                    else models.ContactPoint.START
+                )
+                onward = self._graph.next_lanes(entry.road_id, entry.lane_id, far)
+                if any(after.road_id in prefer_roads for after in onward):
+                    return entry
+        return entries[0]
 
     @staticmethod
     def _stuck(

@@ -17,7 +17,7 @@ from simtest_operator.errors import ScenarioError
 from simtest_operator.openscenario import model
 from simtest_operator.sim import placements
 from simtest_operator.sim.actors import Actor, Mode
-from simtest_operator.sim.runs import LATERAL, Run, shape_fraction, shape_slope
+from simtest_operator.sim.runs import LATERAL, Run, peak_rate_factor, shape_fraction, shape_slope
 from simtest_operator.sim.world import World
 from simtest_operator.snapshots import JumpCause
 
@@ -94,7 +94,9 @@ class LaneChangeRun(Run):
         elif dynamics.dimension is model.DynamicsDimension.TIME or self._by_distance:
             self._duration = abs(dynamics.value)
         else:
-            self._duration = lateral / abs(dynamics.value) if dynamics.value else 0.0
+            # the rate is the peak lateral speed (as esmini reads it; the mean for linear)
+            rate = abs(dynamics.value)
+            self._duration = peak_rate_factor(dynamics.shape) * lateral / rate if rate else 0.0
         if self._duration <= 0.0:
             self._finish(world)
             if lateral > 0.0:
