@@ -7,10 +7,12 @@ speed transition over zero time or distance is a step whatever its shape."""
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import pytest
 
 from simtest_operator.openscenario import model
+from simtest_operator.sim import speeds
 from tests.sim.worlds import DT, Bench, lane, speed, teleport
 
 
@@ -230,3 +232,14 @@ def test_a_lane_change_rate_is_its_peak_lateral_speed() -> None:
     assert (car.lane_id, abs(car.offset)) == (-1, pytest.approx(1.75, abs=0.1))
     bench.step(round(1.45 / DT))
     assert (bench.actor("Car").lane_id, bench.actor("Car").offset) == (-2, 0.0)
+
+
+def test_a_speed_change_rate_is_its_peak_acceleration() -> None:
+    # esmini reads the rate of every transition as its peak (one TransitionDynamics for speed
+    # and lateral actions): 0 -> 10 m/s sinusoidally at 2 m/s² takes pi/2 * 10 / 2 s.
+    dynamics = model.TransitionDynamics(
+        shape=model.DynamicsShape.SINUSOIDAL, dimension=model.DynamicsDimension.RATE, value=2.0
+    )
+    assert speeds.transition_duration(dynamics, 0.0, 10.0) == pytest.approx(math.pi * 2.5)
+    linear = dataclasses.replace(dynamics, shape=model.DynamicsShape.LINEAR)
+    assert speeds.transition_duration(linear, 0.0, 10.0) == pytest.approx(5.0)

@@ -3,11 +3,12 @@ continuous) and SpeedProfileAction.
 
 A transition runs from the speed at the action start to the target with the dynamics shape over a
 duration derived from the dimension: ``time`` is the duration, ``distance`` the distance covered
-(duration = distance / mean speed), ``rate`` the mean acceleration (duration = |dv| / rate). A
-``continuous`` relative target is re-read each step, so the transition bends towards a moving
-target (its pace re-derived from it), and the action keeps tracking it after the transition and
-never ends by itself, never changing speed faster than the vehicle's performance; a relative
-target that is not continuous is the reference's speed at the action start (as esmini).
+(duration = distance / mean speed), ``rate`` the peak acceleration (linear: duration =
+|dv| / rate). A ``continuous`` relative target is re-read each step, so the transition bends
+towards a moving target (its pace re-derived from it), and the action keeps tracking it after
+the transition and never ends by itself, never changing speed faster than the vehicle's
+performance; a relative target that is not continuous is the reference's speed at the action
+start (as esmini).
 """
 
 from __future__ import annotations
@@ -59,8 +60,8 @@ def transition_duration(
     elif dynamics.dimension is model.DynamicsDimension.DISTANCE:
         mean = abs(v0 + v1) / 2.0
         duration = value / mean if mean > 1e-6 else 0.0
-    else:
-        duration = abs(v1 - v0) / value if value > 1e-9 else 0.0
+    else:  # the rate is the peak acceleration (the mean for linear), as esmini reads it
+        duration = peak_rate_factor(dynamics.shape) * abs(v1 - v0) / value if value > 1e-9 else 0.0
     if performance is not None:
         limit = performance.max_acceleration if v1 > v0 else performance.max_deceleration
         if limit > 0:
