@@ -1,11 +1,11 @@
 """Lane centres against SUMO: every esmini road converted by netconvert (x/y kept, ``origId`` on
 each lane), points along each SUMO lane shape projected onto our road, our lane centre at that s
 compared with the SUMO polyline (< 0.2 m). Compared where SUMO's own approximation is exact
-enough to be a reference: cross-sections that do not change within +-5 m (netconvert draws
-width and lane-offset transitions as straight chords between section boundaries, e.g. 1.3 m off
-on two_plus_one), no zero-width inner lanes (netconvert drops them), and junction-internal lanes
-only where their radius is not below netconvert's curve resolution (parking_demo's 5 m turns are
-excluded)."""
+enough to be a reference: flat cross-sections (netconvert draws banked lanes flat) that do not
+change within +-5 m (netconvert draws width and lane-offset transitions as straight chords
+between section boundaries, e.g. 1.3 m off on two_plus_one), no zero-width inner lanes
+(netconvert drops them), and junction-internal lanes only where their radius is not below
+netconvert's curve resolution (parking_demo's 5 m turns are excluded)."""
 
 from __future__ import annotations
 
@@ -43,6 +43,8 @@ def steady(net: RoadNetwork, road_id: str, s: float, lane_id: int) -> bool:
     ):
         return False
     for probe in (max(s - 5, 0), s, min(s + 5, length)):
+        if abs(net.roll(road_id, probe)) > 1e-9:
+            return False  # netconvert draws banked lanes flat; OpenDRIVE's t rolls with the road
         lanes = net.lanes_at(road_id, probe)
         if any(abs(b.slope_inner) > 1e-9 or abs(b.slope_outer) > 1e-9 for b in lanes):
             return False

@@ -101,3 +101,24 @@ def test_tracking_with_previous_coordinates(xodr_dir: Path) -> None:
         assert coord is not None
         assert coord.s == pytest.approx(s, abs=1e-6)
         previous = coord
+
+
+def test_lateral_offsets_roll_with_the_superelevation() -> None:
+    # OpenDRIVE's t axis lies in the banked cross-section (esmini places entities so): 60 degrees
+    # of superelevation halve how far a lane centre reaches sideways and lower it; the
+    # projection finds the same t back.
+    document = (
+        '<?xml version="1.0"?><OpenDRIVE><header revMajor="1" revMinor="6"/>'
+        '<road id="r" length="100" junction="-1"><planView><geometry s="0" x="0" y="0" hdg="0" '
+        'length="100"><line/></geometry></planView>'
+        f'<lateralProfile><superelevation s="0" a="{math.pi / 3}" b="0" c="0" d="0"/>'
+        '</lateralProfile><lanes><laneSection s="0"><center><lane id="0" type="none"/></center>'
+        '<right><lane id="-1" type="driving"><width sOffset="0" a="4"/></lane></right>'
+        "</laneSection></lanes></road></OpenDRIVE>"
+    )
+    net = RoadNetwork.from_bytes(document.encode())
+    pose = net.lane_pose("r", 10.0, -1)
+    assert (pose.x, pose.y, pose.z) == pytest.approx((10.0, -1.0, -math.sqrt(3.0)))
+    coord = net.to_road(pose.x, pose.y, "r")
+    assert coord is not None
+    assert (coord.s, coord.t, coord.lane_id) == pytest.approx((10.0, -2.0, -1))

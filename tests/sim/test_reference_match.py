@@ -4,12 +4,12 @@ here that exercises it (clothoid and clothoid-spline trajectories with jumps, of
 per-segment timing; NURBS timing; follow-mode timed polylines with a stop and braking from the
 entity's speed; reversing along a trajectory and road-position headings in a parking lot;
 jerk-limited follow-mode speed profiles (entries asking for more than the limits arrive
-later); a continuous relative speed tracked within the vehicle's performance; spring-model
-distance keeping with jerk limits; time-gap distance keeping in free space behind a reference
-that moves first in the step, and synchronizing with a master that moves first (within 0.1 m);
-lane changes on a circle with a headway trigger; end-of-road teleports restarting acts; lateral
-distance keeping; lane clearance on a 2+1 road; traffic signal states with edge-triggered
-events)."""
+later); a continuous relative speed tracked within the vehicle's performance; lateral offsets
+on banked roads and crests; spring-model distance keeping with jerk limits; time-gap distance
+keeping in free space behind a reference that moves first in the step, and synchronizing with a
+master that moves first (within 0.1 m); lane changes on a circle with a headway trigger;
+end-of-road teleports restarting acts; lateral distance keeping; lane clearance on a 2+1 road;
+traffic signal states with edge-triggered events)."""
 
 from __future__ import annotations
 
@@ -83,6 +83,8 @@ def compare(relative: str, tmp_path: Path) -> references.Comparison:
         "brake_by_trajectory_100-0.xosc",  # follow-mode trajectory from the entity's speed
         "speed-profile_test.xosc",  # follow-mode entries beyond maxAcceleration arrive later
         "relative_speed_phases.xosc",  # continuous relative speed within the performance
+        "pitch_by_super_elevation.xosc",  # t rolls with the superelevation
+        "tilted_crest.xosc",  # ... about the pitched tangent: banked on a crest
     ],
 )
 def test_matches_the_reference_player(relative: str, tmp_path: Path) -> None:

@@ -206,6 +206,8 @@ class Road:
     successor: RoadLink | None
     geometries: tuple[Geometry, ...]
     elevations: tuple[Poly3, ...] = ()
+    superelevations: tuple[Poly3, ...] = ()
+    """Roll of the cross-section (rad, positive: the right side down) by ``s``."""
     lane_offsets: tuple[Poly3, ...] = ()
     lane_sections: tuple[LaneSection, ...] = ()
     signals: tuple[Signal, ...] = ()

@@ -83,6 +83,7 @@ class RoadNetwork:
         ]
         self._layouts = [lanes.RoadLayout(road) for road in document.roads]
         self._elevations = [lanes.Piecewise(road.elevations) for road in document.roads]
+        self._rolls = [lanes.Piecewise(road.superelevations) for road in document.roads]
         self._graph = topology.LaneGraph(document)
         self._index: projection.RoadIndex | None = None
 
@@ -127,12 +128,37 @@ class RoadNetwork:
         """Pose at lateral offset ``t`` from the reference line, heading along +s."""
         k = self._slot(road_id)
         x, y, heading, _ = self._lines[k].at(s)
+        across, _, rise, forward = self._tilted(k, s, t, 0.0)
         return Pose(
-            x=x - t * math.sin(heading),
-            y=y + t * math.cos(heading),
-            z=self._elevations[k].value(s),
+            x=x - across * math.sin(heading) + forward * math.cos(heading),
+            y=y + across * math.cos(heading) + forward * math.sin(heading),
+            z=self._elevations[k].value(s) + rise,
             heading=heading,
         )
+
+    def roll(self, road_id: str, s: float) -> float:
+        """Superelevation (rad) of the road's cross-section at ``s`` (0: flat)."""
+        return self._rolls[self._slot(road_id)].value(s)
+
+    def banked(self, road_id: str) -> bool:
+        """Whether the road has a superelevation profile."""
+        return bool(self._rolls[self._slot(road_id)])
+
+    def _tilted(
+        self, k: int, s: float, t: float, slope: float
+    ) -> tuple[float, float, float, float]:
+        """(sideways offset, its rate along s, height, forward offset) of the point ``t`` across
+        the road, where ``slope`` is dt/ds. OpenDRIVE's t axis rolls with the superelevation
+        about the road's (pitched) tangent: on a banked road an offset reaches less far
+        sideways, rises or falls, and on a slope also shifts along the road (as esmini)."""
+        rolls = self._rolls[k]
+        if not rolls:
+            return t, slope, 0.0, 0.0
+        roll, roll_rate = rolls.value_slope(s)
+        pitch = math.atan(self._elevations[k].value_slope(s)[1])
+        cos_r, sin_r = math.cos(roll), math.sin(roll)
+        sideways = slope * cos_r - t * sin_r * roll_rate
+        return t * cos_r, sideways, t * sin_r * math.cos(pitch), -t * sin_r * math.sin(pitch)
 
     def lane_pose(self, road_id: str, s: float, lane_id: int, offset: float = 0.0) -> Pose:
         """Pose at the centre of lane ``lane_id`` (+``offset``, positive to the left) at ``s``.
@@ -144,12 +170,12 @@ class RoadNetwork:
         k = self._slot(road_id)
         x, y, heading, curvature = self._lines[k].at(s)
         t, slope = self._lane_line(k, road_id, s, lane_id)
-        t += offset
+        across, rate, rise, forward = self._tilted(k, s, t + offset, slope)
         return Pose(
-            x=x - t * math.sin(heading),
-            y=y + t * math.cos(heading),
-            z=self._elevations[k].value(s),
-            heading=heading + math.atan2(slope, 1.0 - curvature * t),
+            x=x - across * math.sin(heading) + forward * math.cos(heading),
+            y=y + across * math.cos(heading) + forward * math.sin(heading),
+            z=self._elevations[k].value(s) + rise,
+            heading=heading + math.atan2(rate, 1.0 - curvature * across),
         )
 
     def lane_stretch(self, road_id: str, s: float, lane_id: int, offset: float = 0.0) -> float:
@@ -161,6 +187,7 @@ class RoadNetwork:
         k = self._slot(road_id)
         _, _, _, curvature = self._lines[k].at(s)
         t, slope = self._lane_line(k, road_id, s, lane_id)
+        # (t across the surface, also on a banked road: esmini scales motion along s so)
         return math.hypot(1.0 - curvature * (t + offset), slope)
 
     def _lane_line(self, k: int, road_id: str, s: float, lane_id: int) -> tuple[float, float]:
@@ -312,7 +339,7 @@ class RoadNetwork:
 
     def _search_index(self) -> projection.RoadIndex:
         if self._index is None:
-            self._index = projection.RoadIndex(self._lines, self._layouts)
+            self._index = projection.RoadIndex(self._lines, self._layouts, self._rolls)
         return self._index
 
     def to_road(

@@ -221,6 +221,7 @@ class _Reader:
             raise self._error(plan_view, f"road {road_id!r} has no <geometry>")
         self._check_coverage(plan_view, road_id, geometries)
         elevation = _child(element, "elevationProfile")
+        lateral = _child(element, "lateralProfile")
         lanes = _child(element, "lanes")
         if lanes is None:
             raise self._error(element, f"road {road_id!r} has no <lanes>")
@@ -266,6 +267,13 @@ class _Reader:
                 length,
                 self._limits.max_coordinate,
                 "elevation",
+            ),
+            superelevations=self._records(
+                _children(lateral, "superelevation") if lateral is not None else [],
+                "s",
+                length,
+                math.pi / 2.0,
+                "superelevation",
             ),
             lane_offsets=self._records(
                 _children(lanes, "laneOffset"), "s", length, self._limits.max_lane_width, "offset"

@@ -47,13 +47,28 @@ class Projection:
 class RoadIndex:
     """Sampled segments of every road, for nearest-road search."""
 
-    __slots__ = ("_bounds", "_ends", "_grid", "_layouts", "_lines", "_seg", "_spans", "_wide")
+    __slots__ = (
+        "_bounds",
+        "_ends",
+        "_grid",
+        "_layouts",
+        "_lines",
+        "_rolls",
+        "_seg",
+        "_spans",
+        "_wide",
+    )
 
     def __init__(
-        self, lines: Sequence[planview.ReferenceLine], layouts: Sequence[lanes.RoadLayout]
+        self,
+        lines: Sequence[planview.ReferenceLine],
+        layouts: Sequence[lanes.RoadLayout],
+        rolls: Sequence[lanes.Piecewise] = (),
     ) -> None:
         self._lines = lines
         self._layouts = layouts
+        self._rolls = rolls
+        """Superelevation per road (none: flat): t runs along the banked cross-section."""
         columns: list[list[float]] = [[] for _ in range(8)]
         spans: list[tuple[int, int]] = []
         for road_index, (line, layout) in enumerate(zip(lines, layouts, strict=True)):
@@ -205,6 +220,8 @@ class RoadIndex:
         cos_h, sin_h = math.cos(heading), math.sin(heading)
         along = (x - rx) * cos_h + (y - ry) * sin_h
         t = -(x - rx) * sin_h + (y - ry) * cos_h
+        if road_index < len(self._rolls) and self._rolls[road_index]:
+            t /= max(math.cos(self._rolls[road_index].value(s)), 1e-3)
         t_min, t_max = _extent(self._layouts[road_index], s)
         lateral_out = max(t - t_max, t_min - t, 0.0)
         overshoot = abs(along) if (s <= 0.0 and along < 0) or (s >= length and along > 0) else 0.0

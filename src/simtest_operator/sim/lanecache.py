@@ -131,7 +131,12 @@ class LaneCache:
             exact = self._roads.lane_pose(road_id, s, lane_id, offset)
             return exact.x, exact.y, exact.z, exact.heading, 1.0
         x, y, z, heading, ref_heading, lane_t, curvature = row
+        # the stretch counts t across the surface, also on a banked road (as esmini moves)
         shrink = min(max(1.0 - curvature * (lane_t + offset), 0.5), 2.0)
+        if self._roads.banked(road_id):
+            # the offset runs along the tilted cross-section: the exact pose
+            exact = self._roads.lane_pose(road_id, s, lane_id, offset)
+            return exact.x, exact.y, exact.z, exact.heading, 1.0 / shrink
         return (
             x - offset * math.sin(ref_heading),
             y + offset * math.cos(ref_heading),
