@@ -78,6 +78,7 @@ def compare(relative: str, tmp_path: Path) -> references.Comparison:
         "xosc/cut-in_cr.xosc",  # ends 10 s after a "continuous" lane offset ended (Event::Action)
         "test_action_dynamics.xosc",
         "direction_dimension_trig.xosc",  # longitudinal relative speed in the reference's frame
+        "star.xosc",  # a relative orientation of a RelativeRoadPosition turns from the road's s
     ],
 )
 def test_matches_the_reference_player(relative: str, tmp_path: Path) -> None:

@@ -153,10 +153,21 @@ def _relative_road(
     assert roads is not None
     ref = world.actor(position.entity_ref)
     road_id, s, t, direction = placements.road_coordinates(world, ref)
+    # A relative orientation turns from the road's s direction (the standard's reference
+    # context for road coordinates; esmini); without one it faces the way the reference travels.
+    along_s = (
+        position.orientation is not None
+        and position.orientation.type is model.ReferenceContext.RELATIVE
+    )
     target_s = s + position.ds
     if 0.0 <= target_s <= roads.road_length(road_id):
         return placements.road_placement(
-            world, road_id, target_s, t + position.dt, direction, position.orientation
+            world,
+            road_id,
+            target_s,
+            t + position.dt,
+            1 if along_s else direction,
+            position.orientation,
         )
     # Past the road's end: along the reference entity's lane through the links, keeping its
     # lateral place in that lane (plus dt).
