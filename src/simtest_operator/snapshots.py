@@ -199,7 +199,8 @@ class JumpCause(enum.StrEnum):
     start's heading)."""
     LATERAL_STEP = "lateralStep"
     """A lane change or lane offset of ``step`` shape (or zero time), or a lateral distance
-    without limits, moved it across at once."""
+    without limits, moved it across at once; or a lateral distance without an acceleration
+    limit stepped its lateral speed (and heading)."""
     ROAD_END = "roadEnd"
     """It reached the end of its road and stands there, its speed dropped a step later (as
     esmini does)."""

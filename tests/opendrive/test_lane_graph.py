@@ -80,6 +80,40 @@ def test_next_lanes_across_road_link_and_junction() -> None:
     assert {(entry.road_id, entry.lane_id) for entry in back} == {("B", 1), ("B", 2)}
 
 
+def test_a_declared_lane_link_beats_the_id_guess_of_the_other_road() -> None:
+    # P's end meets Q's end (lanes swap sides). Q's lane -1 declares P's lane 2 as successor;
+    # P's lane 1 (0 m wide there, opening towards P's start) declares nothing, so the id guess
+    # would link it to Q's -1 too, and P comes first in the file: the walk took the 0 m lane.
+    narrow = (
+        '<lane id="1" type="driving"><link/><width sOffset="0" a="3.5"/>'
+        '<width sOffset="50" a="0"/></lane>'
+    )
+    road_p = road(
+        "P", 200, 0, 3.141592653589793, 100,
+        '<successor elementType="road" elementId="Q" contactPoint="end"/>',
+        section(0, narrow + lane(2, '<successor id="-1"/>'), lane(-1)),
+    )  # fmt: skip
+    road_q = road(
+        "Q", 0, 0, 0, 100,
+        '<successor elementType="road" elementId="P" contactPoint="end"/>',
+        section(0, lane(1), lane(-1, '<successor id="2"/>')),
+    )  # fmt: skip
+    net = RoadNetwork.from_bytes(
+        (
+            '<?xml version="1.0"?><OpenDRIVE><header revMajor="1" revMinor="6"/>'
+            f"{road_p}{road_q}</OpenDRIVE>"
+        ).encode()
+    )
+    assert net.next_lanes("Q", -1, ContactPoint.END) == (
+        LaneEntry(road_id="P", lane_id=2, contact_point=ContactPoint.END),
+    )
+    assert net.advance("Q", 99.0, -1, 2.0).lane_id == 2
+    # a lane that declares nothing still links by id where the other side is free
+    assert net.next_lanes("Q", 1, ContactPoint.END) == (
+        LaneEntry(road_id="P", lane_id=-1, contact_point=ContactPoint.END),
+    )
+
+
 def test_successors_follow_driving_direction() -> None:
     net = network()
     assert [e.road_id for e in net.successors("B", 1)] == ["C1", "C2"]

@@ -9,6 +9,7 @@ import math
 import pytest
 
 from simtest_operator.openscenario import model
+from simtest_operator.snapshots import JumpCause
 from tests.sim.worlds import DT, Bench, lane, speed, teleport
 
 
@@ -51,6 +52,23 @@ def test_speed_limit_only_moves_at_that_speed() -> None:
     b.start("Car", keep(model.DynamicConstraints(max_speed=1.0)))
     b.step(10)
     assert b.actor("Car").offset == pytest.approx(0.5)
+
+
+def test_speed_limit_only_steps_the_lateral_speed_a_declared_discontinuity() -> None:
+    # no acceleration limit: the lateral speed steps from 0 to 4 m/s at the start and back
+    # to the closing speed and 0 at the end, the heading with it (esmini's lat_dist_road_test
+    # turns 53 degrees in a step); the evidence gate refused that recording until declared
+    b = bench()
+    b.start("Car", keep(model.DynamicConstraints(max_speed=4.0), continuous=False))
+    b.step(30)
+    steps = sorted({round(j.time, 9) for j in b.world.discontinuities})
+    assert steps and steps[0] == pytest.approx(DT)  # the start
+    assert steps[-1] > 0.3  # the stop at the distance (1.5 m at 4 m/s: 0.375 s)
+    assert all(j.cause is JumpCause.LATERAL_STEP for j in b.world.discontinuities)
+    held = bench()
+    held.start("Car", keep(model.DynamicConstraints(max_speed=4.0, max_acceleration=3.0)))
+    held.step(30)
+    assert held.world.discontinuities == []  # a limited acceleration is motion, not a step
 
 
 def test_non_continuous_ends_within_a_centimetre() -> None:

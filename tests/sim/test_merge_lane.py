@@ -65,3 +65,20 @@ def test_the_corpus_file_passes_the_evidence_gate(tmp_path: Path) -> None:
         )
     )
     assert report.outcome.verdict is Verdict.PASSED, report.outcome.reason
+
+
+def test_a_route_lane_still_closed_at_the_link_does_not_take_the_car(tmp_path: Path) -> None:
+    # follow_route_multiple_scenario_waypoints: road 222's lane -1 links to road 202's lane 2;
+    # 202's lane 1 (the route's lane, a turn pocket) is 0 m wide there and opens further on.
+    # The lane graph took lane 1 by its id, then the route's lane pick did: the car jumped
+    # 1.9 m sideways onto a lane border and the evidence gate refused the recording.
+    report = scenario_execution.run_scenario(
+        scenario_execution.RunRequest(
+            scenario=SCENARIO.with_name("follow_route_multiple_scenario_waypoints.xosc"),
+            nets_dir=tmp_path,
+            record=False,
+            backend=BackendChoice.MEMORY,
+            loading=LOADING,
+        )
+    )
+    assert report.outcome.verdict is Verdict.PASSED, report.outcome.reason

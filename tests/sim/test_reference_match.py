@@ -85,6 +85,7 @@ def compare(relative: str, tmp_path: Path) -> references.Comparison:
         "relative_speed_phases.xosc",  # continuous relative speed within the performance
         "pitch_by_super_elevation.xosc",  # t rolls with the superelevation
         "tilted_crest.xosc",  # ... about the pitched tangent: banked on a crest
+        "star.xosc",  # a relative orientation of a RelativeRoadPosition turns from the road's s
     ],
 )
 def test_matches_the_reference_player(relative: str, tmp_path: Path) -> None:
@@ -121,3 +122,19 @@ def test_trucks_with_trailers_change_lanes_as_the_reference(relative: str, tmp_p
     assert {"Truck+", "Truck++"} <= {e.name for e in comparison.entities}
     assert comparison.match, comparison
     assert all(e.median <= 0.1 for e in comparison.entities), comparison
+
+
+def test_relative_positions_past_a_junction_take_the_placed_entitys_route(tmp_path: Path) -> None:
+    # targets placed 100 m ahead of (or 70 m behind) the ego across a junction take the exit of
+    # their own route, or of the ego's when they have none (was: the first declared connection,
+    # 17-68 m off); a lane offset along a route is to the left of the route's direction.
+    # Target_going_left is not held: esmini counts its dLane from the ego's side of the road.
+    comparison = compare("relative_pos_over_intersection.xosc", tmp_path)
+    worst = {e.name: e.maximum for e in comparison.entities}
+    for name in (
+        "Target_going_straight",
+        "Target_going_right",
+        "Target_going_along_Ego_route",
+        "Target_starting_behind_route",
+    ):
+        assert worst[name] < 0.05, comparison

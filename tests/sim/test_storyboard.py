@@ -206,3 +206,16 @@ def test_completes_without_stop_trigger_only_when_stories_end() -> None:
     blocked = Harness(b.storyboard(b.event("E"), stop=b.trigger((b.sim_time(100),))))
     blocked.step(5)
     assert not blocked.board.complete
+
+
+def test_without_stories_or_stop_trigger_the_storyboard_runs_on() -> None:
+    """A static scene (Init only, esmini's geo_pos/stationary_objects) never ends by itself
+    under esmini's rules: esmini runs it to its time limit. ScenarioRunner ends it at once."""
+    scene = model.Storyboard(init=model.Init(), stories=(), stop_trigger=None)
+    h = Harness(scene)
+    h.step(5)
+    assert not h.board.complete
+    carla = Storyboard(scene, raw=h.raw, start_action=h.start, scenario_runner=True)
+    carla.update(0.05)
+    carla.settle(0.05)
+    assert carla.complete

@@ -50,15 +50,19 @@ class LaneGraph:
         self._roads: dict[str, models.Road] = {road.id: road for road in document.roads}
         self._edges: dict[_EndKey, list[LaneEntry]] = {}
         junctions = {junction.id: junction for junction in document.junctions}
-        for road in document.roads:
-            for end in models.ContactPoint:
-                link = road.predecessor if end is models.ContactPoint.START else road.successor
-                if link is None:
-                    continue
-                if link.element_type is models.ElementType.ROAD:
-                    self._link_roads(road, end, link)
-                elif link.element_id in junctions:
-                    self._link_junction(road, end, junctions[link.element_id])
+        # Declared lane links first: a lane without one is linked by its id only where the
+        # other road's lane does not declare a different partner (a lane that opens from 0 m
+        # wide beside the declared one must not take its traffic).
+        for guessing in (False, True):
+            for road in document.roads:
+                for end in models.ContactPoint:
+                    link = road.predecessor if end is models.ContactPoint.START else road.successor
+                    if link is None:
+                        continue
+                    if link.element_type is models.ElementType.ROAD:
+                        self._link_roads(road, end, link, guessing=guessing)
+                    elif link.element_id in junctions and not guessing:
+                        self._link_junction(road, end, junctions[link.element_id])
         neighbours: dict[str, set[str]] = {}
         for (road_id, _, _), entries in self._edges.items():
             neighbours.setdefault(road_id, set()).update(entry.road_id for entry in entries)
@@ -83,22 +87,40 @@ class LaneGraph:
         road = self._roads.get(road_id)
         return road is not None and _end_section(road, end).lane(lane_id) is not None
 
+    def _linked_to(self, key: _EndKey, road_id: str) -> bool:
+        return any(entry.road_id == road_id for entry in self._edges.get(key, ()))
+
     def _link_roads(
-        self, road: models.Road, end: models.ContactPoint, link: models.RoadLink
+        self,
+        road: models.Road,
+        end: models.ContactPoint,
+        link: models.RoadLink,
+        *,
+        guessing: bool,
     ) -> None:
+        """Declared lane links (``guessing`` False), or the id-based default for lanes that
+        declare none and whose partner end is not linked to this road yet (True)."""
         other = self._roads.get(link.element_id)
         if other is None:
             return
         contact = link.contact_point or self._guess_contact(road, other)
         for lane in _lanes(_end_section(road, end)):
             declared = lane.predecessors if end is models.ContactPoint.START else lane.successors
+            if bool(declared) == guessing:
+                continue
             targets = declared or (_default_lane(lane.id, end, contact),)
             for target in targets:
-                if target != 0 and self._has_lane(other.id, target, contact):
-                    self._add(
-                        (road.id, lane.id, end),
-                        LaneEntry(road_id=other.id, lane_id=target, contact_point=contact),
-                    )
+                if target == 0 or not self._has_lane(other.id, target, contact):
+                    continue
+                if guessing and (
+                    self._linked_to((road.id, lane.id, end), other.id)
+                    or self._linked_to((other.id, target, contact), road.id)
+                ):
+                    continue
+                self._add(
+                    (road.id, lane.id, end),
+                    LaneEntry(road_id=other.id, lane_id=target, contact_point=contact),
+                )
 
     def _guess_contact(self, road: models.Road, other: models.Road) -> models.ContactPoint:
         """Contact point missing in the file: the end of ``other`` that links back to ``road``."""

@@ -186,7 +186,9 @@ class Dispatcher:
                 self._ignore(f"AddEntityAction of {actor.name}, which is already in the world")
                 return Done(actor)
             # It comes back with the speed it had (esmini keeps a deleted entity's state).
-            self.teleport(actor, positions.resolve(world, body.position, placing=True))
+            self.teleport(
+                actor, positions.resolve(world, body.position, placing=True, mover=actor.name)
+            )
             world.declare(actor, JumpCause.ADDED)
             return Done(actor)
         if isinstance(body, model.DeleteEntityAction):
@@ -227,7 +229,9 @@ class Dispatcher:
             if world.hitches.towed(actor.name):
                 return Done(actor)  # its tow vehicle places it (esmini)
             moved = actor.placed  # the first pose (in Init) is no jump
-            self.teleport(actor, positions.resolve(world, body.position, placing=True))
+            self.teleport(
+                actor, positions.resolve(world, body.position, placing=True, mover=actor.name)
+            )
             self.teleported.add(actor.name)
             if moved:
                 world.declare(actor, JumpCause.TELEPORT)

@@ -26,6 +26,9 @@ DEFAULT_MAX_LATERAL_ACCELERATION = 0.5
 SPRING = 0.4
 """Spring stiffness (1/s^2) per m/s^2 of allowed lateral acceleration (lateral distance)."""
 LATERAL_TOLERANCE = 0.01
+_STEP_ACCELERATION = 10.0
+"""m/s^2 (about 1 g): a lateral speed an action without acceleration limit changes faster than
+this within a step has stepped (a declared discontinuity: the heading turns with it)."""
 """Metres from the requested lateral distance at which a non-continuous action is done."""
 
 
@@ -280,15 +283,21 @@ class LateralDistanceRun(Run):
         elif dt > 0.0:
             assert limits is not None
             error = target - actor.offset
+            stepped = False
             max_speed = limits.max_speed if limits.max_speed is not None else math.inf
             if limits.max_acceleration is None:
                 speed = error / dt  # no acceleration limit: as fast as the speed limit allows
+                stepped = True
             else:
                 stiffness = SPRING * limits.max_acceleration
                 wanted = error * stiffness - self._lateral_speed * 2.0 * math.sqrt(stiffness)
                 wanted = max(-limits.max_acceleration, min(limits.max_acceleration, wanted))
                 speed = self._lateral_speed + wanted * dt
             speed = max(-max_speed, min(max_speed, speed))
+            if stepped and abs(speed - self._lateral_speed) > _STEP_ACCELERATION * dt:
+                # no acceleration limit: the lateral speed steps and the heading with it (esmini
+                # turns 53 degrees in one step), a discontinuity the scenario commands
+                world.declare(actor, JumpCause.LATERAL_STEP)
             self._lateral_speed = speed
             actor.offset += speed * dt
             actor.lane_changing = True  # steering sideways takes from the distance driven

@@ -217,9 +217,21 @@ def _pick_route_lane(world: World, actor: Actor) -> None:
     if not following:
         return
 
+    road_id = actor.road_id
+    exit_s = (
+        roads.road_length(road_id) if roads.driving_direction(road_id, actor.lane_id) > 0 else 0.0
+    )
+
     def continues(lane_id: int) -> bool:
-        return any(
-            entry.road_id in following for entry in roads.successors(actor.road_id or "", lane_id)
+        if any(entry.road_id in following for entry in roads.successors(road_id, lane_id)):
+            return True
+        # a lane that narrows to nothing before the road's exit (a merge lane) goes on
+        # through the lane next to it, nearer the centre (_leave_vanished_lane moves it there)
+        inner = lane_id - (1 if lane_id > 0 else -1)
+        return (
+            inner != 0
+            and roads.lane_width(road_id, exit_s, lane_id) < _VANISHED
+            and any(entry.road_id in following for entry in roads.successors(road_id, inner))
         )
 
     if continues(actor.lane_id):
@@ -227,7 +239,11 @@ def _pick_route_lane(world: World, actor: Actor) -> None:
     candidates = [
         lane_id
         for lane_id in roads.lane_ids(actor.road_id, actor.s)
-        if lane_id * actor.lane_id > 0 and continues(lane_id)
+        if lane_id * actor.lane_id > 0
+        and continues(lane_id)
+        # a lane still 0 m wide here (opening further on) does not hold the actor yet: its
+        # centre lies on the border, a jump away (the mirror of _leave_vanished_lane)
+        and roads.lane_width(actor.road_id, actor.s, lane_id) >= _VANISHED
     ]
     if candidates:
         actor.lane_id = min(candidates, key=lambda lane_id: abs(lane_id - actor.lane_id))

@@ -44,10 +44,11 @@ def _check_along(world: World, position: model.LanePosition | model.RoadPosition
 
 
 def resolve(
-    world: World, position: model.Position, *, placing: bool = False
+    world: World, position: model.Position, *, placing: bool = False, mover: str | None = None
 ) -> placements.Placement:
     """World pose of ``position`` now; ``placing`` (a TeleportAction) refuses an ``s`` beyond
-    the road's ends instead of clamping it."""
+    the road's ends instead of clamping it. ``mover`` is the entity being placed: a relative
+    position that runs past its reference road takes the junction exits of its route."""
     if isinstance(position, model.Unsupported):
         raise placements.unsupported(position)
     if isinstance(position, model.WorldPosition):
@@ -94,14 +95,10 @@ def resolve(
         )
     if isinstance(position, model.RelativeRoadPosition):
         _require_roads(world, position)
-        ref = world.actor(position.entity_ref)
-        road_id, s, t, direction = placements.road_coordinates(world, ref)
-        return placements.road_placement(
-            world, road_id, s + position.ds, t + position.dt, direction, position.orientation
-        )
+        return _relative_road(world, position, mover)
     if isinstance(position, model.RelativeLanePosition):
         _require_roads(world, position)
-        return _relative_lane(world, position)
+        return _relative_lane(world, position, mover)
     if isinstance(position, model.RoutePosition):
         _require_roads(world, position)
         return route_legs.resolve(world, position, lambda p: resolve(world, p))
@@ -141,7 +138,61 @@ def _starts_at_an_entity(shape: model.Shape) -> bool:
     return False
 
 
-def _relative_lane(world: World, position: model.RelativeLanePosition) -> placements.Placement:
+def _route_through(world: World, mover: str | None, ref: str) -> tuple[str, ...]:
+    """Roads to prefer where a relative position continues through a junction: the route of
+    the entity being placed, else the reference entity's (esmini; the first declared
+    connection when neither has a route)."""
+    own = world.actors[mover].route if mover is not None and mover in world.actors else ()
+    return own or world.actor(ref).route
+
+
+def _relative_road(
+    world: World, position: model.RelativeRoadPosition, mover: str | None
+) -> placements.Placement:
+    roads = world.roads
+    assert roads is not None
+    ref = world.actor(position.entity_ref)
+    road_id, s, t, direction = placements.road_coordinates(world, ref)
+    # A relative orientation turns from the road's s direction (the standard's reference
+    # context for road coordinates; esmini); without one it faces the way the reference travels.
+    along_s = (
+        position.orientation is not None
+        and position.orientation.type is model.ReferenceContext.RELATIVE
+    )
+    target_s = s + position.ds
+    if 0.0 <= target_s <= roads.road_length(road_id):
+        return placements.road_placement(
+            world,
+            road_id,
+            target_s,
+            t + position.dt,
+            1 if along_s else direction,
+            position.orientation,
+        )
+    # Past the road's end: along the reference entity's lane through the links, keeping its
+    # lateral place in that lane (plus dt).
+    lane_id = world.current_lane(ref)
+    location = roads.advance(
+        road_id,
+        s,
+        lane_id,
+        position.ds,
+        prefer_roads=_route_through(world, mover, position.entity_ref),
+    )
+    return placements.lane_placement(
+        world,
+        location.road_id,
+        location.lane_id,
+        location.s,
+        t + position.dt - world.lane_t(road_id, s, lane_id),
+        orientation=position.orientation,
+        direction=location.direction * (1 if position.ds >= 0 else -1) * direction,
+    )
+
+
+def _relative_lane(
+    world: World, position: model.RelativeLanePosition, mover: str | None
+) -> placements.Placement:
     roads = world.roads
     assert roads is not None
     ref = world.actor(position.entity_ref)
@@ -153,16 +204,20 @@ def _relative_lane(world: World, position: model.RelativeLanePosition) -> placem
         target_s = s + direction * (position.ds_lane or 0.0)
     length = roads.road_length(road_id)
     if not 0.0 <= target_s <= length:
-        # Continue along the lane graph past the end of the reference road.
-        location = roads.advance(road_id, s, lane_id, target_s - s)
+        # Continue along the lane graph past the end of the reference road. Along a route the
+        # offset is to the left of the route's direction (esmini's route positions); without
+        # one it keeps its side of the reference line, which flips where the roads meet head on.
+        route = _route_through(world, mover, position.entity_ref)
+        location = roads.advance(road_id, s, lane_id, target_s - s, prefer_roads=route)
+        sense = location.direction * (1 if target_s >= s else -1)
         return placements.lane_placement(
             world,
             location.road_id,
             location.lane_id,
             location.s,
-            position.offset,
+            position.offset * (sense * direction if route else sense),
             orientation=position.orientation,
-            direction=location.direction * (1 if target_s >= s else -1) * direction,
+            direction=sense * direction,
         )
     offset = position.offset
     beyond = placements.lane_beyond(world, road_id, target_s, lane_id)

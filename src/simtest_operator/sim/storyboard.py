@@ -198,7 +198,9 @@ class Storyboard:
         # A stop trigger that held only ScenarioRunner criteria is no stop trigger.
         self._stop_defined = stop is not None and bool(stop.condition_groups or not stop.criteria)
         # ScenarioRunner ends a scenario when its stories are done or its stop trigger fires.
-        self._end_with_stories = scenario_runner or not self._stop_defined
+        # Without a stop trigger esmini ends the storyboard when its stories are done, but one
+        # with no story (a static scene) never ends by itself: it runs to the time limit.
+        self._end_with_stories = scenario_runner or (not self._stop_defined and bool(self._stories))
         self._complete = False
         self._fired: list[tuple[Node, Node, Node, frozenset[str]]] = []
         self._visible: set[tuple[Node, Transition]] = set()
@@ -221,7 +223,7 @@ class Storyboard:
     @property
     def complete(self) -> bool:
         """True once the stop trigger fired (or, without one or under ScenarioRunner's rules,
-        every story completed)."""
+        every story completed; without stop trigger and stories, never under esmini's rules)."""
         return self._complete
 
     def nodes(self) -> Iterator[Node]:
