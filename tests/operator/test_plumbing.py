@@ -168,6 +168,10 @@ def test_names() -> None:
     ) == ("c-b00042", 42, 7, 3)
     assert names.parse_environment("something-else") is None
     assert len(names.environment("x" * 50, 99999, 999, 9)) <= 253
+    wide = names.parse_environment(names.environment("c", 123_456, 0, 1))
+    assert wide is not None and (wide.batch, wide.batch_index) == ("c-b123456", 123_456)
+    longest = names.environment_labels("x" * 50, names.batch("x" * 50, 9_999_999), 9)
+    assert all(len(value) <= 63 for value in longest.values())  # label values
 
 
 def test_configuration_from_variables_and_flags(tmp_path: object) -> None:

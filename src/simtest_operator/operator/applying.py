@@ -57,6 +57,9 @@ KIND_NAMES = {
     Kind.ENVIRONMENT: "SimEnvironment",
 }
 
+_EVENT_KEYS_KEPT = 256
+"""Rate-limit entries kept at least before the expired ones are dropped."""
+
 
 @dataclasses.dataclass(slots=True)
 class Applied:
@@ -87,7 +90,10 @@ class Applier:
     _last_event: dict[tuple[Kind, str, str], datetime.datetime] = dataclasses.field(
         default_factory=dict
     )
-    """Last event per (object, reason): repeats of one reason are limited, a new phase is not."""
+    """Last event per (object, reason): repeats of one reason are limited, a new phase is not.
+    Entries older than ``event_interval`` limit nothing and are dropped (one per batch and
+    environment would otherwise stay for the whole campaign)."""
+    _prune_at: int = _EVENT_KEYS_KEPT
     _identities_ready: bool = False
     """The campaign's helmfile identities were created (or found) by this applier: once per
     operator run, not once per environment."""
@@ -307,6 +313,13 @@ class Applier:
             and (now - last).total_seconds() < self.event_interval
         ):
             return
+        if len(self._last_event) >= self._prune_at:  # amortised: the bound doubles past it
+            self._last_event = {
+                k: t
+                for k, t in self._last_event.items()
+                if (now - t).total_seconds() < self.event_interval
+            }
+            self._prune_at = max(_EVENT_KEYS_KEPT, 2 * len(self._last_event))
         self._last_event[key] = now
         involved = {
             "apiVersion": "simtest.dev/v1alpha1",

@@ -25,7 +25,7 @@ LABEL_MANAGED_BY = "app.kubernetes.io/managed-by"
 MANAGED_BY = "simtest-operator"
 LABEL_COMPONENT = "app.kubernetes.io/component"
 
-_ENV = re.compile(r"^(?P<batch>.+-b(?P<index>\d{5}))-e(?P<first>\d{3})-a(?P<attempt>\d+)$")
+_ENV = re.compile(r"^(?P<batch>.+-b(?P<index>\d{5,}))-e(?P<first>\d{3})-a(?P<attempt>\d+)$")
 
 
 def scenario_list(campaign: str) -> str:
@@ -55,7 +55,8 @@ def evaluation_labels(campaign: str) -> dict[str, str]:
 
 
 def batch(campaign: str, index: int) -> str:
-    """ScenarioBatch ``index`` of ``campaign``."""
+    """ScenarioBatch ``index`` of ``campaign``: five digits at least, more past 99,999 (a list
+    of up to ~800,000 scenarios may have batches of one), so existing names never change."""
     return f"{campaign}-b{index:05d}"
 
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import datetime
+import sys
 from collections.abc import Mapping
 from typing import Any
 
@@ -329,7 +330,13 @@ def environment_view(body: Raw) -> EnvironmentView:
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
 class BatchView:
-    """A ScenarioBatch."""
+    """A ScenarioBatch.
+
+    Batches are the only children that outlive the window (the durable record of the results),
+    so the cache holds one view per batch for the whole campaign: 10,000 of them at 100,000
+    scenarios. A view therefore keeps each verdict once, as its record; the wire form of the
+    results and the typed status are rebuilt on demand, which only open batches need.
+    """
 
     name: str
     namespace: str
@@ -339,18 +346,34 @@ class BatchView:
     index: int
     scenario_ids: tuple[str, ...]
     results: tuple[ResultRecord, ...]
-    """The recorded results (the typed ``status`` leaves them out: read once, here)."""
+    """The recorded results, parsed once."""
     proposals: tuple[PinnedScenario, ...] = ()
     """A search's wave: its concrete scenarios with their proposal records (empty otherwise)."""
-    status: ScenarioBatchStatus
-    """The status, typed (:mod:`~simtest_operator.operator.status.reading`)."""
-    status_wire: Raw
-    """The status as stored, for merge patches."""
+    stored_fields: Raw
+    """The status as stored, without ``results`` when :attr:`results` write back to exactly the
+    stored list (else with it: the stored list is then kept as it is)."""
+
+    @property
+    def status(self) -> ScenarioBatchStatus:
+        """The status, typed (:mod:`~simtest_operator.operator.status.reading`; no results)."""
+        return reading.batch(self.stored_fields)
+
+    @property
+    def status_wire(self) -> Raw:
+        """The status as stored, for merge patches."""
+        if "results" in self.stored_fields or not self.results:
+            return self.stored_fields
+        return {**self.stored_fields, "results": [r.to_wire() for r in self.results]}
 
 
 def batch_view(body: Raw) -> BatchView:
     """Parse a ScenarioBatch body."""
     meta, status, spec = _meta(body), _status(body), _spec(body)
+    results = _results(status.get("results"))
+    stored = status
+    if results and [r.to_wire() for r in results] == status.get("results"):
+        stored = {sys.intern(k): v for k, v in status.items() if k != "results"}
+    ids = {r.id: r.id for r in results}  # one string per id, shared with the records
     return BatchView(
         name=str(meta.get("name", "")),
         namespace=str(meta.get("namespace", "")),
@@ -359,12 +382,14 @@ def batch_view(body: Raw) -> BatchView:
         campaign=str(spec.get("campaign", "")),
         index=int(spec.get("index", 0) or 0),
         scenario_ids=tuple(
-            str(s.get("id", "")) for s in spec.get("scenarios") or () if isinstance(s, Mapping)
+            ids.get(i, i)
+            for i in (
+                str(s.get("id", "")) for s in spec.get("scenarios") or () if isinstance(s, Mapping)
+            )
         ),
-        results=_results(status.get("results")),
+        results=results,
         proposals=_proposals(spec.get("scenarios"), where=f"ScenarioBatch {meta.get('name')}"),
-        status=reading.batch(status),
-        status_wire=status,
+        stored_fields=stored,
     )
 
 

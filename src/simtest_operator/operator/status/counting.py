@@ -69,6 +69,9 @@ class Tally:
         self._seen: dict[int, tuple[BatchView, dict[str, int] | None]] = {}
         self._open: set[int] = set()
         self._total = dict.fromkeys(COUNTER_KEYS, 0)
+        self._shared: dict[tuple[int, ...], dict[str, int]] = {}
+        """One counters object per distinct value: most closed batches count alike ("10
+        passed"), and a campaign keeps one entry per batch for its whole run."""
 
     @property
     def open(self) -> AbstractSet[int]:
@@ -93,6 +96,8 @@ class Tally:
                 continue  # the cache hands the same view until the object changes
             self._forget(index)
             counts = _closed_counts(batch, layout.positions(index), layout)
+            if counts is not None:
+                counts = self._shared.setdefault(tuple(counts.values()), counts)
             self._seen[index] = (batch, counts)
             if counts is None:
                 self._open.add(index)
