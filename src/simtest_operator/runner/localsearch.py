@@ -15,7 +15,7 @@ from typing import Any
 
 from simtest_operator.runner import preparing, resolving, searchresults, storing
 from simtest_operator.runner.preparing import SearchPlan
-from simtest_operator.runner.searching import SearchFeed, replayed
+from simtest_operator.runner.searching import SearchFeed
 from simtest_operator.scenarios.pinned import FrozenList, PinnedScenario
 from simtest_operator.search import SearchSpace, summarise
 from simtest_operator.verdicts import ScenarioOutcome
@@ -72,16 +72,21 @@ class LocalSearch:
         """Replay what an earlier invocation proposed (a resumed run) and feed the rest."""
         space = SearchSpace.from_spec(search.spec, search.path)
         proposed = plan.frozen.scenarios
-        finished = {k: v for k, v in results.items() if k in plan.finished}
-        searcher, unpinned = replayed(search, space, proposed, finished)
+        outcomes = {
+            p.proposal.index: resolving.search_outcome(results[p.id].verdict, results[p.id].metrics)
+            for p in proposed
+            if p.proposal is not None and p.id in plan.finished and p.id in results
+        }
+        pins = [p.proposal for p in proposed if p.proposal is not None]
+        replayed = resolving.replay_search(search.spec, space, pins, outcomes)
         local = cls(plan, search, space, store, paths, proposed=proposed)
         local.feed = SearchFeed(
-            searcher,
+            replayed.searcher,
             search.base,
             parallel=parallel,
             batch_size=plan.policy.batch_size,
             pending=[p for p in proposed if p.id not in plan.finished and p.id in paths],
-            told=unpinned,
+            told=replayed.unpinned,
             on_proposed=local._proposed,
         )
         return local

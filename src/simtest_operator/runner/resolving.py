@@ -15,7 +15,7 @@ Rules (documented in docs/local-run.md):
 * ids are paths inside their source; a clash across sources gets the suffix ``~<source number>``;
 * a search (``spec.search``) pins only its logical scenario (:func:`freeze_search`); its concrete
   scenarios enter the list as they are proposed (:func:`pin_proposal`), each with what replays
-  the search (:func:`replay_inputs`).
+  the search (:func:`replay_search`).
 """
 
 from __future__ import annotations
@@ -37,7 +37,7 @@ from simtest_operator.scenarios.specs import Selection
 from simtest_operator.verdicts import Verdict
 
 if TYPE_CHECKING:  # the engine (scikit-learn, optuna) loads only where a search runs
-    from simtest_operator.search import Outcome, Proposal, SearchSpace, SearchSummary
+    from simtest_operator.search import Outcome, Proposal, Searcher, SearchSpace, SearchSummary
 
 Expander = Callable[[Path, int], Sequence[openscenario.ConcreteRun]]
 """Expands a distribution file (with a seed for stochastic ones) into concrete runs."""
@@ -259,6 +259,41 @@ def replay_inputs(
             )
         proposals.append(proposal_of(pin))
     return proposals, tells
+
+
+@dataclasses.dataclass(frozen=True, slots=True)
+class ReplayedSearch:
+    """A searcher rebuilt from a frozen list, and what it was told on the way."""
+
+    searcher: Searcher
+    pinned: Sequence[tuple[int, Outcome]]
+    """Tells the pinned proposals record, in the order told."""
+    unpinned: Sequence[int]
+    """Tells made after the last proposal was asked, in index order: the next proposal's
+    ``told``."""
+
+
+def replay_search(
+    spec: SearchSpec,
+    space: SearchSpace,
+    pins: Sequence[ProposalPin],
+    outcomes: Mapping[int, Outcome],
+) -> ReplayedSearch:
+    """The searcher as a frozen list left it (a resumed run, a restarted operator): each pinned
+    proposal asked again after the tells recorded before it, then told every other outcome.
+
+    CPU-bound (every proposal is asked again: a classifier fit each for ``boundary``); the
+    operator calls it off its event loop. ScenarioError or ReplayError when the record does
+    not replay."""
+    from simtest_operator.search import Searcher
+
+    proposals, tells = replay_inputs(pins, outcomes)
+    searcher = Searcher.replay(spec, space, proposals, tells)
+    told = {index for index, _ in tells}
+    unpinned = sorted(set(outcomes) - told)
+    for index in unpinned:
+        searcher.tell(index, outcomes[index])
+    return ReplayedSearch(searcher=searcher, pinned=tells, unpinned=unpinned)
 
 
 def search_outcome(verdict: Verdict, metrics: Mapping[str, float]) -> Outcome:
