@@ -14,16 +14,18 @@ import asyncio
 import dataclasses
 import datetime
 import json
+import shutil
 import time
 from collections.abc import Coroutine, Mapping
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import Any, TypeVar, cast
 
 import pytest
 
-from simtest_operator.operator import observed, planning
+from simtest_operator.operator import observed, planning, resolving
 from simtest_operator.operator.actions import Kind, Plan
 from simtest_operator.operator.batches import Layout
+from simtest_operator.operator.client import Client
 from simtest_operator.operator.searching import CampaignSearch
 from simtest_operator.scenarios import FrozenList, PinnedScenario, sha256_hex
 from simtest_operator.search import Proposal, Searcher, SearchSpace
@@ -65,14 +67,21 @@ class SearchCluster(FakeCluster):
         )
 
     def restart(self) -> None:
-        """A new operator: the searcher rebuilt from the batches alone."""
+        """A new operator: the searcher rebuilt from the pinned logical scenario and the
+        batches alone, as the campaign loop does."""
         view = observed.campaign_view(self.get(Kind.CAMPAIGN, "camp") or {})
         assert view.spec is not None and view.spec.search is not None
-        space = SearchSpace.from_spec(view.spec.search, CUT_IN)
         batches = [observed.batch_view(b) for b in self.of(Kind.BATCH)]
-        self.search = asyncio.run(
-            CampaignSearch.replayed(view.spec.search, space, self.base, batches)
-        )
+
+        async def replay() -> CampaignSearch:
+            assert view.spec is not None and view.spec.search is not None
+            client = cast(Client, None)  # file sources: nothing is read through the API
+            space, target = await resolving.search_space(
+                client, view, self.base, config=self.config
+            )
+            return await CampaignSearch.replayed(view.spec.search, space, target, batches)
+
+        self.search = asyncio.run(replay())
 
     def inputs(self, name: str = "camp") -> planning.Inputs:
         given = super().inputs(name)
@@ -290,3 +299,51 @@ def test_asking_and_replaying_the_searcher_leave_the_event_loop_free(
     replayed, ticks = asyncio.run(_ticks_during(replay))
     assert replayed.searcher.asked == 2
     assert ticks >= 2, "the event loop was blocked while the searcher was replayed"
+
+
+def test_a_search_over_a_distribution_runs_the_scenario_it_names(tmp_path: Path) -> None:
+    """The logical scenario is a ParameterValueDistribution: its ranges are the dimensions
+    (``parameters`` narrow them) and every proposal runs the scenario file it names, pinned
+    from the same source (its URI and sha256), under the distribution's id."""
+    shutil.copy(CUT_IN, tmp_path / "cut-in.xosc")
+    pvd = tmp_path / "cut-in-pvd.xosc"
+    pvd.write_text(DISTRIBUTION)
+    cluster = SearchCluster(nodes={"n0": 2})
+    cluster.base = PinnedScenario(
+        id="cut-in-pvd.xosc", source=pvd.as_uri(), sha256=sha256_hex(pvd.read_bytes())
+    )
+    narrowed = {**SEARCH, "scenario": "cut-in-pvd.xosc", "parameters": [
+        {"name": "CutInGap", "min": 10, "max": 30}]}  # fmt: skip
+    cluster.start(narrowed, maxParallel=2)
+    cluster.run()
+    assert cluster.status()["search"]["asked"] == 20
+    target = tmp_path / "cut-in.xosc"
+    entries = [e for b in cluster.of(Kind.BATCH) for e in b["spec"]["scenarios"]]
+    assert len(entries) == 20
+    assert {(e["source"], e["sha256"]) for e in entries} == {
+        (target.as_uri(), sha256_hex(target.read_bytes()))
+    }
+    assert {e["id"].split("#")[0] for e in entries} == {"cut-in-pvd.xosc"}
+    for values in cluster.values().values():
+        assert 15 <= values["EgoSpeed"] <= 35 and (values["EgoSpeed"] * 2) % 1 == 0
+        assert 10 <= values["CutInGap"] <= 30
+
+
+DISTRIBUTION = """<?xml version="1.0"?>
+<OpenSCENARIO>
+  <FileHeader revMajor="1" revMinor="2" date="2026-01-01T00:00:00" description="d" author="a"/>
+  <ParameterValueDistribution>
+    <ScenarioFile filepath="cut-in.xosc"/>
+    <Deterministic>
+      <DeterministicSingleParameterDistribution parameterName="EgoSpeed">
+        <DistributionRange stepWidth="0.5">
+          <Range lowerLimit="15" upperLimit="35"/>
+        </DistributionRange>
+      </DeterministicSingleParameterDistribution>
+      <DeterministicSingleParameterDistribution parameterName="CutInGap">
+        <DistributionSet><Element value="5"/><Element value="40"/></DistributionSet>
+      </DeterministicSingleParameterDistribution>
+    </Deterministic>
+  </ParameterValueDistribution>
+</OpenSCENARIO>
+"""

@@ -33,7 +33,6 @@ from simtest_operator.operator.observed import CampaignView
 from simtest_operator.operator.scenariolists import StoredList
 from simtest_operator.operator.status.counting import Tally
 from simtest_operator.render import EnvironmentRequest, RenderedEnvironment
-from simtest_operator.search import SearchSpace
 from simtest_operator.settings import OperatorSettings
 
 log = logging.getLogger(__name__)
@@ -209,15 +208,14 @@ class CampaignLoop:
             return
         base = self.stored.frozen.scenarios[0]
         try:
-            path = await resolving.locate(
+            space, target = await resolving.search_space(
                 self.shared.client, campaign, base, config=self.shared.config
             )
-            space = await asyncio.to_thread(SearchSpace.from_spec, spec.search, path)
         except (ScenarioError, OSError) as exc:
             raise ClusterError(f"cannot fetch the search's logical scenario: {exc}") from exc
         try:
             self.search = await searching.CampaignSearch.replayed(
-                spec.search, space, base, self.shared.cache.batches_of(self.key)
+                spec.search, space, target, self.shared.cache.batches_of(self.key)
             )
         except SimtestError as exc:  # the record does not replay: it never will
             self.stored = None

@@ -13,6 +13,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from simtest_operator.errors import ScenarioError
 from simtest_operator.runner import preparing, resolving, searchresults, storing
 from simtest_operator.runner.preparing import SearchPlan
 from simtest_operator.runner.searching import SearchFeed
@@ -71,7 +72,13 @@ class LocalSearch:
     ) -> LocalSearch:
         """Replay what an earlier invocation proposed (a resumed run) and feed the rest."""
         space = SearchSpace.from_spec(search.spec, search.path)
+        target = resolving.search_target(search.base, search.path, space)
         proposed = plan.frozen.scenarios
+        if proposed and (proposed[0].source, proposed[0].sha256) != (target.source, target.sha256):
+            raise ScenarioError(
+                f"spec.search.scenario {search.spec.scenario!r} now names another file than "
+                f"the one this search ran ({proposed[0].source}); choose another --output"
+            )
         outcomes = {
             p.proposal.index: resolving.search_outcome(results[p.id].verdict, results[p.id].metrics)
             for p in proposed
@@ -82,7 +89,7 @@ class LocalSearch:
         local = cls(plan, search, space, store, paths, proposed=proposed)
         local.feed = SearchFeed(
             replayed.searcher,
-            search.base,
+            target,
             parallel=parallel,
             batch_size=plan.policy.batch_size,
             pending=[p for p in proposed if p.id not in plan.finished and p.id in paths],
@@ -98,9 +105,10 @@ class LocalSearch:
 
     def _proposed(self, pins: Sequence[PinnedScenario]) -> None:
         """New proposals join the frozen list (on disk before they run) and the store."""
+        path = self._space.scenario or self._search.path  # a distribution's scenario file
         for pinned in pins:
-            self._paths[pinned.id] = self._search.path
-            self._store.register(pinned, self._search.path)
+            self._paths[pinned.id] = path
+            self._store.register(pinned, path)
         self._entries.extend(pins)
         self._plan.output.write_frozen(self.frozen)
 
