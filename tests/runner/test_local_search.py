@@ -19,6 +19,7 @@ from pathlib import Path
 import pytest
 
 from simtest_operator import results
+from simtest_operator.errors import ScenarioError
 from simtest_operator.results.querying import ReadOnlyDatabase
 from simtest_operator.runner import campaigns, preparing, scheduling, searchresults
 from simtest_operator.scenarios.resolving import FetchContext
@@ -224,3 +225,9 @@ def test_a_search_over_a_distribution_runs_the_scenario_it_names(tmp_path: Path)
     fetch = FetchContext(base_dir=tmp_path, cache_dir=tmp_path / "cache")
     exported = searchresults.export(tmp_path / "out", tmp_path / "regression", fetch=fetch, top=1)
     assert len(exported) == 1 and "ScenarioObject" in exported[0].read_text()
+    other = (tmp_path / "suite" / "cut-in.xosc").read_text() + "<!-- another file -->\n"
+    (tmp_path / "suite" / "other.xosc").write_text(other)
+    pvd = tmp_path / "suite" / "cut-in-pvd.xosc"
+    pvd.write_text(DISTRIBUTION.replace('filepath="cut-in.xosc"', 'filepath="other.xosc"'))
+    with pytest.raises(ScenarioError, match="no longer leads to the file this search ran"):
+        campaigns.run(_request(tmp_path, manifest))  # resuming: the distribution changed

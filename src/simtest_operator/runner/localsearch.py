@@ -76,8 +76,9 @@ class LocalSearch:
         proposed = plan.frozen.scenarios
         if proposed and (proposed[0].source, proposed[0].sha256) != (target.source, target.sha256):
             raise ScenarioError(
-                f"spec.search.scenario {search.spec.scenario!r} now names another file than "
-                f"the one this search ran ({proposed[0].source}); choose another --output"
+                f"spec.search.scenario {search.spec.scenario!r} no longer leads to the file "
+                f"this search ran ({proposed[0].source} at sha256 {proposed[0].sha256[:12]}...):"
+                " the distribution changed; choose another --output"
             )
         outcomes = {
             p.proposal.index: resolving.search_outcome(results[p.id].verdict, results[p.id].metrics)
