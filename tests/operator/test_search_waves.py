@@ -10,19 +10,25 @@ gets the proposals the batches hold; the same seed and results give the same wav
 
 from __future__ import annotations
 
+import asyncio
 import dataclasses
 import datetime
 import json
-from collections.abc import Mapping
+import shutil
+import time
+from collections.abc import Coroutine, Mapping
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar, cast
 
-from simtest_operator.operator import observed, planning
+import pytest
+
+from simtest_operator.operator import observed, planning, resolving
 from simtest_operator.operator.actions import Kind, Plan
 from simtest_operator.operator.batches import Layout
+from simtest_operator.operator.client import Client
 from simtest_operator.operator.searching import CampaignSearch
 from simtest_operator.scenarios import FrozenList, PinnedScenario, sha256_hex
-from simtest_operator.search import SearchSpace
+from simtest_operator.search import Proposal, Searcher, SearchSpace
 from tests.operator.fakecluster import FakeCluster, Script, campaign_body
 
 CUT_IN = Path(__file__).parents[2] / "scenarios/library/cut-in/cut-in_highway_v25_gap15_dv10.xosc"
@@ -36,6 +42,9 @@ SEARCH = {
     "budget": 20,
     "seed": 3,
 }
+
+
+T = TypeVar("T")
 
 
 class SearchCluster(FakeCluster):
@@ -58,12 +67,21 @@ class SearchCluster(FakeCluster):
         )
 
     def restart(self) -> None:
-        """A new operator: the searcher rebuilt from the batches alone."""
+        """A new operator: the searcher rebuilt from the pinned logical scenario and the
+        batches alone, as the campaign loop does."""
         view = observed.campaign_view(self.get(Kind.CAMPAIGN, "camp") or {})
         assert view.spec is not None and view.spec.search is not None
-        space = SearchSpace.from_spec(view.spec.search, CUT_IN)
         batches = [observed.batch_view(b) for b in self.of(Kind.BATCH)]
-        self.search = CampaignSearch.replayed(view.spec.search, space, self.base, batches)
+
+        async def replay() -> CampaignSearch:
+            assert view.spec is not None and view.spec.search is not None
+            client = cast(Client, None)  # file sources: nothing is read through the API
+            space, target = await resolving.search_space(
+                client, view, self.base, config=self.config
+            )
+            return await CampaignSearch.replayed(view.spec.search, space, target, batches)
+
+        self.search = asyncio.run(replay())
 
     def inputs(self, name: str = "camp") -> planning.Inputs:
         given = super().inputs(name)
@@ -82,7 +100,7 @@ class SearchCluster(FakeCluster):
             assert self.search is not None
             view = observed.campaign_view(self.get(Kind.CAMPAIGN, "camp") or {})
             batches = [observed.batch_view(b) for b in self.of(Kind.BATCH)]
-            wave = self.search.advance(view, batches, plan.observation)
+            wave = asyncio.run(self.search.advance(view, batches, plan.observation))
             if wave is not None:
                 self.apply(Plan(actions=(wave,)))
         running = sum(1 for p in self.of(Kind.POD) if p["status"]["phase"] == "Running")
@@ -147,7 +165,8 @@ def test_a_search_runs_its_budget_in_waves_that_keep_the_slots_busy() -> None:
         assert all(t < index for t in told)
     assert proposals[-1][1] >= 12  # later proposals learnt from the results before them
     assert cluster.search is not None
-    frozen, record = cluster.search.record([observed.batch_view(b) for b in cluster.of(Kind.BATCH)])
+    batches = [observed.batch_view(b) for b in cluster.of(Kind.BATCH)]
+    frozen, record = asyncio.run(cluster.search.record(batches))
     assert [p.id for p in frozen] == [f"cut-in.xosc#search-{i}" for i in range(20)]
     assert record["summary"]["runs"] == 20 and record["summary"]["failures"] == status["failed"]
     assert [p["index"] for p in record["proposals"]] == list(range(20))
@@ -216,3 +235,115 @@ def test_a_queued_search_asks_kueue_for_its_window_not_for_the_proposals_so_far(
     workload = cluster.get(Kind.WORKLOAD, "camp-simulators")
     assert workload is not None
     assert workload["spec"]["podSets"][0]["count"] == 4
+
+
+def _slow_asks(monkeypatch: pytest.MonkeyPatch, seconds: float) -> None:
+    """Every ask blocks its thread for ``seconds``, as a classifier fit does."""
+    ask = Searcher.ask
+
+    def slow(self: Searcher, n: int) -> list[Proposal]:
+        time.sleep(seconds)
+        return ask(self, n)
+
+    monkeypatch.setattr(Searcher, "ask", slow)
+
+
+async def _ticks_during(work: Coroutine[Any, Any, T]) -> tuple[T, int]:
+    """``work``'s result and how often another coroutine got the event loop meanwhile."""
+    ticks = 0
+    done = asyncio.Event()
+
+    async def tick() -> None:
+        nonlocal ticks
+        while not done.is_set():
+            await asyncio.sleep(0.01)
+            ticks += 1
+
+    ticker = asyncio.create_task(tick())
+    await asyncio.sleep(0)  # the ticker is waiting before the work starts
+    ticks = 0
+    try:
+        result = await work
+        during = ticks
+    finally:
+        done.set()
+        await ticker
+    return result, during
+
+
+def test_asking_and_replaying_the_searcher_leave_the_event_loop_free(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A ``boundary`` proposal takes about a second of CPU; the operator's event loop serves
+    every campaign and kopf's handlers, so the searcher works in a thread meanwhile."""
+    cluster = SearchCluster(nodes={"n0": 2})
+    cluster.start(maxParallel=2)
+    cluster.restart()
+    assert cluster.search is not None
+    plan = cluster.plan()
+    cluster.apply(plan)
+    _slow_asks(monkeypatch, 0.3)
+    view = observed.campaign_view(cluster.get(Kind.CAMPAIGN, "camp") or {})
+    batches = [observed.batch_view(b) for b in cluster.of(Kind.BATCH)]
+    wave, ticks = asyncio.run(
+        _ticks_during(cluster.search.advance(view, batches, plan.observation))
+    )
+    assert wave is not None and len(wave.body["spec"]["scenarios"]) == 2
+    assert ticks >= 2, "the event loop was blocked while the searcher was asked"
+    cluster.apply(Plan(actions=(wave,)))
+    view = observed.campaign_view(cluster.get(Kind.CAMPAIGN, "camp") or {})
+    assert view.spec is not None and view.spec.search is not None
+    space = SearchSpace.from_spec(view.spec.search, CUT_IN)
+    batches = [observed.batch_view(b) for b in cluster.of(Kind.BATCH)]
+    replay = CampaignSearch.replayed(view.spec.search, space, cluster.base, batches)
+    replayed, ticks = asyncio.run(_ticks_during(replay))
+    assert replayed.searcher.asked == 2
+    assert ticks >= 2, "the event loop was blocked while the searcher was replayed"
+
+
+def test_a_search_over_a_distribution_runs_the_scenario_it_names(tmp_path: Path) -> None:
+    """The logical scenario is a ParameterValueDistribution: its ranges are the dimensions
+    (``parameters`` narrow them) and every proposal runs the scenario file it names, pinned
+    from the same source (its URI and sha256), under the distribution's id."""
+    shutil.copy(CUT_IN, tmp_path / "cut-in.xosc")
+    pvd = tmp_path / "cut-in-pvd.xosc"
+    pvd.write_text(DISTRIBUTION)
+    cluster = SearchCluster(nodes={"n0": 2})
+    cluster.base = PinnedScenario(
+        id="cut-in-pvd.xosc", source=pvd.as_uri(), sha256=sha256_hex(pvd.read_bytes())
+    )
+    narrowed = {**SEARCH, "scenario": "cut-in-pvd.xosc", "parameters": [
+        {"name": "CutInGap", "min": 10, "max": 30}]}  # fmt: skip
+    cluster.start(narrowed, maxParallel=2)
+    cluster.run()
+    assert cluster.status()["search"]["asked"] == 20
+    target = tmp_path / "cut-in.xosc"
+    entries = [e for b in cluster.of(Kind.BATCH) for e in b["spec"]["scenarios"]]
+    assert len(entries) == 20
+    assert {(e["source"], e["sha256"]) for e in entries} == {
+        (target.as_uri(), sha256_hex(target.read_bytes()))
+    }
+    assert {e["id"].split("#")[0] for e in entries} == {"cut-in-pvd.xosc"}
+    for values in cluster.values().values():
+        assert 15 <= values["EgoSpeed"] <= 35 and (values["EgoSpeed"] * 2) % 1 == 0
+        assert 10 <= values["CutInGap"] <= 30
+
+
+DISTRIBUTION = """<?xml version="1.0"?>
+<OpenSCENARIO>
+  <FileHeader revMajor="1" revMinor="2" date="2026-01-01T00:00:00" description="d" author="a"/>
+  <ParameterValueDistribution>
+    <ScenarioFile filepath="cut-in.xosc"/>
+    <Deterministic>
+      <DeterministicSingleParameterDistribution parameterName="EgoSpeed">
+        <DistributionRange stepWidth="0.5">
+          <Range lowerLimit="15" upperLimit="35"/>
+        </DistributionRange>
+      </DeterministicSingleParameterDistribution>
+      <DeterministicSingleParameterDistribution parameterName="CutInGap">
+        <DistributionSet><Element value="5"/><Element value="40"/></DistributionSet>
+      </DeterministicSingleParameterDistribution>
+    </Deterministic>
+  </ParameterValueDistribution>
+</OpenSCENARIO>
+"""

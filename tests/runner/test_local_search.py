@@ -19,6 +19,7 @@ from pathlib import Path
 import pytest
 
 from simtest_operator import results
+from simtest_operator.errors import ScenarioError
 from simtest_operator.results.querying import ReadOnlyDatabase
 from simtest_operator.runner import campaigns, preparing, scheduling, searchresults
 from simtest_operator.scenarios.resolving import FetchContext
@@ -158,3 +159,75 @@ def test_an_interrupted_search_resumes_by_replaying_the_searcher(tmp_path: Path)
     assert [p["values"] for p in _proposals(uninterrupted / "out")][:3] == [
         p["values"] for p in before[:3]
     ]  # the same seed gives the same first wave
+
+
+DISTRIBUTION = """<?xml version="1.0"?>
+<OpenSCENARIO>
+  <FileHeader revMajor="1" revMinor="2" date="2026-01-01T00:00:00" description="d" author="a"/>
+  <ParameterValueDistribution>
+    <ScenarioFile filepath="cut-in.xosc"/>
+    <Deterministic>
+      <DeterministicSingleParameterDistribution parameterName="EgoSpeed">
+        <DistributionRange stepWidth="0.5">
+          <Range lowerLimit="15" upperLimit="35"/>
+        </DistributionRange>
+      </DeterministicSingleParameterDistribution>
+    </Deterministic>
+    <Stochastic numberOfTestRuns="4" randomSeed="1">
+      <StochasticDistribution parameterName="CutInGap">
+        <UniformDistribution><Range lowerLimit="5" upperLimit="40"/></UniformDistribution>
+      </StochasticDistribution>
+    </Stochastic>
+  </ParameterValueDistribution>
+</OpenSCENARIO>
+"""
+
+
+def test_a_search_over_a_distribution_runs_the_scenario_it_names(tmp_path: Path) -> None:
+    """The distribution is the logical scenario (its ranges are the dimensions); the
+    proposals run the scenario file it names, pinned from the same source; a resumed run
+    pins the distribution again and replays."""
+    manifest = _manifest(tmp_path)
+    (tmp_path / "suite" / "cut-in-pvd.xosc").write_text(DISTRIBUTION)
+    text = MANIFEST.replace("scenario: cut-in.xosc", "scenario: cut-in-pvd.xosc")
+    text = text.replace(
+        "      - {name: EgoSpeed, min: 15, max: 35}\n      - {name: CutInGap, min: 5, max: 40}\n",
+        "      - {name: CutInGap, min: 10, max: 30}  # narrows the distribution's range\n",
+    )
+    manifest.write_text(text)
+    stop = threading.Event()
+    finished: list[str] = []
+
+    def stop_after_five(event: campaigns.Event) -> None:
+        if isinstance(event, scheduling.Finished):
+            finished.append(event.pinned.id)
+            if len(finished) >= 5:
+                stop.set()
+
+    first = campaigns.run(_request(tmp_path, manifest), on_event=stop_after_five, stop=stop)
+    assert first.interrupted
+    before = _proposals(tmp_path / "out")
+    second = campaigns.run(_request(tmp_path, manifest))
+    assert not second.interrupted and second.summary.total == 12
+    after = _proposals(tmp_path / "out")
+    assert after[: len(before)] == before  # replayed from the distribution, not proposed again
+    assert [p["id"] for p in after] == [f"cut-in-pvd.xosc#search-{i}" for i in range(12)]
+    frozen = json.loads((tmp_path / "out" / "frozen.json").read_text())["scenarios"]
+    scenario = (tmp_path / "suite" / "cut-in.xosc").absolute().as_uri()
+    assert {s["source"] for s in frozen} == {scenario}
+    for p in after:
+        values = {k: json.loads(v) for k, v in p["values"].items()}  # type: ignore[attr-defined]
+        assert set(values) == {"EgoSpeed", "CutInGap"}
+        assert 15 <= values["EgoSpeed"] <= 35 and (values["EgoSpeed"] * 2) % 1 == 0
+        assert 10 <= values["CutInGap"] <= 30
+    summary = json.loads((tmp_path / "out" / "search.json").read_text())
+    assert [d["name"] for d in summary["dimensions"]] == ["EgoSpeed", "CutInGap"]
+    fetch = FetchContext(base_dir=tmp_path, cache_dir=tmp_path / "cache")
+    exported = searchresults.export(tmp_path / "out", tmp_path / "regression", fetch=fetch, top=1)
+    assert len(exported) == 1 and "ScenarioObject" in exported[0].read_text()
+    other = (tmp_path / "suite" / "cut-in.xosc").read_text() + "<!-- another file -->\n"
+    (tmp_path / "suite" / "other.xosc").write_text(other)
+    pvd = tmp_path / "suite" / "cut-in-pvd.xosc"
+    pvd.write_text(DISTRIBUTION.replace('filepath="cut-in.xosc"', 'filepath="other.xosc"'))
+    with pytest.raises(ScenarioError, match="no longer leads to the file this search ran"):
+        campaigns.run(_request(tmp_path, manifest))  # resuming: the distribution changed

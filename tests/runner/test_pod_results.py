@@ -274,6 +274,10 @@ def test_stopped_scenarios_are_flagged_in_the_message(tmp_path: Path) -> None:
     assert messages.flagged(text, messages.STOPPED, True) == {"b.xosc"}
 
 
+GRACE_SECONDS = 30
+"""A pod's default termination grace period: the kubelet kills the container after it."""
+
+
 @pytest.mark.slow
 def test_the_runner_stops_on_sigterm_within_seconds(tmp_path: Path) -> None:
     scenario = REPO / "scenarios" / "smoke" / "following_highway_v25_thw2_drop5_d2.xosc"
@@ -311,8 +315,11 @@ def test_the_runner_stops_on_sigterm_within_seconds(tmp_path: Path) -> None:
         time.sleep(0.05)
     runner.send_signal(signal.SIGTERM)
     stopped = time.monotonic()
-    runner.wait(timeout=10)
-    assert time.monotonic() - stopped < 5, "the runner must stop well inside the grace period"
+    runner.wait(timeout=GRACE_SECONDS)
+    assert time.monotonic() - stopped < GRACE_SECONDS, "the kubelet would have killed it"
     (outcome,) = messages.decode(log.read_text())
     assert outcome.verdict is Verdict.ERROR, outcome
     assert "SIGTERM" in outcome.reason
+    # The mechanism, not the machine's speed: the scenario ends at 10 s simulated in real time,
+    # so only a run cut short by SIGTERM (not one left to finish) takes less wall time.
+    assert 0 < outcome.wall_seconds < 10, outcome.wall_seconds

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from simtest_operator.errors import ScenarioError
+from simtest_operator.errors import ScenarioError, SourceError
 from simtest_operator.runner import resolving
 from simtest_operator.scenarios import (
     FetchContext,
@@ -22,6 +22,7 @@ from simtest_operator.scenarios import (
     PathSource,
     PinnedScenario,
     Selection,
+    uris,
 )
 from simtest_operator.search import Outcome, Proposal
 from simtest_operator.verdicts import Verdict
@@ -86,3 +87,23 @@ def test_a_search_names_a_file_of_its_selection(tmp_path: Path) -> None:
     assert base.id == "cut-in.xosc" and base.source.endswith("/suite/cut-in.xosc")
     with pytest.raises(ScenarioError, match="not among the 1 scenario"):
         resolving.freeze_search(selection, ctx, campaign="c", scenario="other.xosc")
+
+
+def test_a_distributions_scenario_is_pinned_from_the_distributions_source(tmp_path: Path) -> None:
+    """:func:`uris.sibling`: the file a distribution names gets a URI of the same source."""
+    tree = tmp_path / "tree"
+    (tree / "dist").mkdir(parents=True)
+    pvd, scenario = tree / "dist" / "d.xosc", tree / "s.xosc"
+    commit = "a" * 40
+    git = uris.git_uri("https://example.test/r.git", commit, "dist/d.xosc")
+    assert uris.sibling(git, pvd, scenario) == uris.git_uri(
+        "https://example.test/r.git", commit, "s.xosc"
+    )
+    archive = uris.http_uri("https://example.test/a.tgz", "dist/d.xosc")
+    assert uris.sibling(archive, pvd, scenario) == "https://example.test/a.tgz#s.xosc"
+    assert uris.sibling(uris.file_uri(pvd), pvd, scenario) == uris.file_uri(scenario)
+    with pytest.raises(SourceError, match="outside the source"):
+        uris.sibling(git, pvd, tmp_path / "elsewhere.xosc")
+    single = uris.http_uri("https://example.test/d.xosc")
+    with pytest.raises(SourceError, match="single downloaded file"):
+        uris.sibling(single, tmp_path / "dl" / "d.xosc", tmp_path / "dl" / "s.xosc")

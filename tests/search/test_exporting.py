@@ -28,7 +28,10 @@ def test_export_writes_loadable_concrete_files(cut_in: Path, tmp_path: Path) -> 
     assert declared["EgoSpeed"] == 31.5 and declared["CutInGap"] == 8.0
     assert declared["TargetSpeed"] == 15.0  # untouched
     reference = load_scenario(cut_in, overrides={"EgoSpeed": "31.5", "CutInGap": "8"})
-    assert first.road_network.logic_file == reference.road_network.logic_file
+    copy = first.road_network.logic_file  # the road network is copied next to the files
+    assert copy == (out / "roads/highway_straight.xodr").resolve()
+    assert reference.road_network.logic_file is not None and copy is not None
+    assert copy.read_bytes() == reference.road_network.logic_file.read_bytes()
     second = {d.name: d.value for d in load_scenario(written[1]).parameters}
     assert second["LaneChangeTime"] == 1.5
 

@@ -128,11 +128,13 @@ def test_a_sut_that_never_answers_the_handshake_times_out_at_start_up() -> None:
 
 
 def test_a_paced_run_records_the_achieved_factor_and_flags_falling_behind() -> None:
+    # Pace 5: the 8.2 s run takes 1.64 s of wall time while its own work takes ~0.15 s (about
+    # 60x real time unpaced), so even a loaded machine keeps up; pacing must hold it back.
     sut = dataclasses.replace(AEB, external=external(reference_command()))
-    kept = run(sut, None, real_time_factor=20.0).outcome.metrics
-    assert kept["realTimeFactorTarget"] == 20.0
+    kept = run(sut, None, real_time_factor=5.0).outcome.metrics
+    assert kept["realTimeFactorTarget"] == 5.0
     assert kept["realTimeBehind"] == 0.0
-    assert 19.0 <= kept["loopRealTimeFactor"] <= 21.0
+    assert 5.0 * suts.KEEP_UP_TOLERANCE <= kept["loopRealTimeFactor"] <= 5.25
     slow = dataclasses.replace(
         AEB, external=external((sys.executable, str(FAULTY), "slow", "3"), step_deadline=2.0)
     )

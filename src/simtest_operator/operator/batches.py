@@ -70,6 +70,18 @@ class ScenarioState:
     durable: bool = False
     """For DONE: the result is recorded in the SimEnvironment status, so it may be folded."""
 
+    @classmethod
+    def folded(cls, position: int, record: ResultRecord) -> ScenarioState:
+        """A scenario whose final result ``record`` is in its batch's status."""
+        return cls(
+            position=position,
+            id=record.id,
+            state=State.FOLDED,
+            attempt=record.attempts,
+            result=record,
+            durable=True,
+        )
+
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
 class Layout:
@@ -186,14 +198,7 @@ class Progress:
         if record is None:
             state = State.SKIPPED if self.skipped_absent else State.PENDING
             return ScenarioState(position=position, id=scenario_id, state=state)
-        return ScenarioState(
-            position=position,
-            id=scenario_id,
-            state=State.FOLDED,
-            attempt=record.attempts,
-            result=record,
-            durable=True,
-        )
+        return ScenarioState.folded(position, record)
 
     def of_batch(self, index: int) -> list[ScenarioState]:
         """The states of one open batch, in list order."""
@@ -290,14 +295,7 @@ def _state(
 ) -> ScenarioState:
     kept = folded.get(scenario_id)
     if kept is not None:
-        return ScenarioState(
-            position=position,
-            id=scenario_id,
-            state=State.FOLDED,
-            attempt=kept.attempts,
-            result=kept,
-            durable=True,
-        )
+        return ScenarioState.folded(position, kept)
     entry = latest.get(scenario_id)
     if entry is None:
         return ScenarioState(position=position, id=scenario_id, state=State.PENDING)

@@ -33,7 +33,6 @@ from simtest_operator.operator.observed import CampaignView
 from simtest_operator.operator.scenariolists import StoredList
 from simtest_operator.operator.status.counting import Tally
 from simtest_operator.render import EnvironmentRequest, RenderedEnvironment
-from simtest_operator.search import SearchSpace
 from simtest_operator.settings import OperatorSettings
 
 log = logging.getLogger(__name__)
@@ -173,14 +172,14 @@ class CampaignLoop:
         self._observe(plan)
         self.wake_at = plan.wake_at
         if self.search is not None:
-            wave = self.search.advance(campaign, inputs.batches, plan.observation)
+            wave = await self.search.advance(campaign, inputs.batches, plan.observation)
             if wave is not None:  # its batch shows up in the cache, and the next step starts it
                 created = await self.applier.apply(Plan(actions=(wave,)), now=now)
                 self.expectations.expect(created.expectations, now=now)
                 applied.failures += created.failures
         searched = None
         if self.search is not None and recording_results.finish_of(campaign) is not None:
-            searched = self.search.record(inputs.batches)
+            searched = await self.search.record(inputs.batches)
         self.recorder.observe(campaign, self.stored, inputs.batches, search=searched)  # results DB
         shared.metrics.reconcile.observe(time.perf_counter() - started)
         if applied.failures or applied.conflict:
@@ -209,15 +208,14 @@ class CampaignLoop:
             return
         base = self.stored.frozen.scenarios[0]
         try:
-            path = await resolving.locate(
+            space, target = await resolving.search_space(
                 self.shared.client, campaign, base, config=self.shared.config
             )
-            space = await asyncio.to_thread(SearchSpace.from_spec, spec.search, path)
         except (ScenarioError, OSError) as exc:
             raise ClusterError(f"cannot fetch the search's logical scenario: {exc}") from exc
         try:
-            self.search = searching.CampaignSearch.replayed(
-                spec.search, space, base, self.shared.cache.batches_of(self.key)
+            self.search = await searching.CampaignSearch.replayed(
+                spec.search, space, target, self.shared.cache.batches_of(self.key)
             )
         except SimtestError as exc:  # the record does not replay: it never will
             self.stored = None

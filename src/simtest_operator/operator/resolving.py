@@ -20,6 +20,7 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 
 from simtest_operator.api import converting
+from simtest_operator.api.v1alpha1.search import SearchSpec
 from simtest_operator.errors import ClusterError, RenderError, ScenarioError
 from simtest_operator.operator import bodies, names, observed, requests, scenariolists
 from simtest_operator.operator.actions import Kind
@@ -103,6 +104,27 @@ async def locate(
     return await asyncio.to_thread(Locator(context).locate, pinned)
 
 
+async def search_space(
+    client: Client,
+    campaign: observed.CampaignView,
+    base: PinnedScenario,
+    *,
+    config: OperatorSettings,
+) -> tuple[SearchSpace, PinnedScenario]:
+    """The space of the campaign's search over its pinned logical scenario ``base``, and the
+    pin its proposals run (for a distribution: the scenario file it names)."""
+    assert campaign.spec is not None and campaign.spec.search is not None
+    path = await locate(client, campaign, base, config=config)
+    return await asyncio.to_thread(_search_space, campaign.spec.search, base, path)
+
+
+def _search_space(
+    spec: SearchSpec, base: PinnedScenario, path: Path
+) -> tuple[SearchSpace, PinnedScenario]:
+    space = SearchSpace.from_spec(spec, path)
+    return space, freezing.search_target(base, path, space)
+
+
 async def resolve(
     client: Client,
     campaign: observed.CampaignView,
@@ -112,8 +134,9 @@ async def resolve(
 ) -> StoredList:
     """Freeze the campaign's list, check it renders, and store it (or read what is stored).
 
-    A search (``spec.search``) freezes only its logical scenario; the space is built once here,
-    so a parameter the file does not declare fails the campaign before anything runs."""
+    A search (``spec.search``) freezes only its logical scenario; the space (and for a
+    distribution, the pin of the scenario file it names) is built once here, so a parameter the
+    file does not declare fails the campaign before anything runs."""
     assert campaign.spec is not None
     spec = campaign.spec
     context = fetch_context(client, campaign, config=config)
@@ -135,7 +158,7 @@ async def resolve(
             seed=spec.environment.simulator.seed,
         )
         path = await asyncio.to_thread(Locator(context).locate, frozen.scenarios[0])
-        await asyncio.to_thread(SearchSpace.from_spec, spec.search, path)
+        await asyncio.to_thread(_search_space, spec.search, frozen.scenarios[0], path)
     stored = StoredList(frozen=frozen, batch_size=spec.execution.batch_size)
     if frozen.scenarios:
         _preflight(campaign, stored, config=config, render=render)

@@ -20,6 +20,7 @@ The planner sees the waves as an ordinary frozen list
 
 from __future__ import annotations
 
+import asyncio
 import math
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
@@ -70,7 +71,7 @@ class CampaignSearch:
         self._record: tuple[int, Mapping[str, Any]] | None = None
 
     @classmethod
-    def replayed(
+    async def replayed(
         cls,
         spec: SearchSpec,
         space: SearchSpace,
@@ -78,18 +79,20 @@ class CampaignSearch:
         batches: Iterable[BatchView],
     ) -> CampaignSearch:
         """The searcher as the waves left it: their proposals asked again after the results
-        recorded before each, then told every result folded since."""
+        recorded before each, then told every result folded since (off the event loop: every
+        proposal is asked again)."""
         mine = {b.index: b for b in batches}
         frozen, starts = waves(mine)
         outcomes = _folded(frozen, mine.values())
         pins = [p.proposal for p in frozen if p.proposal is not None]
-        proposals, tells = resolving.replay_inputs(pins, outcomes)
-        search = cls(spec, space, Searcher.replay(spec, space, proposals, tells), base)
+        replayed = await asyncio.to_thread(resolving.replay_search, spec, space, pins, outcomes)
+        search = cls(spec, space, replayed.searcher, base)
         search.waves = len(starts)
-        for index, outcome in tells:
+        search.unpinned = list(replayed.unpinned)
+        for index, outcome in replayed.pinned:
             search._learnt(index, outcome)
-        for index in sorted(set(outcomes) - search.told):
-            search._tell(index, outcomes[index])
+        for index in replayed.unpinned:
+            search._learnt(index, outcomes[index])
         return search
 
     def progress(self) -> SearchProgress:
@@ -118,11 +121,14 @@ class CampaignSearch:
         for index in sorted(set(outcomes) - self.told):
             self._tell(index, outcomes[index])
 
-    def advance(
+    async def advance(
         self, campaign: CampaignView, batches: Iterable[BatchView], observation: Observation
     ) -> Create | None:
         """After a planning step: the next wave's batch (None: the window is full, the search
-        is over, or the cache is behind)."""
+        is over, or the cache is behind). The searcher is asked off the event loop (a
+        ``boundary`` proposal fits a classifier: about a second), so other campaigns' steps and
+        kopf's handlers go on meanwhile; only this campaign's loop touches its searcher, and it
+        waits for the answer."""
         mine = {b.index: b for b in batches if b.campaign == campaign.name}
         frozen, starts = waves(mine)
         if self.wave is not None:
@@ -137,7 +143,7 @@ class CampaignSearch:
         room = observation.window - observation.in_flight - observation.queued
         if room <= 0 or not self.progress().open:
             return None
-        proposals = self.searcher.ask(min(room, MAX_WAVE))
+        proposals = await asyncio.to_thread(self.searcher.ask, min(room, MAX_WAVE))
         if not proposals:
             self.exhausted = True
             return None
@@ -187,12 +193,13 @@ class CampaignSearch:
             return -best[0]
         return best[0]
 
-    def record(
+    async def record(
         self, batches: Iterable[BatchView]
     ) -> tuple[tuple[PinnedScenario, ...], Mapping[str, Any]]:
         """The search's frozen list and the record the results store keeps with the campaign
         (``settings.search``: the spec, the dimensions, every proposal, the summary); computed
-        once the search is over (the loop asks only then), again only if more results came."""
+        once the search is over (the loop asks only then), again only if more results came.
+        The summary fits the boundary classifier: off the event loop."""
         mine = {b.index: b for b in batches}
         frozen, _ = waves(mine)
         outcomes = _folded(frozen, mine.values())
@@ -202,7 +209,7 @@ class CampaignSearch:
                 for p in frozen
                 if p.proposal is not None and p.proposal.index in outcomes
             ]
-            summary = summarise(self.space, runs, self.spec.objectives)
+            summary = await asyncio.to_thread(summarise, self.space, runs, self.spec.objectives)
             record = resolving.search_record(self.spec, self.space, frozen, summary)
             self._record = (len(outcomes), record)
         return frozen, self._record[1]

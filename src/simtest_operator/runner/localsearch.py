@@ -13,9 +13,10 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from simtest_operator.errors import ScenarioError
 from simtest_operator.runner import preparing, resolving, searchresults, storing
 from simtest_operator.runner.preparing import SearchPlan
-from simtest_operator.runner.searching import SearchFeed, replayed
+from simtest_operator.runner.searching import SearchFeed
 from simtest_operator.scenarios.pinned import FrozenList, PinnedScenario
 from simtest_operator.search import SearchSpace, summarise
 from simtest_operator.verdicts import ScenarioOutcome
@@ -71,17 +72,29 @@ class LocalSearch:
     ) -> LocalSearch:
         """Replay what an earlier invocation proposed (a resumed run) and feed the rest."""
         space = SearchSpace.from_spec(search.spec, search.path)
+        target = resolving.search_target(search.base, search.path, space)
         proposed = plan.frozen.scenarios
-        finished = {k: v for k, v in results.items() if k in plan.finished}
-        searcher, unpinned = replayed(search, space, proposed, finished)
+        if proposed and (proposed[0].source, proposed[0].sha256) != (target.source, target.sha256):
+            raise ScenarioError(
+                f"spec.search.scenario {search.spec.scenario!r} no longer leads to the file "
+                f"this search ran ({proposed[0].source} at sha256 {proposed[0].sha256[:12]}...):"
+                " the distribution changed; choose another --output"
+            )
+        outcomes = {
+            p.proposal.index: resolving.search_outcome(results[p.id].verdict, results[p.id].metrics)
+            for p in proposed
+            if p.proposal is not None and p.id in plan.finished and p.id in results
+        }
+        pins = [p.proposal for p in proposed if p.proposal is not None]
+        replayed = resolving.replay_search(search.spec, space, pins, outcomes)
         local = cls(plan, search, space, store, paths, proposed=proposed)
         local.feed = SearchFeed(
-            searcher,
-            search.base,
+            replayed.searcher,
+            target,
             parallel=parallel,
             batch_size=plan.policy.batch_size,
             pending=[p for p in proposed if p.id not in plan.finished and p.id in paths],
-            told=unpinned,
+            told=replayed.unpinned,
             on_proposed=local._proposed,
         )
         return local
@@ -93,9 +106,10 @@ class LocalSearch:
 
     def _proposed(self, pins: Sequence[PinnedScenario]) -> None:
         """New proposals join the frozen list (on disk before they run) and the store."""
+        path = self._space.scenario or self._search.path  # a distribution's scenario file
         for pinned in pins:
-            self._paths[pinned.id] = self._search.path
-            self._store.register(pinned, self._search.path)
+            self._paths[pinned.id] = path
+            self._store.register(pinned, path)
         self._entries.extend(pins)
         self._plan.output.write_frozen(self.frozen)
 

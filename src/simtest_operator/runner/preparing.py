@@ -59,7 +59,8 @@ class SearchPlan:
 
     spec: SearchSpec
     base: PinnedScenario
-    """The logical scenario, pinned (id ``spec.scenario``)."""
+    """The logical scenario, pinned (id ``spec.scenario``): a scenario file or a
+    ParameterValueDistribution."""
     path: Path
     """Its file on this machine (sha256 verified)."""
 
@@ -215,6 +216,13 @@ def _search_plan(
         )
     try:
         path = Locator(fetch).locate(base)
+        if logical is None and not path.as_posix().endswith(f"/{spec.scenario}"):
+            # The proposals run another file: the logical scenario is a distribution naming
+            # it. Pinned again here; LocalSearch checks it still names the file they ran.
+            base = resolving.freeze_search(
+                selection, fetch, campaign=frozen.campaign, scenario=spec.scenario
+            ).scenarios[0]
+            path = Locator(fetch).locate(base)
     except SourceError as exc:
         raise ScenarioError(f"spec.search.scenario {spec.scenario!r}: {exc}") from exc
     return SearchPlan(spec=spec, base=base, path=path)

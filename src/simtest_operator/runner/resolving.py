@@ -15,7 +15,7 @@ Rules (documented in docs/local-run.md):
 * ids are paths inside their source; a clash across sources gets the suffix ``~<source number>``;
 * a search (``spec.search``) pins only its logical scenario (:func:`freeze_search`); its concrete
   scenarios enter the list as they are proposed (:func:`pin_proposal`), each with what replays
-  the search (:func:`replay_inputs`).
+  the search (:func:`replay_search`).
 """
 
 from __future__ import annotations
@@ -29,15 +29,15 @@ from typing import TYPE_CHECKING, Any
 
 from simtest_operator import openscenario
 from simtest_operator.api.v1alpha1.search import SearchSpec
-from simtest_operator.errors import ScenarioError
+from simtest_operator.errors import ScenarioError, SourceError
 from simtest_operator.openscenario import headers
-from simtest_operator.scenarios import resolving, selecting
+from simtest_operator.scenarios import resolving, selecting, uris
 from simtest_operator.scenarios.pinned import FrozenList, PinnedScenario, ProposalPin, sha256_hex
 from simtest_operator.scenarios.specs import Selection
 from simtest_operator.verdicts import Verdict
 
 if TYPE_CHECKING:  # the engine (scikit-learn, optuna) loads only where a search runs
-    from simtest_operator.search import Outcome, Proposal, SearchSpace, SearchSummary
+    from simtest_operator.search import Outcome, Proposal, Searcher, SearchSpace, SearchSummary
 
 Expander = Callable[[Path, int], Sequence[openscenario.ConcreteRun]]
 """Expands a distribution file (with a seed for stochastic ones) into concrete runs."""
@@ -173,6 +173,10 @@ SEARCH_SUFFIX = "#search-"
 """A search's concrete scenario has the id ``<logical scenario>#search-<index>``."""
 
 
+LOGICAL_SUFFIX = "#logical"
+"""While a search freezes, a ParameterValueDistribution is pinned as itself under this suffix."""
+
+
 def freeze_search(
     selection: Selection,
     ctx: resolving.FetchContext,
@@ -184,23 +188,40 @@ def freeze_search(
     """The logical scenario a search varies, pinned: a one-entry list (id ``scenario``).
 
     The selection is resolved as for any campaign, so the file is pinned from the same sources
-    on a laptop and in a cluster; ``scenario`` must be one of the files it selects."""
-    frozen = freeze(selection, ctx, campaign=campaign, seed=seed)
-    base = next((s for s in frozen.scenarios if s.id == scenario), None)
-    if base is None and any(s.id.startswith(f"{scenario}#") for s in frozen.scenarios):
-        raise ScenarioError(
-            f"spec.search.scenario {scenario!r} is a ParameterValueDistribution: a campaign "
-            "cannot search one yet; name the scenario file it varies and give the ranges as "
-            "spec.search.parameters"
-        )
+    on a laptop and in a cluster; ``scenario`` must be one of the files it selects. A
+    ParameterValueDistribution is pinned as itself, not expanded: the search spans its ranges,
+    and its proposals run the scenario file it names (:func:`search_target`)."""
+    frozen = freeze(selection, ctx, campaign=campaign, seed=seed, expand=_unexpanded)
+    wanted = (scenario, f"{scenario}{LOGICAL_SUFFIX}")
+    base = next((s for s in frozen.scenarios if s.id in wanted), None)
     if base is None:
-        listed = ", ".join(s.id for s in frozen.scenarios[:5]) or "none"
+        listed = ", ".join(s.id.removesuffix(LOGICAL_SUFFIX) for s in frozen.scenarios[:5])
         raise ScenarioError(
             f"spec.search.scenario {scenario!r} is not among the {len(frozen.scenarios)} "
-            f"scenario(s) the selection resolves to (first: {listed}); name a file of "
+            f"scenario(s) the selection resolves to (first: {listed or 'none'}); name a file of "
             "spec.scenarios as a path inside its source"
         )
-    return dataclasses.replace(frozen, scenarios=(base,))
+    return dataclasses.replace(frozen, scenarios=(dataclasses.replace(base, id=scenario),))
+
+
+def _unexpanded(path: Path, seed: int) -> Sequence[openscenario.ConcreteRun]:
+    ident = f"{path.name}{LOGICAL_SUFFIX}"
+    return [openscenario.ConcreteRun(id=ident, scenario=path, overrides={})]
+
+
+def search_target(base: PinnedScenario, path: Path, space: SearchSpace) -> PinnedScenario:
+    """The pin a search's proposals run: the logical scenario ``base`` itself, or, when it is a
+    ParameterValueDistribution (``path``: its local copy), the scenario file the distribution
+    names, pinned from the same source (same id: proposals stay ``<distribution>#search-<i>``).
+    ScenarioError when that file cannot be pinned (outside the source)."""
+    target = space.scenario
+    if target is None or target.resolve() == path.resolve():
+        return base
+    try:
+        uri = uris.sibling(base.source, path, target)
+    except SourceError as exc:
+        raise ScenarioError(f"spec.search.scenario {base.id!r}: {exc}") from exc
+    return dataclasses.replace(base, source=uri, sha256=sha256_hex(target.read_bytes()))
 
 
 def pin_proposal(
@@ -259,6 +280,41 @@ def replay_inputs(
             )
         proposals.append(proposal_of(pin))
     return proposals, tells
+
+
+@dataclasses.dataclass(frozen=True, slots=True)
+class ReplayedSearch:
+    """A searcher rebuilt from a frozen list, and what it was told on the way."""
+
+    searcher: Searcher
+    pinned: Sequence[tuple[int, Outcome]]
+    """Tells the pinned proposals record, in the order told."""
+    unpinned: Sequence[int]
+    """Tells made after the last proposal was asked, in index order: the next proposal's
+    ``told``."""
+
+
+def replay_search(
+    spec: SearchSpec,
+    space: SearchSpace,
+    pins: Sequence[ProposalPin],
+    outcomes: Mapping[int, Outcome],
+) -> ReplayedSearch:
+    """The searcher as a frozen list left it (a resumed run, a restarted operator): each pinned
+    proposal asked again after the tells recorded before it, then told every other outcome.
+
+    CPU-bound (every proposal is asked again: a classifier fit each for ``boundary``); the
+    operator calls it off its event loop. ScenarioError or ReplayError when the record does
+    not replay."""
+    from simtest_operator.search import Searcher
+
+    proposals, tells = replay_inputs(pins, outcomes)
+    searcher = Searcher.replay(spec, space, proposals, tells)
+    told = {index for index, _ in tells}
+    unpinned = sorted(set(outcomes) - told)
+    for index in unpinned:
+        searcher.tell(index, outcomes[index])
+    return ReplayedSearch(searcher=searcher, pinned=tells, unpinned=unpinned)
 
 
 def search_outcome(verdict: Verdict, metrics: Mapping[str, float]) -> Outcome:

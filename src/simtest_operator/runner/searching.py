@@ -5,44 +5,20 @@ the searcher for as many proposals as workers are free (the first wave fills eve
 for the next ones as each result comes back -- no barrier between waves, so the workers stay busy.
 Every proposal enters the frozen list the moment it is made, with its index, values, basis and
 the results told before it (:func:`~simtest_operator.runner.resolving.pin_proposal`): ``--frozen``
-reruns exactly the proposed list, and a resumed run replays the searcher and continues.
+reruns exactly the proposed list, and a resumed run replays the searcher
+(:func:`~simtest_operator.runner.resolving.replay_search`) and continues.
 """
 
 from __future__ import annotations
 
 import collections
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Sequence
 
 from simtest_operator.runner import resolving
-from simtest_operator.runner.preparing import SearchPlan
 from simtest_operator.scenarios import batching
 from simtest_operator.scenarios.pinned import PinnedScenario
-from simtest_operator.search import Outcome, Proposal, Searcher, SearchSpace
+from simtest_operator.search import Outcome, Proposal, Searcher
 from simtest_operator.verdicts import ScenarioOutcome
-
-
-def replayed(
-    plan: SearchPlan,
-    space: SearchSpace,
-    proposed: Sequence[PinnedScenario],
-    finished: Mapping[str, ScenarioOutcome],
-) -> tuple[Searcher, list[int]]:
-    """A searcher that has proposed ``proposed`` (a resumed run: replayed from their pins) and
-    been told every finished result, and the tells not yet pinned to a proposal (told after the
-    last one was asked, in index order)."""
-    pins = [p.proposal for p in proposed if p.proposal is not None]
-    by_index = {
-        p.proposal.index: resolving.search_outcome(finished[p.id].verdict, finished[p.id].metrics)
-        for p in proposed
-        if p.proposal is not None and p.id in finished
-    }
-    proposals, tells = resolving.replay_inputs(pins, by_index)
-    searcher = Searcher.replay(plan.spec, space, proposals, tells)
-    told = {index for index, _ in tells}
-    unpinned = sorted(set(by_index) - told)
-    for index in unpinned:
-        searcher.tell(index, by_index[index])
-    return searcher, unpinned
 
 
 class SearchFeed:

@@ -19,6 +19,7 @@ from simtest_operator.api.v1alpha1.search import SearchSpec
 from simtest_operator.errors import ResultsError, SourceError
 from simtest_operator.results import comparing, opening, records, reportmodel, stores
 from simtest_operator.runner import resolving
+from simtest_operator.scenarios import uris
 from simtest_operator.scenarios.locating import Locator
 from simtest_operator.scenarios.pinned import PinnedScenario, ProposalPin
 from simtest_operator.scenarios.resolving import FetchContext
@@ -187,7 +188,8 @@ def export(
     run_key: str | None = None,
 ) -> list[Path]:
     """Write the ``top`` most critical concrete scenarios of a stored search as ``.xosc`` files
-    (the logical scenario fetched as pinned, its parameter values replaced)."""
+    (the logical scenario fetched as pinned, its parameter values replaced), with copies of the
+    road network and catalogs they reference: the folder runs on its own."""
     with opening.open_store(target, create=False) as store:
         campaign = _campaign(store, run_key)
         stored = store.outcomes(campaign.run_key, final_only=False)
@@ -207,7 +209,8 @@ def export(
         path = Locator(fetch).locate(logical)
     except SourceError as exc:
         raise ResultsError(f"cannot fetch the logical scenario {search.scenario}: {exc}") from exc
-    return write_scenarios(path, [by_index[run.index] for run in chosen], out_dir)
+    root = uris.source_root(path, logical.source)
+    return write_scenarios(path, [by_index[run.index] for run in chosen], out_dir, source_root=root)
 
 
 def _campaign(store: stores.ResultSource, run_key: str | None) -> records.CampaignRecord:

@@ -152,6 +152,32 @@ def parse(uri: str) -> SourceUri:
     raise SourceError(f"unknown source URI scheme in {uri!r}")
 
 
+def sibling(uri: str, path: Path, other: Path) -> str:
+    """The URI of ``other``, a file of the same source as ``path`` (whose URI is ``uri``): the
+    scenario a distribution names, pinned from the tree the distribution came from. SourceError
+    when ``other`` lies outside that source."""
+    parsed = parse(uri)
+    if isinstance(parsed, FileUri):
+        return file_uri(other.resolve())
+    root = source_root(path, uri)
+    assert root is not None
+    try:
+        member = other.resolve().relative_to(root.resolve()).as_posix()
+    except ValueError:
+        raise SourceError(f"{other} is outside the source of {uri}") from None
+    if isinstance(parsed, GitUri):
+        return git_uri(parsed.url, parsed.commit, member)
+    if isinstance(parsed, HttpUri):
+        if parsed.member is None:
+            raise SourceError(f"{uri} is a single downloaded file: it has no sibling {member}")
+        return http_uri(parsed.url, member)
+    if isinstance(parsed, ConfigMapUri):
+        return configmap_uri(parsed.name, member)
+    if isinstance(parsed, GraphqlUri):
+        return graphql_uri(parsed.endpoint, member)
+    return rest_uri(parsed.url, member)
+
+
 def _checked_relative(path: str, uri: str) -> str:
     pure = PurePosixPath(path)
     if pure.is_absolute() or ".." in pure.parts or not path:
