@@ -100,3 +100,52 @@ def test_plot_pairs_draws_every_pair() -> None:
     plots = plot_pairs(space, records, summary)
     assert [(x, y) for x, y, _ in plots] == [("gap", "speed"), ("gap", "mode"), ("speed", "mode")]
     assert all(png.startswith(b"\x89PNG") for _, _, png in plots)
+
+
+def band(runs: int, seed: int = 3) -> list[tuple[Proposal, Outcome]]:
+    """One thin oblique failure band (|gap/100 - speed/10| < 0.08) sampled at random."""
+    rng = np.random.default_rng(seed)
+    records = []
+    for index, (u, v) in enumerate(rng.random((runs, 2))):
+        failed = abs(u - v) < 0.08
+        verdict = Verdict.FAILED if failed else Verdict.PASSED
+        records.append(record(index, 100 * u, 10 * v, verdict, 0.0 if failed else 1.0))
+    return records
+
+
+def test_a_sparse_search_reports_one_band_as_one_region() -> None:
+    # 40 runs, as in scenarios/search-campaign.yaml: failures lie farther apart than a fixed
+    # 0.2 but as near as such a search resolves (one step of a 40-point grid, per dimension).
+    records = band(40)
+    summary = analysis.summarise(SPACE, records, [SearchObjective()])
+    assert summary.failures >= 5
+    assert len(summary.regions) == 1
+
+
+def test_separate_pockets_stay_separate_at_any_density() -> None:
+    for runs in (40, 160, 640):
+        rng = np.random.default_rng(runs)
+        records = []
+        for index, (u, v) in enumerate(rng.random((runs, 2))):
+            failed = (u < 0.2 and v > 0.8) or (u > 0.8 and v < 0.2)
+            records.append(
+                record(index, 100 * u, 10 * v, Verdict.FAILED if failed else Verdict.PASSED, 1.0)
+            )
+        summary = analysis.summarise(SPACE, records, [SearchObjective()])
+        assert len(summary.regions) == 2, runs
+
+
+def test_grid_regions_connect_diagonal_neighbours() -> None:
+    # An oblique band on a 5 x 5 grid touches only diagonally; a point two steps off is apart.
+    grid = np.array([[i / 4, j / 4] for i in range(5) for j in range(5)])
+    assert analysis.resolution(grid) == 0.25
+    band_points = np.array([[k / 4, k / 4] for k in range(5)])
+    apart = np.array([[0.0, 1.0]])
+    labels = analysis.cluster(np.vstack([band_points, apart]), analysis.resolution(grid))
+    assert len(set(labels[:5].tolist())) == 1
+    assert labels[5] not in labels[:5]
+    # Spacing per dimension (5 x 3 points): the largest step links the diagonal neighbours.
+    grid = np.array([[i / 4, j / 2] for i in range(5) for j in range(3)])
+    assert analysis.resolution(grid) == 0.5
+    labels = analysis.cluster(np.array([[0.0, 0.0], [0.25, 0.5], [0.5, 1.0]]), 0.5)
+    assert len(set(labels.tolist())) == 1
