@@ -1,4 +1,4 @@
-"""How the next point is proposed: grid, random, optuna's TPE, boundary-seeking active learning.
+"""How the next point is proposed: grid, random, optuna's TPE, boundary active learning, hybrid.
 
 A strategy proposes one unit-cube point at a time from the proposal's index, the outcomes told so
 far (in tell order) and the points asked but not yet told. Its randomness is seeded from the
@@ -180,7 +180,8 @@ class ActiveBoundary:
     known point; then a candidate maximises the classifier's uncertainty ``1 - |2p - 1|`` plus
     ``EXPLORATION`` times its distance to the nearest told or pending point (relative to the
     spacing the points so far would have on a grid), so a batch spreads along the boundary
-    instead of stacking where it is least certain.
+    instead of stacking where it is least certain. The classifier is refitted on the schedule
+    of :func:`refit_point`, so one fit serves a whole batch and long searches stay cheap.
     """
 
     def __init__(self, space: SearchSpace, seed: int) -> None:
