@@ -1,16 +1,19 @@
-"""Benchmark of the search for failures: grid, random, TPE and boundary active learning.
+"""Benchmark of the search for failures: grid, random, TPE, boundary active learning, hybrid.
 
 Three logical scenarios of ``scenarios/library`` with three parameters each, the built-in driver
 model as the system under test, every run a real simulation through the runner's
 ``run_scenario`` on two spawned worker processes (one libsumo per process). Ground truth is a
 dense grid of each scenario. For each scenario and seed, every strategy searches with budget
 200 in waves of four (a window of two slots, kept full: the next wave is asked as soon as a wave
-is told); random, TPE and boundary do not depend on the budget, so their first 100 runs are the
-budget-100 search; grid is run at 100 and 200 (its grid depends on the budget). Reported:
+is told); random, TPE, boundary and hybrid do not depend on the budget, so their first 100 runs
+are the budget-100 search; grid is run at 100 and 200 (its grid depends on the budget).
+Reported:
 
-* failures found (failing runs) and failure regions found: dense-grid regions (single-linkage
-  clusters of its failures, :mod:`simtest_operator.search.analysis`) that hold a failure of the
-  search, or the dense-grid failure nearest to it within the clustering distance;
+* failures found (failing runs) and failure regions found: dense-grid regions (connected sets
+  of failing grid points, diagonal neighbours included: :func:`analysis.cluster` at the grid's
+  :func:`analysis.resolution`) that hold a failure of the search, or whose nearest failure lies
+  within one grid step of it; and how many regions the search itself reports (the same two
+  functions on its own runs) — a search is right about regions when that equals the truth;
 * boundary misclassification: the share of the dense grid that the boundary classifier fitted on
   the search's runs gets wrong;
 * runs to the dense grid's accuracy: the fewest runs (in steps of 10) after which the search's
@@ -60,7 +63,7 @@ BUDGETS = (100, 200)
 WAVE = 4
 CHECKPOINT = 10
 ACCURACY_SHARE = 0.9
-ADAPTIVE = (SearchStrategy.TPE, SearchStrategy.BOUNDARY)
+ADAPTIVE = (SearchStrategy.TPE, SearchStrategy.BOUNDARY, SearchStrategy.HYBRID)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -189,6 +192,9 @@ def overrides(values: Mapping[str, float | str]) -> dict[str, str]:
 @dataclasses.dataclass
 class Truth:
     points: np.ndarray
+    step: float
+    """The dense grid's resolution (its largest spacing): failures within one step in every
+    parameter are one region."""
     failed: np.ndarray
     region_of: np.ndarray
     """Dense-grid region label of each failing dense point (-1 for passes)."""
@@ -205,8 +211,9 @@ def truth(
     points = space.encode_all([values[i] for i in judged])
     failed = np.array([outcomes[i].failed for i in judged], dtype=bool)
     region_of = np.full(len(judged), -1)
+    step = analysis.resolution(points)
     if failed.any():
-        region_of[failed] = analysis.cluster(points[failed])
+        region_of[failed] = analysis.cluster(points[failed], step)
     folds = StratifiedKFold(n_splits=5, shuffle=True, random_state=0)
     accuracies, errors = [], []
     for train, test in folds.split(points, failed):
@@ -216,6 +223,7 @@ def truth(
         errors.append(fitted.misclassification(points[test], failed[test]))
     return Truth(
         points,
+        step,
         failed,
         region_of,
         int(region_of.max()) + 1,
@@ -225,15 +233,18 @@ def truth(
 
 
 def regions_found(space: SearchSpace, records: list[tuple[Any, Outcome]], t: Truth) -> int:
+    """Dense-grid regions holding a failure of the search: its nearest dense-grid failure lies
+    within one grid step in every parameter (the regions' own neighbourhood)."""
     found: set[int] = set()
     fail_points = t.points[t.failed]
     fail_regions = t.region_of[t.failed]
     for proposal, outcome in records:
         if not outcome.failed or len(fail_points) == 0:
             continue
-        gaps = np.sqrt(((fail_points - np.array(space.encode(proposal.values))) ** 2).sum(axis=1))
+        steps = np.abs(fail_points - np.array(space.encode(proposal.values))) / t.step
+        gaps = steps.max(axis=1)
         nearest = int(np.argmin(gaps))
-        if gaps[nearest] <= analysis.REGION_DISTANCE:
+        if gaps[nearest] <= 1.0 + 1e-6:
             found.add(int(fail_regions[nearest]))
     return len(found)
 
@@ -249,9 +260,12 @@ def score(space: SearchSpace, records: list[tuple[Any, Outcome]], t: Truth) -> d
         ):
             runs_to = n
             break
+    failed = [p for p, o in records if o.failed]
+    step = analysis.resolution(analysis.labelled(space, records)[0])
     return {
-        "failures": sum(o.failed for _, o in records),
+        "failures": len(failed),
         "regions": regions_found(space, records, t),
+        "reported_regions": len(analysis.regions(space, failed, step)),
         "misclassification": round(fitted.misclassification(t.points, t.failed), 4)
         if fitted
         else 1.0,
@@ -389,13 +403,24 @@ def summarise_case(
                 {"strategy": strategy.value}
                 | {
                     k: median(results, k)
-                    for k in ("failures", "regions", "misclassification", "runs_to_grid_accuracy")
+                    for k in (
+                        "failures",
+                        "regions",
+                        "misclassification",
+                        "runs_to_grid_accuracy",
+                        "reported_regions",
+                    )
                 }
             )
         random = per[SearchStrategy.RANDOM.value][budget]
         grid = per[SearchStrategy.GRID.value][budget]
-        chosen = next(a for a in adaptive if a["strategy"] == _default())
+        chosen = {
+            k: v
+            for k, v in next(a for a in adaptive if a["strategy"] == _default()).items()
+            if k != "reported_regions"
+        }
         keys = ("failures", "regions", "misclassification")
+        more = ("runs_to_grid_accuracy", "reported_regions")
         entries.append(
             {
                 "name": case.name,
@@ -416,8 +441,8 @@ def summarise_case(
                     "balanced_accuracy": round(t.accuracy, 4),
                     "misclassification": round(t.misclassification, 4),
                 },
-                "grid": {k: median(grid, k) for k in (*keys, "runs_to_grid_accuracy")},
-                "random": {k: median(random, k) for k in (*keys, "runs_to_grid_accuracy")},
+                "grid": {k: median(grid, k) for k in (*keys, *more)},
+                "random": {k: median(random, k) for k in (*keys, *more)},
                 "adaptive": adaptive,
                 "seeds": len(random),
             }
@@ -443,6 +468,7 @@ def table(
         "budget",
         "failures",
         "regions",
+        "reported regions",
         "misclassification",
         "runs to grid accuracy",
     ):
@@ -455,6 +481,7 @@ def table(
                 str(budget),
                 str(median(results, "failures")),
                 f"{median(results, 'regions')}/{t.regions}",
+                str(median(results, "reported_regions")),
                 f"{median(results, 'misclassification'):.3f}",
                 str(median(results, "runs_to_grid_accuracy") or "-"),
             )

@@ -1,11 +1,14 @@
 """What a finished (or running) search found: failures, failure regions, boundary, critical runs.
 
-Regions are clusters of failures in the unit cube, single-linkage with a cut at
-``REGION_DISTANCE`` (Euclidean, after normalising every range to ``[0, 1]`` and a categorical
-value to its bin's centre): two failures belong to one region when a chain of failures, each
-within that distance of the next, connects them. Single linkage follows the elongated,
-curved failure regions driving scenarios have (a band along a gap/speed trade-off), where
-centroid-based clustering would cut one band into several "regions".
+A failure region is a set of failures connected at the resolution the runs themselves have:
+two failures are neighbours when they differ by at most one step in every parameter (Chebyshev
+distance in the unit cube), and a region is a chain of neighbours (single linkage). The step is
+the longest edge of the minimum spanning tree of all judged runs, the finest distance at which
+the sample is one connected set. On a grid that is the grid's spacing, so a region is a
+connected set of failing grid points, diagonal neighbours included (a thin oblique band is one
+region, not pieces that touch only at corners); a sparse search gets a coarser step, so its
+failures do not each become a "region" of their own. The dense grid of the benchmark and a
+search are clustered by the same two functions.
 """
 
 from __future__ import annotations
@@ -22,8 +25,6 @@ from simtest_operator.search import boundaries
 from simtest_operator.search.records import Outcome, Proposal, criticality
 from simtest_operator.search.spaces import Points, SearchSpace, Value
 
-REGION_DISTANCE = 0.2
-"""Largest unit-cube gap inside one failure region: a fifth of every range."""
 CRITICAL_COUNT = 10
 """How many of the most critical proposals the summary lists."""
 
@@ -104,7 +105,7 @@ def summarise(
         runs=len(records),
         failures=len(failed),
         not_judged=len(records) - len(judged),
-        regions=regions(space, failed),
+        regions=regions(space, failed, resolution(labelled(space, records)[0])),
         boundary=boundary,
         critical=[
             CriticalRun(index=p.index, values=dict(p.values), verdict=o.verdict.value, score=s)
@@ -127,12 +128,13 @@ def fit_boundary(space: SearchSpace, records: Records) -> boundaries.Boundary | 
     return boundaries.fit(*labelled(space, records))
 
 
-def regions(space: SearchSpace, failed: Sequence[Proposal]) -> list[Region]:
-    """Failure regions, largest first (ties by the smallest member index)."""
+def regions(space: SearchSpace, failed: Sequence[Proposal], step: float) -> list[Region]:
+    """Failure regions of ``failed`` at ``step`` (:func:`resolution` of the judged runs),
+    largest first (ties by the smallest member index)."""
     if not failed:
         return []
     points = space.encode_all([p.values for p in failed])
-    labels = cluster(points)
+    labels = cluster(points, step)
     found = []
     for label in sorted(set(labels.tolist())):
         members = [p for p, lab in zip(failed, labels, strict=True) if lab == label]
@@ -158,14 +160,37 @@ def regions(space: SearchSpace, failed: Sequence[Proposal]) -> list[Region]:
     return found
 
 
-def cluster(points: Points) -> npt.NDArray[np.int64]:
-    """Region labels of unit-cube failure points (see the module docstring)."""
+def resolution(points: Points) -> float:
+    """The step at which the runs at ``points`` (unit cube) form one connected set: the longest
+    edge of their minimum spanning tree under the Chebyshev distance. On a grid it is the grid's
+    spacing (its largest, if the spacing differs per dimension); a scattered sample's gaps are
+    uneven, so it is what the sparsest part of the sample resolves."""
+    if len(points) < 2:
+        return 1.0
+    from sklearn.cluster import AgglomerativeClustering
+
+    # Single linkage merges along the minimum spanning tree: its last merge is the longest edge.
+    model = AgglomerativeClustering(
+        n_clusters=1, metric="chebyshev", linkage="single", compute_distances=True
+    )
+    model.fit(points)
+    return max(float(model.distances_.max()), 1e-9)
+
+
+def cluster(points: Points, step: float) -> npt.NDArray[np.int64]:
+    """Region labels of unit-cube failure points: chains of neighbours at most ``step`` apart in
+    every dimension (see the module docstring)."""
     if len(points) == 1:
         return np.zeros(1, dtype=np.int64)
     from sklearn.cluster import AgglomerativeClustering
 
+    # Merged below the threshold: a hair above one step keeps grid neighbours (whose values
+    # are rounded to the scenario's precision) together.
     model = AgglomerativeClustering(
-        n_clusters=None, distance_threshold=REGION_DISTANCE, linkage="single"
+        n_clusters=None,
+        distance_threshold=step * (1.0 + 1e-6),
+        metric="chebyshev",
+        linkage="single",
     )
     labels: npt.NDArray[np.int64] = model.fit_predict(points).astype(np.int64)
     return labels

@@ -44,6 +44,9 @@ class SearchStrategy(enum.StrEnum):
     BOUNDARY = "boundary"
     """Active learning of the pass/fail boundary: a classifier's most uncertain points, spread
     within each batch, after a quasi-random initial design."""
+    HYBRID = "hybrid"
+    """Boundary active learning for where the system fails, with a share of every batch spent
+    inside the estimated failure set for how often: many failures and the whole boundary."""
 
 
 class SearchParameter(ApiModel):
@@ -101,7 +104,7 @@ class SearchObjective(ApiModel):
     """Which direction is critical for a metric; ignored for ``verdict``."""
 
 
-DEFAULT_STRATEGY = SearchStrategy.BOUNDARY
+DEFAULT_STRATEGY = SearchStrategy.HYBRID
 """The strategy docs/search.md recommends from bench/search.py's measurements."""
 
 
