@@ -6,7 +6,13 @@ Public entry point: :class:`RoadNetwork` (``RoadNetwork.from_file(path)``), whic
 """
 
 from simtest_operator.opendrive.lanes import LaneBounds
-from simtest_operator.opendrive.models import ContactPoint, OpenDrive, Road, TrafficRule
+from simtest_operator.opendrive.models import (
+    ContactPoint,
+    HeaderOffset,
+    OpenDrive,
+    Road,
+    TrafficRule,
+)
 from simtest_operator.opendrive.network import (
     DRIVABLE_LANE_TYPES,
     LaneLocation,
@@ -23,6 +29,7 @@ __all__ = [
     "DRIVABLE_LANE_TYPES",
     "ContactPoint",
     "Control",
+    "HeaderOffset",
     "LaneBounds",
     "LaneEntry",
     "LaneLocation",

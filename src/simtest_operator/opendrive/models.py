@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import enum
+import math
 
 
 class ContactPoint(enum.StrEnum):
@@ -257,6 +258,29 @@ class Junction:
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class HeaderOffset:
+    """``<header><offset>`` (OpenDRIVE 1.5+): the map's inertial relocation.
+
+    The spec translates the dataset by (x, y, z) and then rotates it by ``heading`` about the new
+    origin. Roads and scenario world positions stay in the file's own frame (netconvert ignores
+    the offset too, so SUMO's lanes coincide); only reported coordinates go through :meth:`apply`,
+    as esmini reports them.
+    """
+
+    x: float
+    y: float
+    z: float
+    heading: float
+
+    def apply(self, x: float, y: float, heading: float) -> tuple[float, float, float]:
+        """File-frame pose -> the relocated frame (heading in [-pi, pi))."""
+        tx, ty = x + self.x, y + self.y
+        cos_h, sin_h = math.cos(self.heading), math.sin(self.heading)
+        turned = (heading + self.heading + math.pi) % (2.0 * math.pi) - math.pi
+        return tx * cos_h - ty * sin_h, tx * sin_h + ty * cos_h, turned
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
 class OpenDrive:
     """A whole parsed document."""
 
@@ -265,3 +289,5 @@ class OpenDrive:
     name: str
     roads: tuple[Road, ...]
     junctions: tuple[Junction, ...] = ()
+    offset: HeaderOffset | None = None
+    """The header offset; None when absent or the identity."""

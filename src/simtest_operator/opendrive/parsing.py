@@ -166,6 +166,7 @@ class _Reader:
                 f"root element is <{name}>, expected <OpenDRIVE>", file=self._source
             )
         rev_major, rev_minor, name = 1, 4, ""
+        offset: models.HeaderOffset | None = None
         roads: list[models.Road] = []
         junctions: list[models.Junction] = []
         seen: set[str] = set()
@@ -177,6 +178,7 @@ class _Reader:
                     self._int(element, "revMinor"),
                 )
                 name = element.get("name") or ""
+                offset = self.header_offset(element)
             elif kind == "road":
                 if len(roads) >= self._limits.max_roads:
                     raise self._error(
@@ -195,7 +197,22 @@ class _Reader:
             name=name,
             roads=tuple(roads),
             junctions=tuple(junctions),
+            offset=offset,
         )
+
+    def header_offset(self, header: etree._Element) -> models.HeaderOffset | None:
+        """The header's ``<offset>``: finite, within the coordinate limit, None if the identity."""
+        element = _child(header, "offset")
+        if element is None:
+            return None
+        limit = self._limits.max_coordinate
+        offset = models.HeaderOffset(
+            x=self._bounded(element, "x", limit),
+            y=self._bounded(element, "y", limit),
+            z=self._bounded(element, "z", limit),
+            heading=self._bounded(element, "hdg", limit),
+        )
+        return None if offset == models.HeaderOffset(x=0.0, y=0.0, z=0.0, heading=0.0) else offset
 
     def road(self, element: etree._Element) -> models.Road:
         road_id = self._attr(element, "id", str)

@@ -20,7 +20,7 @@ import time
 from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
 
-from simtest_operator import evaluation, provenance, recording
+from simtest_operator import evaluation, opendrive, provenance, recording
 from simtest_operator.errors import ScenarioError, SimtestError
 from simtest_operator.evaluation import quality
 from simtest_operator.openscenario import Deviation, LoadOptions
@@ -97,22 +97,29 @@ class RunReport:
 
 
 class _Samples:
-    __slots__ = ("_next", "data")
+    """1 Hz samples in the map's reported frame: the file frame moved by the OpenDRIVE header
+    offset, if any (esmini reports positions so; the simulation itself runs in the file frame)."""
 
-    def __init__(self) -> None:
+    __slots__ = ("_frame", "_next", "data")
+
+    def __init__(self, frame: opendrive.HeaderOffset | None = None) -> None:
         self.data: dict[str, list[Sample]] = {}
         self._next = 0.0
+        self._frame = frame
 
     def observe(self, snapshot: WorldSnapshot) -> None:
         if snapshot.time + 1e-6 < self._next:
             return
         self._next = float(int(snapshot.time + 1e-6) + 1)
         for e in snapshot.entities:
+            x, y, heading = e.x, e.y, e.heading
+            if self._frame is not None:
+                x, y, heading = self._frame.apply(x, y, heading)
             sample = (
                 round(snapshot.time, 3),
-                round(e.x, 3),
-                round(e.y, 3),
-                round(e.heading, 4),
+                round(x, 3),
+                round(y, 3),
+                round(heading, 4),
                 round(e.speed, 3),
             )
             self.data.setdefault(e.name, []).append(sample)
@@ -170,7 +177,8 @@ def run_scenario(
             opened.scenario, roads=simulation.world.roads
         ),
     )
-    samples = _Samples()
+    roads = simulation.world.roads
+    samples = _Samples(roads.document.offset if roads is not None else None)
     recorder = None
     invalid: str | None = None
     error: str | None = None
