@@ -124,3 +124,36 @@ def test_road_type_speed_limits() -> None:
     assert road.speed_limit(5.0) == pytest.approx(11.176)
     assert road.speed_limit(9.0) == 12.0
     assert parse(single_road(LINE, length=10)).roads[0].speed_limit(0.0) is None
+
+
+def _with_header_offset(offset: str) -> bytes:
+    data = single_road(LINE, length=10)
+    return data.replace(b'revMinor="6"/>', b'revMinor="6">' + offset.encode() + b"</header>")
+
+
+def test_header_offset_translates_then_rotates() -> None:
+    # OpenDRIVE 1.5+: the dataset is translated by (x, y), then rotated by hdg about the new
+    # origin; esmini reports geo_pos's (908.13, 593.99, 5.4978) at (-129.69, -21.34, 0.175)
+    offset = parse(_with_header_offset('<offset x="-1000" y="-500" z="0" hdg="0.959931"/>')).offset
+    assert offset is not None
+    x, y, heading = offset.apply(908.1317271, 593.9895912, 5.497787)
+    assert (x, y, heading) == pytest.approx((-129.685, -21.344, 0.17453), abs=1e-3)
+
+
+def test_identity_or_absent_header_offset_is_none() -> None:
+    assert parse(single_road(LINE, length=10)).offset is None
+    assert parse(_with_header_offset('<offset x="0" y="0" z="0" hdg="0"/>')).offset is None
+
+
+@pytest.mark.parametrize(
+    "offset",
+    [
+        '<offset x="nan" y="0" z="0" hdg="0"/>',
+        '<offset x="0" y="1e300" z="0" hdg="0"/>',
+        '<offset x="0" y="0" z="0" hdg="inf"/>',
+        '<offset x="0" y="0" z="0"/>',
+    ],
+)
+def test_hostile_header_offset_is_refused(offset: str) -> None:
+    with pytest.raises(ScenarioError, match="offset"):
+        parse(_with_header_offset(offset))
