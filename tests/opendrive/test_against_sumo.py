@@ -104,3 +104,14 @@ def test_junction_lane_centres_match_sumo(name: str, xodr_dir: Path, nets_dir: P
     errors = lane_errors(net, netcache.ensure_net(path, cache_dir=nets_dir).path, internal=True)
     assert len(errors) >= 20
     assert max(errors) < TOLERANCE
+
+
+def test_a_map_with_a_header_offset_keeps_sumos_frame(xodr_dir: Path, nets_dir: Path) -> None:
+    # netconvert keeps x/y in the file's frame whatever the header <offset> says, and so do our
+    # roads (the offset moves only reported paths): SUMO traffic drives on our lanes
+    path = xodr_dir.parents[1] / "EnvironmentSimulator" / "Unittest" / "xodr" / "offset.xodr"
+    net = RoadNetwork.from_file(path)
+    assert net.document.offset is not None
+    errors = lane_errors(net, netcache.ensure_net(path, cache_dir=nets_dir).path, internal=False)
+    assert len(errors) >= 2, "nothing compared"
+    assert max(errors) < TOLERANCE
