@@ -397,10 +397,40 @@ def main() -> None:
         help="also run every window config with this operator setting, side by side "
         "(e.g. SIMTEST_OPERATOR_RELEASE_EXITED=false, the graceful delete before the cut)",
     )
+    parser.add_argument(
+        "--from-json",
+        nargs="+",
+        type=Path,
+        default=[],
+        metavar="FILE",
+        help="run nothing: write the table and plot of these results files (several: merged)",
+    )
     args = parser.parse_args()
+    console = Console()
+    if args.from_json:
+        results, title = loaded(args.from_json)
+    else:
+        results, title = measure(args, console)
+    write(results, title, args.name, console)
+
+
+def loaded(paths: Sequence[Path]) -> tuple[list[Result], str]:
+    """The results of earlier runs, in file order, and the first file's title."""
+    results: list[Result] = []
+    titles: list[str] = []
+    for path in paths:
+        data = json.loads(path.read_text())
+        titles.append(data["title"])
+        for item in data["results"]:
+            config = Config(**item.pop("config"))
+            results.append(Result(config=config, **item))
+    return results, titles[0]
+
+
+def measure(args: argparse.Namespace, console: Console) -> tuple[list[Result], str]:
+    """Run every configuration of ``args`` on a real-node dev cluster per ``s``."""
     settings = Settings.from_env()
     toolchain = Toolchain(root=settings.cache.toolchain)
-    console = Console()
     ids = pick(args.scenarios)
     ship_nets(remove=args.no_shipped_nets)
     results: list[Result] = []
@@ -438,8 +468,13 @@ def main() -> None:
         f"{len(ids)} library scenarios, real node, realTimeFactor {args.real_time_factor}, "
         "batch size 9"
     )
+    return results, title
+
+
+def write(results: Sequence[Result], title: str, name: str, console: Console) -> None:
+    """Print the table and the comparisons; write the JSON, markdown and plot."""
     console.print(table(results, title))
-    stem = REPO / "bench" / "results" / ("real_table1" + (f"-{args.name}" if args.name else ""))
+    stem = REPO / "bench" / "results" / ("real_table1" + (f"-{name}" if name else ""))
     stem.parent.mkdir(parents=True, exist_ok=True)
     stem.with_suffix(".json").write_text(
         json.dumps({"title": title, "results": [dataclasses.asdict(r) for r in results]}, indent=2)
