@@ -20,6 +20,7 @@ Each phase is given as seconds of makespan (its slot-seconds over ``s``), so the
 bound. Prints a markdown table::
 
     python bench/real_attribution.py bench/results/real_table1-session9.json
+    python bench/real_attribution.py --per-pod bench/results/real_table1-session9.json
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ from __future__ import annotations
 import argparse
 import itertools
 import json
+import statistics
 from pathlib import Path
 from typing import Any
 
@@ -49,19 +51,8 @@ def attribute(result: dict[str, Any]) -> dict[str, float]:
     spent = dict.fromkeys(PHASES, 0.0)
     pods = [m for m in result["marks"].values() if "scheduled" in m and "terminated" in m]
     for marks in pods:
-        finished = sorted(
-            (at, key.removeprefix("finished ")) for key, at in marks.items()
-            if key.startswith("finished ")
-        )  # fmt: skip
-        spent["pod start"] += marks["running"] - marks["scheduled"]
-        if not finished:  # no log lines seen: the whole pod counts as start-up
-            spent["runner start-up"] += marks["terminated"] - marks["running"]
-            continue
-        first_at, first = finished[0]
-        spent["runner start-up"] += first_at - runs.get(first, 0.0) - marks["running"]
-        for (previous, _), (at, scenario) in itertools.pairwise(finished):
-            spent["between runs"] += at - runs.get(scenario, 0.0) - previous
-        spent["exit"] += marks["terminated"] - finished[-1][0]
+        for phase, seconds in pod_phases(marks, runs).items():
+            spent[phase] += seconds
     binds = sorted(m["scheduled"] for m in pods)
     ends = sorted(m["terminated"] for m in pods)
     busy = sum(m["terminated"] - m["scheduled"] for m in pods)
@@ -70,6 +61,43 @@ def attribute(result: dict[str, Any]) -> dict[str, float]:
     spent["idle: end"] = sum(makespan - end for end in ends[-slots:])
     spent["idle: refill"] = idle - spent["idle: start"] - spent["idle: end"]
     return {phase: seconds / slots for phase, seconds in spent.items()}
+
+
+def pod_phases(marks: dict[str, float], runs: dict[str, float]) -> dict[str, float]:
+    """One pod's seconds in pod start, runner start-up, between runs and exit."""
+    finished = sorted(
+        (at, key.removeprefix("finished ")) for key, at in marks.items()
+        if key.startswith("finished ")
+    )  # fmt: skip
+    phases = {"pod start": marks["running"] - marks["scheduled"]}
+    if not finished:  # no log lines seen: the whole pod counts as start-up
+        return phases | {"runner start-up": marks["terminated"] - marks["running"]}
+    first_at, first = finished[0]
+    phases["runner start-up"] = first_at - runs.get(first, 0.0) - marks["running"]
+    phases["between runs"] = sum(
+        at - runs.get(scenario, 0.0) - previous
+        for (previous, _), (at, scenario) in itertools.pairwise(finished)
+    )
+    phases["exit"] = marks["terminated"] - finished[-1][0]
+    return phases
+
+
+def per_pod(results: list[dict[str, Any]]) -> str:
+    """One row per run: the median pod's start, runner start-up and exit (seconds)."""
+    head = ["config", "pods", "pod start", "runner start-up", "exit"]
+    lines = ["| " + " | ".join(head) + " |", "|---|" + "---:|" * (len(head) - 1)]
+    for result in results:
+        pods = [
+            pod_phases(m, result["durations"])
+            for m in result["marks"].values()
+            if "scheduled" in m and "terminated" in m
+        ]
+        cells = [label(result["config"]), str(len(pods))]
+        for phase in head[2:]:
+            values = [p[phase] for p in pods if phase in p]
+            cells.append(f"{statistics.median(values):.2f}" if values else "-")
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
 
 
 def label(config: dict[str, Any]) -> str:
@@ -101,9 +129,12 @@ def markdown(results: list[dict[str, Any]]) -> str:
 def main() -> None:
     parser = argparse.ArgumentParser(description=(__doc__ or "").split("\n", 1)[0])
     parser.add_argument("results", type=Path, nargs="+")
+    parser.add_argument(
+        "--per-pod", action="store_true", help="the median pod's phases instead (seconds per pod)"
+    )
     args = parser.parse_args()
     found = [r for path in args.results for r in json.loads(path.read_text())["results"]]
-    print(markdown(found), end="")
+    print((per_pod if args.per_pod else markdown)(found), end="")
 
 
 if __name__ == "__main__":

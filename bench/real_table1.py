@@ -20,6 +20,9 @@ pod waiting Pending for a slot is queueing and counts in neither.
     python bench/real_table1.py                                 # 60 scenarios, s = 1, 2, 3
     python bench/real_table1.py --scenarios 30 --s 2 --name quick
 
+The maps' networks are shipped beside them first (``simtest scenario nets``, as a user stages a
+scenario volume), so pods run no netconvert; ``--no-shipped-nets`` takes them away.
+
 Needs root and what ``make test`` builds (toolchain, images). Results go to
 ``bench/results/real_table1[-NAME].{json,md,png}``.
 """
@@ -29,6 +32,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
+import shutil
 import statistics
 import tempfile
 import time
@@ -54,9 +58,12 @@ from simtest_operator.devcluster.cluster import DevCluster
 from simtest_operator.devcluster.toolchain import Toolchain
 from simtest_operator.render import RunSpec
 from simtest_operator.settings import Settings
+from simtest_operator.sim import netcache
 
 SCENARIOS = REPO / "scenarios"
 LIBRARY = SCENARIOS / "library"
+ROADS = SCENARIOS / "roads"
+"""The library's maps (``../../roads/*.xodr``)."""
 GROUP, VERSION = "simtest.dev", "v1alpha1"
 NODE_CPU_MILLIS = 1800
 """CPU the simulator pods of the 2-core node share (the rest: kubelet, device plugin, operator)."""
@@ -113,6 +120,15 @@ def pick(count: int) -> list[str]:
     files = sorted(p.relative_to(LIBRARY).as_posix() for p in LIBRARY.rglob("*.xosc"))
     step = max(len(files) / count, 1.0)
     return [files[int(i * step)] for i in range(min(count, len(files)))]
+
+
+def ship_nets(*, remove: bool) -> None:
+    """Stage the maps as a user would (``simtest scenario nets``), or take the networks away."""
+    for xodr in sorted(ROADS.glob("*.xodr")):
+        if remove:
+            shutil.rmtree(netcache.shipped_dir(xodr), ignore_errors=True)
+        else:
+            netcache.ship_net(xodr)
 
 
 def campaign(name: str, ids: Sequence[str], config: Config, args: argparse.Namespace) -> Any:
@@ -322,7 +338,7 @@ def plot(results: Sequence[Result], path: Path) -> None:
     fig, (left, right) = plt.subplots(1, 2, figsize=(12, 4.5))
     labels = [r.config.label for r in results]
     left.barh(labels, [r.bound_ratio for r in results], color="tab:blue")
-    left.axvline(0.85, color="tab:orange", ls="--", label="goal PerScenario 0.85")
+    left.axvline(0.90, color="tab:orange", ls="--", label="goal PerScenario 0.90")
     left.axvline(0.95, color="tab:green", ls="--", label="goal Reuse 0.95")
     left.set_xlabel("lower bound / makespan (1 = no orchestration cost)")
     left.set_xlim(0, 1.05)
@@ -359,6 +375,12 @@ def main() -> None:
         help="which of the four runs per s, comma-separated",
     )
     parser.add_argument(
+        "--no-shipped-nets",
+        action="store_true",
+        help="remove the converted networks shipped beside the maps (`simtest scenario nets`): "
+        "every pod runs netconvert, as before session 10",
+    )
+    parser.add_argument(
         "--operator-env",
         action="append",
         default=[],
@@ -375,11 +397,42 @@ def main() -> None:
         help="also run every window config with this operator setting, side by side "
         "(e.g. SIMTEST_OPERATOR_RELEASE_EXITED=false, the graceful delete before the cut)",
     )
+    parser.add_argument(
+        "--from-json",
+        nargs="+",
+        type=Path,
+        default=[],
+        metavar="FILE",
+        help="run nothing: write the table and plot of these results files (several: merged)",
+    )
     args = parser.parse_args()
+    console = Console()
+    if args.from_json:
+        results, title = loaded(args.from_json)
+    else:
+        results, title = measure(args, console)
+    write(results, title, args.name, console)
+
+
+def loaded(paths: Sequence[Path]) -> tuple[list[Result], str]:
+    """The results of earlier runs, in file order, and the first file's title."""
+    results: list[Result] = []
+    titles: list[str] = []
+    for path in paths:
+        data = json.loads(path.read_text())
+        titles.append(data["title"])
+        for item in data["results"]:
+            config = Config(**item.pop("config"))
+            results.append(Result(config=config, **item))
+    return results, titles[0]
+
+
+def measure(args: argparse.Namespace, console: Console) -> tuple[list[Result], str]:
+    """Run every configuration of ``args`` on a real-node dev cluster per ``s``."""
     settings = Settings.from_env()
     toolchain = Toolchain(root=settings.cache.toolchain)
-    console = Console()
     ids = pick(args.scenarios)
+    ship_nets(remove=args.no_shipped_nets)
     results: list[Result] = []
     with tempfile.TemporaryDirectory(prefix="real-table1-") as tmp:
         work = Path(tmp)
@@ -415,8 +468,13 @@ def main() -> None:
         f"{len(ids)} library scenarios, real node, realTimeFactor {args.real_time_factor}, "
         "batch size 9"
     )
+    return results, title
+
+
+def write(results: Sequence[Result], title: str, name: str, console: Console) -> None:
+    """Print the table and the comparisons; write the JSON, markdown and plot."""
     console.print(table(results, title))
-    stem = REPO / "bench" / "results" / ("real_table1" + (f"-{args.name}" if args.name else ""))
+    stem = REPO / "bench" / "results" / ("real_table1" + (f"-{name}" if name else ""))
     stem.parent.mkdir(parents=True, exist_ok=True)
     stem.with_suffix(".json").write_text(
         json.dumps({"title": title, "results": [dataclasses.asdict(r) for r in results]}, indent=2)

@@ -1,4 +1,5 @@
-"""``simtest scenario run|check``: run one scenario, or every scenario under a directory.
+"""``simtest scenario run|check|nets``: run one scenario, or every scenario under a directory;
+ship the converted road networks of the maps under a directory.
 
 Thin wiring: options -> :func:`simtest_operator.runner.run_scenario` -> formatted output.
 ``check`` expands ParameterValueDistribution files into their concrete runs and skips catalogs.
@@ -20,7 +21,7 @@ from simtest_operator import runner
 from simtest_operator.cli import options
 from simtest_operator.cli.options import F
 from simtest_operator.cli.terminal import markup, printable
-from simtest_operator.errors import ScenarioError
+from simtest_operator.errors import ScenarioError, SimulationError
 from simtest_operator.evaluation import reference as references
 from simtest_operator.openscenario import (
     Deviation,
@@ -316,3 +317,38 @@ def check(
     click.echo(f"{ran} ran, {counts[Verdict.INVALID]} invalid, {counts[Verdict.ERROR]} errors")
     if warned:
         click.echo(f"{warned} scenarios accepted with deviations from the schema (see warnings)")
+
+
+@scenario.command("nets")
+@click.argument("directory", type=click.Path(exists=True, file_okay=False, path_type=Path))
+def nets(directory: Path) -> None:
+    """Convert every OpenDRIVE map under DIRECTORY into the SUMO network the simulator loads,
+    kept in a .simtest-nets folder beside the map.
+
+    Simulator pods then load the network from the scenario volume instead of running netconvert
+    each (their own cache dies with the pod). Run it where the scenarios are staged, with the
+    same simtest release as the runner image: a network made by another SUMO version, or for a
+    changed map, is not used, and that map is converted in every pod as before.
+    """
+    from simtest_operator.sim import netcache
+
+    maps = sorted(
+        path
+        for path in directory.rglob("*.xodr")
+        if path.is_file() and netcache.SHIPPED_DIR not in path.parts
+    )
+    converted = failed = 0
+    for path in maps:
+        try:
+            shipped = netcache.ship_net(path)
+        except (ScenarioError, SimulationError) as exc:
+            failed += 1
+            click.echo(f"not converted: {printable(str(path))}: {printable(str(exc))}", err=True)
+            continue
+        converted += not shipped.from_cache
+        state = "shipped already" if shipped.from_cache else f"converted in {shipped.seconds:.2f} s"
+        click.echo(f"{printable(str(path))}: {state}")
+    click.echo(
+        f"{len(maps)} maps: {converted} converted, {len(maps) - converted - failed} "
+        f"shipped already, {failed} not convertible (pods try netconvert again, as before)"
+    )

@@ -5,6 +5,14 @@ Converting a map takes 0.2-0.5 s and the same few maps back thousands of runs, s
 netconvert flags and the SUMO version. Files appear atomically (temp file + rename), so processes
 converting the same map at the same time are safe: the last rename wins with identical content.
 
+A converted network can also ship with its map: ``simtest scenario nets DIR`` writes it, under the
+same key, into ``.simtest-nets/`` beside the map, and :func:`ensure_net` looks there first. That is
+how simulator pods skip netconvert: their own cache is on the pod's ``emptyDir`` and dies with it,
+while the shipped folder travels read-only with the scenario volume. The key names the map's
+content, the flags and the SUMO version, so a shipped network is used only for the very map it
+was made from by the same netconvert; anything else is a miss and converts as before
+(docs/simulator.md, "Converted networks shipped with the scenarios", says why not a node cache).
+
 The flags keep SUMO's x/y equal to OpenDRIVE's (no offset normalisation) and annotate every SUMO
 lane with ``origId="<road>_<lane>"``. Constant-curvature spirals and straight arcs, which netconvert
 cannot evaluate, are first rewritten as the equivalent arc or line
@@ -45,6 +53,9 @@ _STRATEGY = "v2: flat curves rewritten; plain, ignore-errors, no-signals, no-sig
 _IGNORE_ERRORS = ("--ignore-errors", "true")
 _STDERR_TAIL = 20
 
+SHIPPED_DIR = ".simtest-nets"
+"""Folder beside a map holding its shipped conversions (``<key>.net.xml``)."""
+
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
 class ConvertedNet:
@@ -52,6 +63,7 @@ class ConvertedNet:
 
     path: Path
     from_cache: bool
+    """Found converted (shipped beside the map or in the cache): netconvert did not run."""
     seconds: float
     """Wall time spent here (hash + lookup on a hit, conversion on a miss)."""
 
@@ -78,8 +90,14 @@ def cache_key(content: bytes) -> str:
     return digest.hexdigest()
 
 
+def shipped_dir(xodr: Path) -> Path:
+    """Where the conversions shipped with the map ``xodr`` live."""
+    return xodr.parent / SHIPPED_DIR
+
+
 def ensure_net(xodr: Path, *, cache_dir: Path, timeout: float = 300.0) -> ConvertedNet:
-    """The SUMO network for the OpenDRIVE file ``xodr``, converting it on a cache miss.
+    """The SUMO network for the OpenDRIVE file ``xodr``: the one shipped beside it, else the
+    cached one, else converted into ``cache_dir``.
 
     Raises ScenarioError if the map cannot be read and SimulationError if netconvert fails on
     every fallback (the message ends with netconvert's last stderr lines).
@@ -89,12 +107,19 @@ def ensure_net(xodr: Path, *, cache_dir: Path, timeout: float = 300.0) -> Conver
         content = xodr.read_bytes()
     except OSError as exc:
         raise ScenarioError(f"cannot read OpenDRIVE file: {exc}", file=str(xodr)) from exc
-    target = cache_dir / f"{cache_key(content)}.net.xml"
-    if target.is_file() and target.stat().st_size > 0:
-        return ConvertedNet(path=target, from_cache=True, seconds=time.perf_counter() - started)
+    name = f"{cache_key(content)}.net.xml"
+    target = cache_dir / name
+    for found in (shipped_dir(xodr) / name, target):
+        if found.is_file() and found.stat().st_size > 0:
+            return ConvertedNet(path=found, from_cache=True, seconds=time.perf_counter() - started)
     cache_dir.mkdir(parents=True, exist_ok=True)
     _convert(xodr, content, target, timeout=timeout)
     return ConvertedNet(path=target, from_cache=False, seconds=time.perf_counter() - started)
+
+
+def ship_net(xodr: Path, *, timeout: float = 300.0) -> ConvertedNet:
+    """Convert ``xodr`` into its shipped folder (if not there yet), for pods to find read-only."""
+    return ensure_net(xodr, cache_dir=shipped_dir(xodr), timeout=timeout)
 
 
 def _convert(xodr: Path, content: bytes, target: Path, *, timeout: float) -> None:
