@@ -138,3 +138,12 @@ def test_relative_positions_past_a_junction_take_the_placed_entitys_route(tmp_pa
         "Target_starting_behind_route",
     ):
         assert worst[name] < 0.05, comparison
+
+
+def test_a_lane_change_into_an_exit_lane_takes_the_exit(tmp_path: Path) -> None:
+    # the target changes into the exit lane before the highway splits: past half-way that lane
+    # holds it, so it takes the exit as in esmini (was: it followed its old lane's successor,
+    # stayed on the highway 30 m off the reference and the ego ran into it)
+    comparison = compare("highway_exit.xosc", tmp_path)
+    assert comparison.match, comparison
+    assert all(e.maximum < 0.05 for e in comparison.entities), comparison
