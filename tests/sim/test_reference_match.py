@@ -148,3 +148,12 @@ def test_paths_are_reported_in_the_frame_of_the_opendrive_header_offset(tmp_path
     assert not comparison.missing
     assert {e.name for e in comparison.entities} == {"car_offset", "car_ignore_offset"}
     assert all(e.maximum < 0.01 for e in comparison.entities), comparison
+
+
+def test_a_lane_change_into_an_exit_lane_takes_the_exit(tmp_path: Path) -> None:
+    # the target changes into the exit lane before the highway splits: past half-way that lane
+    # holds it, so it takes the exit as in esmini (was: it followed its old lane's successor,
+    # stayed on the highway 30 m off the reference and the ego ran into it)
+    comparison = compare("highway_exit.xosc", tmp_path)
+    assert comparison.match, comparison
+    assert all(e.maximum < 0.05 for e in comparison.entities), comparison

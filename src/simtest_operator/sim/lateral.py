@@ -65,6 +65,7 @@ class LaneChangeRun(Run):
         "_duration",
         "_elapsed",
         "_offset0",
+        "_road_id",
         "_shape",
         "_target_offset",
     )
@@ -86,6 +87,8 @@ class LaneChangeRun(Run):
         self._offset0 = actor.offset
         self._direction = actor.direction
         """The actor's direction on its road the lane delta and offsets are counted in."""
+        self._road_id = road_id
+        """The road the change was last aimed on (its target lane's centre is road-specific)."""
         self._shape = action.dynamics.shape
         self._elapsed = 0.0
         """Progress: seconds, or for the distance dimension metres driven along the road."""
@@ -148,7 +151,10 @@ class LaneChangeRun(Run):
             self._direction = actor.direction
             self._delta, self._offset0 = -self._delta, -self._offset0
             self._target_offset = -self._target_offset
+        self._hand_over(world)
         target = self._relative_target(world, actor.road_id)
+        if actor.road_id != self._road_id:
+            self._reaim(target)
         # esmini takes the lateral part of the step's travel at the rate the shape has at the
         # start of the step (so the longitudinal motion is not symmetric about the middle)
         slope = shape_slope(self._shape, self._elapsed / self._duration)
@@ -168,6 +174,43 @@ class LaneChangeRun(Run):
         fraction = shape_fraction(self._shape, self._elapsed / self._duration)
         actor.offset = self._offset0 + (target - self._offset0) * fraction
         actor.lane_changing = True
+
+    def _hand_over(self, world: World) -> None:
+        """Once the actor is nearer the next lane's centre (towards the target) than its own,
+        that lane holds it: where its road ends it follows that lane's successor, the road it
+        is on (esmini keeps a changing car on its target lane), not its old lane's connector."""
+        actor = self.actor
+        assert actor is not None and actor.road_id is not None
+        if self._delta == 0 or world.roads is None:
+            return
+        road_id, s = actor.road_id, actor.s
+        step = 1 if self._delta > 0 else -1
+        following = placements.add_lanes(actor.lane_id, step)
+        if following not in world.roads.lane_ids(road_id, s):
+            return
+        if world.roads.lane_width(road_id, s, following) <= 0.0:
+            return
+        here = world.lane_t(road_id, s, actor.lane_id)
+        there = world.lane_t(road_id, s, following)
+        if abs(here + actor.offset - there) >= abs(actor.offset):
+            return
+        shift = here - there
+        actor.lane_id = following
+        actor.offset += shift
+        self._offset0 += shift
+        self._delta -= step
+
+    def _reaim(self, target: float) -> None:
+        """On a new road the target lane's centre can lie elsewhere relative to the actor's lane
+        (a one-lane junction connector has no lane to change into: its centre line is the
+        target): the change goes on from where the actor is, on the same schedule, instead of
+        jumping to where the new target puts the current fraction."""
+        actor = self.actor
+        assert actor is not None and actor.road_id is not None
+        self._road_id = actor.road_id
+        done = shape_fraction(self._shape, self._elapsed / self._duration)
+        if done < 1.0:
+            self._offset0 = (actor.offset - target * done) / (1.0 - done)
 
 
 class LaneOffsetRun(Run):

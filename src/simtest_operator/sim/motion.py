@@ -185,10 +185,11 @@ def update_timers(world: World, actor: Actor, dt: float, *, was_stuck: bool) -> 
     if world.roads is None:
         return
     # Lane-following actors are on the road unless an offset pushes them past its edge (also
-    # when stuck at a road's end); only free and path-following actors need the (costlier)
-    # projection.
-    if actor.mode is Mode.ROAD:
-        on_road = actor.offset == 0.0 or _within_road_edges(world, actor)
+    # when stuck at a road's end); only free and path-following actors, and a lane-bound one
+    # beside its own road, need the (costlier) projection: a point beside one road can lie on
+    # another (a junction's connectors overlap), and that is road surface all the same.
+    if actor.mode is Mode.ROAD and (actor.offset == 0.0 or _within_road_edges(world, actor)):
+        on_road = True
     else:
         on_road = world.roads.is_on_road(actor.x, actor.y)
     actor.offroad_time = 0.0 if on_road else actor.offroad_time + dt
