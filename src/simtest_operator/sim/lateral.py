@@ -26,10 +26,10 @@ DEFAULT_MAX_LATERAL_ACCELERATION = 0.5
 SPRING = 0.4
 """Spring stiffness (1/s^2) per m/s^2 of allowed lateral acceleration (lateral distance)."""
 LATERAL_TOLERANCE = 0.01
+"""Metres from the requested lateral distance at which a non-continuous action is done."""
 _STEP_ACCELERATION = 10.0
 """m/s^2 (about 1 g): a lateral speed an action without acceleration limit changes faster than
 this within a step has stepped (a declared discontinuity: the heading turns with it)."""
-"""Metres from the requested lateral distance at which a non-continuous action is done."""
 
 
 def lanes_between(start: int, target: int) -> int:
