@@ -2,7 +2,7 @@
 
 Precedence, most specific first: a scenario the engine could not run is ``Invalid``; broken
 infrastructure is ``Error``; a violated criterion (the campaign's, or one of the scenario's own
-ScenarioRunner criteria) is ``Failed`` (even if the run also ran out of
+ScenarioRunner criteria that is not optional) is ``Failed`` (even if the run also ran out of
 time, the violation is the more useful news); a storyboard that did not complete within the time
 limit is ``Timeout``; everything else ``Passed``.
 """
@@ -68,7 +68,7 @@ def judge(evaluator: OnlineEvaluator, facts: RunFacts) -> Judgement:
                 f"criteria_{o.name} failed: {o.detail}",
             )
             for o in outcomes
-            if o.status is Status.FAILED
+            if o.decisive
         ],
         key=lambda failure: failure[0],
     )

@@ -6,7 +6,7 @@ Files are written for one player and rely on its reading of the standard (docs/s
 by any of (first match named):
 
 - a FileHeader ``description`` starting with ``CARLA:`` (ScenarioRunner's own marker);
-- ``criteria_<Test>`` conditions in the storyboard StopTrigger (ScenarioRunner's pass/fail tests);
+- ``criteria_<Test>`` conditions in a StopTrigger (ScenarioRunner's pass/fail tests);
 - a controller whose ``module`` property names one of ScenarioRunner's controller modules
   (``external_control``, ``carla_autopilot``, ...), assigned to an entity or by an action;
 - a CARLA town (``Town01``, ``Town10HD``, ...) as the road network's ``LogicFile``.
@@ -90,8 +90,7 @@ def rules_of(scenario: Scenario) -> Rules:
     """The rule set ``scenario`` runs under (see the module docstring)."""
     if scenario.header.description.startswith(CARLA_PREFIX):
         return Rules(RuleSet.SCENARIO_RUNNER, f"description {CARLA_PREFIX!r}")
-    stop = scenario.storyboard.stop_trigger
-    if stop is not None and stop.criteria:
+    if scenario.criteria:
         return Rules(RuleSet.SCENARIO_RUNNER, "criteria_* conditions")
     for controller in _controllers(scenario):
         module = module_name(controller)

@@ -16,7 +16,7 @@ from simtest_operator.openscenario.deviations import Deviation
 from simtest_operator.openscenario.model.actions import Action, GlobalAction, PrivateAction
 from simtest_operator.openscenario.model.common import ParameterDeclaration, Unsupported
 from simtest_operator.openscenario.model.entities import ScenarioObject
-from simtest_operator.openscenario.model.trigger_conditions import Trigger
+from simtest_operator.openscenario.model.trigger_conditions import Criterion, Trigger
 
 
 class Priority(enum.StrEnum):
@@ -162,6 +162,16 @@ class Storyboard:
     stop_trigger: Trigger | None = None
     line: int | None = None
 
+    @property
+    def criteria(self) -> tuple[Criterion, ...]:
+        """ScenarioRunner's ``criteria_<Test>`` conditions of every StopTrigger, the storyboard's
+        first, then the acts' in document order (ScenarioRunner collects them from every
+        StopTrigger under the storyboard: ``OpenScenario._create_test_criteria``)."""
+        triggers = [self.stop_trigger] + [
+            act.stop_trigger for story in self.stories for act in story.acts
+        ]
+        return tuple(c for trigger in triggers if trigger is not None for c in trigger.criteria)
+
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
 class Scenario:
@@ -194,6 +204,11 @@ class Scenario:
     def unsupported(self) -> tuple[Unsupported, ...]:
         """All unsupported elements of the scenario (the engine reports those it reaches)."""
         return self.unsupported_nodes
+
+    @property
+    def criteria(self) -> tuple[Criterion, ...]:
+        """ScenarioRunner's test criteria (see :attr:`Storyboard.criteria`)."""
+        return self.storyboard.criteria
 
     def entity(self, name: str) -> ScenarioObject | None:
         """The entity called ``name``, or None."""

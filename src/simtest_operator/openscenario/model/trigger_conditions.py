@@ -412,6 +412,6 @@ class Trigger:
 
     condition_groups: tuple[ConditionGroup, ...]
     criteria: tuple[Criterion, ...] = ()
-    """Only on the storyboard's StopTrigger: the ``criteria_<Test>`` conditions taken out of its
-    groups (groups left empty by that are dropped)."""
+    """Only on StopTriggers: the ``criteria_<Test>`` conditions taken out of its groups (groups
+    left empty by that are dropped)."""
     line: int | None = None

@@ -64,7 +64,7 @@ def _act(el: Element, ctx: reading.Context) -> s.Act:
         name=ctx.string(el, "name"),
         maneuver_groups=groups,
         start_trigger=trigger_conditions.trigger(reading.child(el, "StartTrigger"), ctx),
-        stop_trigger=trigger_conditions.trigger(reading.child(el, "StopTrigger"), ctx),
+        stop_trigger=trigger_conditions.stop_trigger(reading.child(el, "StopTrigger"), ctx),
         line=el.sourceline,
     )
 

@@ -46,6 +46,10 @@ KNOWN_CRITERIA = {
         "RunningStopTest",
         "RunningRedLightTest",
         "DrivenDistanceTest",
+        "MaxVelocityTest",
+        "AverageVelocityTest",
+        "OffRoadTest",
+        "EndofRoadTest",
     )
 }
 """ScenarioRunner's test criteria by lower-case name (its documentation writes both
@@ -53,9 +57,10 @@ KNOWN_CRITERIA = {
 
 
 def stop_trigger(el: Element | None, ctx: reading.Context) -> c.Trigger | None:
-    """Read the storyboard's StopTrigger, taking ScenarioRunner's ``criteria_<Test>`` conditions
-    out as :class:`~.model.trigger_conditions.Criterion` (they are tests over the run, not stop
-    conditions; their ParameterConditions name undeclared or empty parameters)."""
+    """Read a StopTrigger (the storyboard's or an act's), taking ScenarioRunner's
+    ``criteria_<Test>`` conditions out as :class:`~.model.trigger_conditions.Criterion` (tests
+    over the run, never stop conditions: ScenarioRunner collects them from every StopTrigger; their
+    ParameterConditions name undeclared or empty parameters)."""
     if el is None:
         return None
     groups: list[c.ConditionGroup] = []
