@@ -1,10 +1,11 @@
 """Reading CARLA ScenarioRunner's conventions and the world-changing actions.
 
-Covers: ``criteria_<Test>`` conditions taken out of the storyboard StopTrigger as criteria (with
-``parameterRef=""`` and undeclared argument parameters, which are not Invalid), an unknown
-criterion reported as a deviation (refused under strict mode), both spellings of OnSidewalkTest;
-AddEntityAction/DeleteEntityAction; EnvironmentAction inline and from an environment catalog entry
-chosen by a parameter; an Action without a child; an inactive OverrideControllerValueAction alone.
+Covers: ``criteria_<Test>`` conditions taken out of the storyboard's and the acts' StopTriggers as
+criteria (with ``parameterRef=""`` and undeclared argument parameters, which are not Invalid), an
+unknown criterion reported as a deviation (refused under strict mode), both spellings of
+OnSidewalkTest; AddEntityAction/DeleteEntityAction; EnvironmentAction inline and from an
+environment catalog entry chosen by a parameter; an Action without a child; an inactive
+OverrideControllerValueAction alone.
 """
 
 from __future__ import annotations
@@ -206,3 +207,25 @@ def test_inactive_override_alone_is_accepted(write_scenario: ScenarioWriter) -> 
         kind="OverrideControllerValueAction", line=private.actions[0].line
     )
     assert scenario.unsupported() == ()
+
+
+def test_criteria_in_an_act_stop_trigger_are_criteria_too(write_scenario: ScenarioWriter) -> None:
+    # ScenarioRunner collects criteria_* from every StopTrigger under the storyboard
+    # (OpenScenario._create_test_criteria iterates storyboard.iter("StopTrigger")).
+    act_stop = (
+        "<StopTrigger><ConditionGroup>"
+        + _criterion("MaxVelocityTest", "max_velocity", "20")
+        + _TIME_STOP
+        + "</ConditionGroup></StopTrigger></Act>"
+    )
+    stories = _story(
+        """<Action name="gone"><GlobalAction><EntityAction entityRef="Ego">
+          <DeleteEntityAction/></EntityAction></GlobalAction></Action>"""
+    ).replace("</Act>", act_stop)
+    stop = "<ConditionGroup>" + _criterion("CollisionTest") + "</ConditionGroup>"
+    scenario = load_scenario(write_scenario(stories=stories, stop=stop))
+    assert [c.test for c in scenario.criteria] == ["CollisionTest", "MaxVelocityTest"]
+    assert scenario.criteria[1].arguments == (("max_velocity", "20"),)
+    act = scenario.storyboard.stories[0].acts[0]
+    assert act.stop_trigger is not None
+    assert [c.name for g in act.stop_trigger.condition_groups for c in g.conditions] == ["TimeOut"]

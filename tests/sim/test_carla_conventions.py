@@ -190,8 +190,10 @@ def test_entities_added_and_deleted_at_run_time(tmp_path: Path) -> None:
     report = run(cs.write(tmp_path, text))
     assert report.outcome.verdict is Verdict.PASSED, report.outcome.reason
     times = [sample[0] for sample in report.samples["late"]]
-    # Declared but not placed in Init: absent until added (after t=2), gone after t=5.
-    assert times and all(2.0 < t <= 5.5 for t in times), times
+    # Declared but not placed in Init: absent until added, gone later. The SimulationTime
+    # conditions count from their first check, when the act started (the hero moved a metre at
+    # t=1.05 s): added after t=3.05, deleted after t=6.05.
+    assert times and all(3.05 < t <= 6.5 for t in times), times
     assert report.samples["late"][0][1] == pytest.approx(150.0, abs=0.5)
 
 
@@ -207,7 +209,7 @@ def test_entity_added_in_init_and_deleted_in_the_story(tmp_path: Path) -> None:
     text = cs.follow_leading(init_globals=init, extra_entities=_LATE, extra_events=deletion)
     report = run(cs.write(tmp_path, text))
     times = [sample[0] for sample in report.samples["late"]]
-    assert times[0] == 0.0 and max(times) <= 5.5
+    assert times[0] == 0.0 and max(times) <= 6.5  # SimulationTime > 5 from the act's start
 
 
 def test_carla_autopilot_drives_a_non_ego_vehicle(tmp_path: Path) -> None:
@@ -250,7 +252,8 @@ def test_environment_recorded_in_log_and_recording(tmp_path: Path) -> None:
     assert report.outcome.verdict is Verdict.PASSED, report.outcome.reason
     log = (out / "run.log").read_text(encoding="utf-8")
     assert "environment Noon at t=0 s (recorded, not rendered)" in log
-    assert "environment Rain at t=3.05 s (recorded, not rendered)" in log
+    # SimulationTime > 3 counts from the act's start at t=1.05 s
+    assert "environment Rain at t=4.05 s (recorded, not rendered)" in log
     with (out / "recording.mcap").open("rb") as stream:
         records = [
             m.metadata

@@ -4,7 +4,8 @@ whatever the shape, a ``rate`` read as seconds, the speed change going on after 
 a routing action until the last waypoint, never on the external hero; a replaced action has
 ended), event priorities not applied, lateral actions aimed at
 the ``external_control`` hero ignored and listed, a LaneOffsetAction positive to the right, and the
-conditions of 1.0-era files (unsigned longitudinal distance, standstill at <= 0.1 m/s).
+conditions of 1.0-era files (unsigned longitudinal distance, standstill at <= 0.1 m/s), the
+storyboard StopTrigger's conditions stopping nothing.
 
 Each test reads the 1 Hz samples (t, x, y, heading, speed) of the run; the avenue runs along +x,
 lane -1 centred at y = -1.75, lane -2 at y = -5.25 (OpenDRIVE's frame, also for ``CARLA:`` files).
@@ -16,6 +17,7 @@ from pathlib import Path
 
 import pytest
 
+from simtest_operator.drivermodel import SutConfig, Takeover
 from simtest_operator.verdicts import Verdict
 
 from . import carla_scenarios as cs
@@ -188,3 +190,21 @@ def test_a_route_of_the_external_hero_never_ends(tmp_path: Path) -> None:
     hero = report.samples["hero"]
     assert max(s[1] for s in hero) > 60.0
     assert hero[-1][4] > 5.0
+
+
+def test_the_storyboard_stop_trigger_stops_nothing(tmp_path: Path) -> None:
+    # ScenarioRunner reads only criteria_* out of the storyboard StopTrigger; a SimulationTime
+    # stop beside them does not end the run (OpenScenario._create_behavior builds no stop from
+    # it): the run lasts until the act stopped after the hero drove 120 m, then passes.
+    stop = (
+        cs.criteria("CollisionTest", distance=None)
+        + """
+        <Condition name="EndAtThree" delay="0" conditionEdge="rising">
+          <ByValueCondition><SimulationTimeCondition value="3" rule="greaterThan"/>
+          </ByValueCondition>
+        </Condition>"""
+    )
+    sut = SutConfig(takeover=Takeover.AFTER_INIT, desired_speed=10.0)
+    report = run(cs.write(tmp_path, cs.follow_leading(stop=stop)), sut=sut, time_limit=40.0)
+    assert report.outcome.verdict is Verdict.PASSED, report.outcome.reason
+    assert report.outcome.metrics["simulatedSeconds"] > 5.0  # not 3 s

@@ -106,7 +106,11 @@ class Node:
         self.start = TriggerState(
             start if start is not None and start.condition_groups else None, level=level
         )
-        self.stop = TriggerState(stop, level=level) if stop is not None else None
+        self.stop = (
+            TriggerState(stop, level=level, any_condition=level and kind is Kind.ACT)
+            if stop is not None
+            else None
+        )
         self.executions = 0
         self.max_executions = max(1, max_executions)
         self.runs: tuple[ActionRun, ...] = ()
@@ -195,9 +199,15 @@ class Storyboard:
         self._stories = tuple(_build_story(story, scenario_runner) for story in storyboard.stories)
         stop = storyboard.stop_trigger
         self._stop = TriggerState(stop, level=scenario_runner)
-        # A stop trigger that held only ScenarioRunner criteria is no stop trigger.
-        self._stop_defined = stop is not None and bool(stop.condition_groups or not stop.criteria)
-        # ScenarioRunner ends a scenario when its stories are done or its stop trigger fires.
+        # A stop trigger that held only ScenarioRunner criteria is no stop trigger; under
+        # ScenarioRunner's rules none is: it reads only the criteria out of the storyboard's
+        # StopTrigger (OpenScenario._create_test_criteria) and builds no stop from its conditions.
+        self._stop_defined = (
+            stop is not None
+            and bool(stop.condition_groups or not stop.criteria)
+            and not scenario_runner
+        )
+        # ScenarioRunner ends a scenario when its stories are done (or at its timeout).
         # Without a stop trigger esmini ends the storyboard when its stories are done, but one
         # with no story (a static scene) never ends by itself: it runs to the time limit.
         self._end_with_stories = scenario_runner or (not self._stop_defined and bool(self._stories))
