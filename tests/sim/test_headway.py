@@ -1,6 +1,7 @@
 """Time headway of the deprecated ``alongRoute="false"``: the straight distance between the
 reference points (the chord across a curve, not the way along the road), defined only while the
-reference is ahead."""
+reference is ahead; ScenarioRunner's time to arrival (distance over the speed difference)
+instead, under its rules."""
 
 from __future__ import annotations
 
@@ -39,3 +40,52 @@ def test_no_headway_to_a_reference_alongside() -> None:
     bench.start("Car", speed(10.0))
     bench.start("Lead", teleport(lane(-2, 49.0)))
     assert math.isnan(headway(bench))
+
+
+def arrival(bench: Bench, *, freespace: bool = False) -> float:
+    """ScenarioRunner's reading of a headway/TTC to ``Lead``: the time to arrival."""
+    conditions = Conditions(bench.world, lambda *args: False, scenario_runner=True)
+    bench.world.refresh()
+    return conditions._arrival(bench.actor("Car"), "Lead", freespace)
+
+
+def test_scenario_runner_reads_the_time_to_arrival() -> None:
+    # 30 m apart, 10 m/s against 4 m/s: 30 / 6 = 5 s (esmini's headway would be 30 / 10 = 3 s).
+    bench = Bench("Car", "Lead")
+    bench.start("Car", teleport(lane(-1, 20.0)))
+    bench.start("Car", speed(10.0))
+    bench.start("Lead", teleport(lane(-1, 50.0)))
+    bench.start("Lead", speed(4.0))
+    assert arrival(bench) == pytest.approx(5.0, rel=1e-6)
+    box = bench.world.state("Car").box.length
+    assert arrival(bench, freespace=True) == pytest.approx((30.0 - box) / 6.0, rel=1e-6)
+    # Alongside counts too (no "ahead" test): 1 m apart in the next lane.
+    bench.start("Lead", teleport(lane(-2, 20.0)))
+    assert math.isfinite(arrival(bench))
+
+
+def test_scenario_runner_has_no_arrival_at_a_faster_entity() -> None:
+    bench = Bench("Car", "Lead")
+    bench.start("Car", teleport(lane(-1, 20.0)))
+    bench.start("Car", speed(5.0))
+    bench.start("Lead", teleport(lane(-1, 50.0)))
+    bench.start("Lead", speed(8.0))
+    assert arrival(bench) == math.inf
+
+
+def test_a_headway_condition_follows_the_rule_set() -> None:
+    bench = Bench("Car", "Lead")
+    bench.start("Car", teleport(lane(-1, 20.0)))
+    bench.start("Car", speed(10.0))
+    bench.start("Lead", teleport(lane(-1, 50.0)))
+    bench.start("Lead", speed(4.0))
+    bench.world.refresh()
+    condition = model.TimeHeadwayCondition(
+        entity_ref="Lead", value=4.0, rule=model.Rule.LESS_THAN, freespace=False
+    )
+    body = model.ByEntity(
+        triggering_entities=("Car",), rule=model.TriggeringEntitiesRule.ANY, condition=condition
+    )
+    # esmini: 30 m / 10 m/s = 3 s < 4 s; ScenarioRunner: 30 m / 6 m/s = 5 s.
+    assert Conditions(bench.world, lambda *args: False)(body)[0] is True
+    assert Conditions(bench.world, lambda *args: False, scenario_runner=True)(body)[0] is False

@@ -201,10 +201,16 @@ class Conditions:
                 return compare(value, condition.rule, condition.value)
             return compare(abs(value), condition.rule, condition.value)
         if isinstance(condition, model.TimeHeadwayCondition):
+            if self._scenario_runner:
+                arrival = self._arrival(actor, condition.entity_ref, condition.freespace)
+                return compare(arrival, condition.rule, condition.value)
             return compare(self._headway(actor, condition), condition.rule, condition.value)
         if isinstance(condition, model.RelativeClearanceCondition):
             return clearance.is_clear(self._world, actor, condition)
         if isinstance(condition, model.TimeToCollisionCondition):
+            if self._scenario_runner and condition.entity_ref is not None:
+                arrival = self._arrival(actor, condition.entity_ref, condition.freespace)
+                return compare(arrival, condition.rule, condition.value)
             return compare(self._ttc(actor, condition), condition.rule, condition.value)
         if isinstance(condition, model.AngleCondition | model.RelativeAngleCondition):
             return self._angle(actor, condition)
@@ -247,6 +253,22 @@ class Conditions:
             if geometry.boxes_overlap(me, world.state(other.name)):
                 return True
         return False
+
+    def _arrival(self, actor: Actor, entity_ref: str, freespace: bool) -> float:
+        """ScenarioRunner's time to arrival at another entity, which it reads for both
+        TimeHeadway and TimeToCollision to an entity (``InTimeToArrivalToVehicle``): the straight
+        distance between the two actors' locations (box centres in CARLA; minus both half
+        lengths with ``freespace``) over the difference of their speeds, infinite unless the
+        entity is the faster -- whoever is ahead, whatever the directions."""
+        world = self._world
+        other = world.actor(entity_ref)
+        me, them = world.state(actor.name), world.state(other.name)
+        (ax, ay, _), (bx, by, _) = me.box_center(), them.box_center()
+        distance = math.hypot(bx - ax, by - ay)
+        if freespace:
+            distance -= (me.box.length + them.box.length) / 2.0
+        closing = actor.speed - other.speed
+        return distance / closing if closing > 0.0 else math.inf
 
     def _headway(self, actor: Actor, condition: model.TimeHeadwayCondition) -> float:
         other = self._world.actor(condition.entity_ref)
