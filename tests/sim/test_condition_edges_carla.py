@@ -1,19 +1,21 @@
-"""ScenarioRunner's condition rule for ``CARLA:`` files (``TriggerState(level=True)``): edges are
-not looked at (a rising condition already true at its first evaluation fires there, where esmini's
-rule does not), a condition that was true once stays true until its trigger fires (one-shot), the
-latch is cleared when the trigger fires and on reset; a delay is a wait before the first check
+"""ScenarioRunner's condition rule for ``CARLA:`` files (``TriggerState(level=True)``): edges are not
+looked at (a rising condition already true at its first evaluation fires there, where esmini's rule
+does not), a condition that was true once stays true until its trigger fires (one-shot), the latch
+is cleared when the trigger fires and on reset; a delay is a wait before the first check
 (ScenarioRunner's TimeOut ahead of the atomic), not a postponed firing; a SimulationTimeCondition
-counts from its own first check; an act StopTrigger's group holds on any one condition. The
-stand-in conditions are StoryboardElementState conditions whose values the test dictates."""
+counts from its own first check, a TraveledDistanceCondition likewise (strictly more); an act
+StopTrigger's group holds on any one condition. The stand-in conditions are StoryboardElementState
+conditions whose values the test dictates."""
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 
 from simtest_operator.openscenario import model
-from simtest_operator.sim.condition_checks import compare
+from simtest_operator.sim.condition_checks import Conditions, compare
 from simtest_operator.sim.triggers import TriggerState
 from tests.sim import builders as b
+from tests.sim.worlds import Bench, lane, teleport
 
 
 def stand_in(**kw: object) -> model.Condition:
@@ -125,3 +127,25 @@ def test_an_act_stop_trigger_group_holds_on_any_condition() -> None:
     group = (b.sim_time(1.0), b.sim_time(100.0))
     assert _timed(b.trigger(group), [0.0, 2.0]) == [False, False]
     assert _timed(b.trigger(group), [0.0, 2.0], any_condition=True) == [False, True]
+
+
+def test_traveled_distance_counts_from_the_first_check() -> None:
+    # ScenarioRunner's DriveDistance: metres since the condition's first check, strictly more.
+    bench = Bench("Car")
+    bench.start("Car", teleport(lane(-1, 10.0)))
+    bench.world.refresh()
+    car = bench.actor("Car")
+    condition = model.TraveledDistanceCondition(value=10.0)
+    body = model.ByEntity(
+        triggering_entities=("Car",), rule=model.TriggeringEntitiesRule.ANY, condition=condition
+    )
+    esmini = Conditions(bench.world, lambda *args: False)
+    carla = Conditions(bench.world, lambda *args: False, scenario_runner=True)
+    dt = bench.world.dt
+    car.odometer = 50.0  # driven before the condition's first check (say, before its act)
+    assert esmini(body)[0] is True
+    assert carla(body)[0] is False
+    for k, (odometer, expected) in enumerate(((55.0, False), (60.0, False), (60.5, True)), 1):
+        bench.world.time = k * dt
+        car.odometer = odometer
+        assert carla(body)[0] is expected, odometer

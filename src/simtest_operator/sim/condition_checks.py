@@ -73,6 +73,7 @@ class Conditions:
     """Evaluates condition bodies against the world and the storyboard state."""
 
     __slots__ = (
+        "_driven_since",
         "_scenario_runner",
         "_signed_longitudinal",
         "_state_query",
@@ -94,6 +95,8 @@ class Conditions:
         self._scenario_runner = scenario_runner
         self._still_since: dict[tuple[int, str], tuple[float, float]] = {}
         """ScenarioRunner's StandStill clocks: (condition, entity) -> (slow since, last seen)."""
+        self._driven_since: dict[tuple[int, str], tuple[float, float]] = {}
+        """ScenarioRunner's DriveDistance: (condition, entity) -> (odometer at start, last seen)."""
 
     def __call__(self, body: model.ByEntity | model.ByValue) -> Truth:
         if isinstance(body, model.ByValue):
@@ -158,6 +161,8 @@ class Conditions:
                 return self._slow_for(condition, actor) >= condition.duration - _EPSILON
             return actor.standstill_time >= condition.duration - _EPSILON and actor.speed == 0.0
         if isinstance(condition, model.TraveledDistanceCondition):
+            if self._scenario_runner:
+                return self._driven_for(condition, actor) > condition.value
             return actor.odometer >= condition.value
         if isinstance(condition, model.EndOfRoadCondition):
             return actor.stuck and actor.end_of_road_time >= condition.duration - _EPSILON
@@ -215,6 +220,17 @@ class Conditions:
         if isinstance(condition, model.AngleCondition | model.RelativeAngleCondition):
             return self._angle(actor, condition)
         raise ScenarioError(f"condition {type(condition).__name__} is not supported")
+
+    def _driven_for(self, condition: model.TraveledDistanceCondition, actor: Actor) -> float:
+        """Metres ``actor`` drove since the condition started watching (ScenarioRunner's
+        DriveDistance counts from its first check, or again after a pause)."""
+        now = self._world.time
+        key = (id(condition), actor.name)
+        start, seen = self._driven_since.get(key, (actor.odometer, now))
+        if now - seen > 1.5 * self._world.dt:
+            start = actor.odometer
+        self._driven_since[key] = (start, now)
+        return actor.odometer - start
 
     def _slow_for(self, condition: model.StandStillCondition, actor: Actor) -> float:
         """Seconds ``actor`` has been at most :data:`SCENARIO_RUNNER_STILL` fast, counted from
