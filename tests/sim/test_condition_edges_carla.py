@@ -1,11 +1,11 @@
-"""ScenarioRunner's condition rule for ``CARLA:`` files (``TriggerState(level=True)``): edges are not
-looked at (a rising condition already true at its first evaluation fires there, where esmini's rule
-does not), a condition that was true once stays true until its trigger fires (one-shot), the latch
-is cleared when the trigger fires and on reset; a delay is a wait before the first check
-(ScenarioRunner's TimeOut ahead of the atomic), not a postponed firing; a SimulationTimeCondition
-counts from its own first check, a TraveledDistanceCondition likewise (strictly more); an act
-StopTrigger's group holds on any one condition. The stand-in conditions are StoryboardElementState
-conditions whose values the test dictates."""
+"""ScenarioRunner's condition rule for ``CARLA:`` files (``TriggerState(level=True)``): edges are
+not looked at (a rising condition already true at its first evaluation fires there, where
+esmini's rule does not), a condition that was true once stays true until its trigger fires (one-
+shot), the latch is cleared when the trigger fires and on reset; a delay is a wait before the
+first check (ScenarioRunner's TimeOut ahead of the atomic), not a postponed firing; a
+SimulationTimeCondition counts from its own first check, a TraveledDistanceCondition likewise
+(strictly more); an act StopTrigger's group holds on any one condition. The stand-in conditions
+are StoryboardElementState conditions whose values the test dictates."""
 
 from __future__ import annotations
 
