@@ -19,7 +19,9 @@ other running events, ``skip`` does not start while another event runs, ``parall
 Under ScenarioRunner's rules priorities are not applied: ScenarioRunner runs the events of a
 maneuver side by side (a parallel composite) and never reads the attribute; and its
 StoryboardElementStateCondition knows one end of an element, so ``endTransition`` and
-``stopTransition`` both see an element end however it ended.
+``stopTransition`` both see an element end however it ended. Its storyboard StopTrigger stops
+nothing (ScenarioRunner reads only the criteria out of it): the run ends with the stories; an
+act's StopTrigger fires on any one of its conditions.
 An event or maneuver group that ended with executions left goes back to standby (maneuver group:
 restarts at once) until ``maximumExecutionCount`` is used up.
 """
