@@ -6,7 +6,7 @@ stand-in's OpenDRIVE projection (docs/simulator.md, "ScenarioRunner audit"):
 
 - ``KeepLaneTest`` is CARLA's lane-invasion sensor: a corner of the vehicle's box that crossed,
   since the previous tick, from one lane into another of the same road and lane section, or
-  between a driving lane and the road's edge, outside junctions (``LaneCrossingCalculator``);
+  between a lane and the road's edge, outside junctions (CARLA's ``LaneCrossingCalculator``);
 - ``WrongLaneTest``: on a change of (road, lane) outside a junction, the lane's direction turned
   by more than 150 deg from the previous lane's; right after a junction, the vehicle's heading is
   more than 120 deg off the new lane's direction;
@@ -36,8 +36,11 @@ WRONG_LANE_HEADING = math.radians(120.0)
 _ALLOWED = frozenset({"driving", "parking"})
 """Lane types ScenarioRunner's off-road and sidewalk tests accept (CARLA Driving, Parking)."""
 
+_MARKED = frozenset({"driving", "bidirectional", "biking", "parking"})
+"""Lane types CARLA's lane-crossing calculator finds road marks between (its ``FLAGS``)."""
+
 _Corner = tuple[str, int, int | None]
-"""Where a box corner is: road, lane section, driving lane id (None: off the driving lanes)."""
+"""Where a box corner is: road, lane section, lane id (None: off those lanes)."""
 
 
 @dataclasses.dataclass(slots=True)
@@ -128,7 +131,7 @@ class LaneWatch:
         if coord is None:
             return None
         section = self._roads.lane_section_index(coord.road_id, coord.s)
-        on_lane = coord.on_road and coord.lane_type == "driving"
+        on_lane = coord.on_road and coord.lane_type in _MARKED
         return coord.road_id, section, coord.lane_id if on_lane else None
 
     def _keep_lane(self, time: float, ego: EntityState, coord: RoadCoord | None) -> None:
