@@ -1,8 +1,8 @@
 """ScenarioRunner criteria in the evaluator and the verdict: the value as the test's second
 argument whatever its parameterRef (a distance, a speed, ``optional``), strict comparisons and
 last-tick MaxVelocityTest, criteria ScenarioRunner cannot build not evaluated, optional failures
-not failing the run, a failed criterion outranking a timeout, outcomes in the reason and as
-``criteria.*`` metrics, no criteria -> unchanged reason."""
+not failing the run, a collision taken standing not the ego's, a failed criterion outranking a
+timeout, outcomes in the reason and as ``criteria.*`` metrics, no criteria -> unchanged reason."""
 
 from __future__ import annotations
 
@@ -189,3 +189,17 @@ def test_without_criteria_the_reason_is_unchanged() -> None:
     evaluator = OnlineEvaluator(Criteria(), ego="hero")
     evaluator.observe(WorldSnapshot(time=0.0, entities=(car("hero", 0.0),)))
     assert judge(evaluator, facts()).reason == "storyboard complete at t=5.00 s, all criteria held"
+
+
+def test_a_collision_taken_standing_still_is_not_the_egos() -> None:
+    # CollisionTest skips collisions while the ego is slower than 0.1 m/s (its EPSILON).
+    checks = ScenarioCriteria([criterion("CollisionTest")], roads=None)
+    evaluator = OnlineEvaluator(Criteria(collision=False), ego="hero", scenario_criteria=checks)
+    standing = EntityState(
+        id=0, name="hero", kind=EntityKind.VEHICLE, category="car", x=0.0, y=0.0, box=BOX
+    )
+    evaluator.observe(WorldSnapshot(time=1.0, entities=(standing, car("rear", -3.0))))
+    (outcome,) = evaluator.criterion_outcomes()
+    assert outcome.status is Status.PASSED
+    assert outcome.detail == "hit by rear while standing (not the ego's fault)"
+    assert judge(evaluator, facts()).verdict is Verdict.PASSED

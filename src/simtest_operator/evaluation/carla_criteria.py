@@ -13,7 +13,7 @@ test with where ScenarioRunner decides it:
 ============================  ====================================================================
 ScenarioRunner criterion      Judged here as
 ============================  ====================================================================
-``CollisionTest``             the ego's bounding box touched another entity's (as ``collision``)
+``CollisionTest``             the ego's bounding box touched another entity's while the ego moved
 ``KeepLaneTest``              CARLA's lane-invasion sensor (:mod:`.lane_criteria`)
 ``WrongLaneTest``             a lane change against the traffic (:mod:`.lane_criteria`)
 ``OnSidewalkTest``            time on a sidewalk or outside the lanes > ``duration``
@@ -67,6 +67,9 @@ _LANE_CHECKS = frozenset(
     {"KeepLaneTest", "WrongLaneTest", "OnSidewalkTest", "OffRoadTest", "EndofRoadTest"}
 )
 _SIGNAL_CHECKS = frozenset({"RunningRedLightTest", "RunningStopTest"})
+_AT_FAULT = 0.1
+"""m/s: CollisionTest ignores a collision taken while the ego was slower (its ``EPSILON``: the
+collision is not the ego's fault)."""
 
 
 class Status(enum.StrEnum):
@@ -144,6 +147,7 @@ class ScenarioCriteria:
         "_roads",
         "_signals",
         "_speed",
+        "_speeds",
         "_time",
     )
 
@@ -154,6 +158,8 @@ class ScenarioCriteria:
         self._distance = 0.0
         self._last: tuple[float, float] | None = None
         self._speed: float | None = None
+        self._speeds: dict[float, float] = {}
+        """The ego's speed at each snapshot time, when CollisionTest needs it."""
         self._time = 0.0
         self._signals = (
             SignalWatch(traffic_controls(roads))
@@ -199,6 +205,8 @@ class ScenarioCriteria:
             self._distance += math.hypot(ego.x - self._last[0], ego.y - self._last[1])
         self._last = (ego.x, ego.y)
         self._speed = ego.speed
+        if "CollisionTest" in self.names:
+            self._speeds[time] = ego.speed
         if self._lanes is not None:
             self._lanes.observe(time, ego)
 
@@ -236,10 +244,14 @@ class ScenarioCriteria:
         collided_with: Sequence[tuple[str, float]],
     ) -> Outcome:
         if name == "CollisionTest":
-            if collided_with:
-                other, time = collided_with[0]
+            for other, time in collided_with:
+                if self._speeds.get(time, _AT_FAULT) < _AT_FAULT:
+                    continue  # hit while (nearly) standing: not counted by ScenarioRunner
                 detail = f"{ego} collided with {other} at t={time:.2f} s"
                 return Outcome(name=name, status=Status.FAILED, detail=detail, time=time)
+            if collided_with:
+                detail = f"hit by {collided_with[0][0]} while standing (not the ego's fault)"
+                return Outcome(name=name, status=Status.PASSED, detail=detail)
             return Outcome(name=name, status=Status.PASSED)
         if value is not None and name in _REQUIRED:
             return self._threshold(name, value)
