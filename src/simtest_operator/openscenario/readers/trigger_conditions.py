@@ -104,7 +104,7 @@ def condition(el: Element, ctx: reading.Context) -> c.Condition:
     if chosen.tag == "ByEntityCondition":
         triggering = ctx.require(chosen, "TriggeringEntities")
         body = c.ByEntity(
-            triggering_entities=tuple(
+            triggering_entities=ctx.entity_refs(
                 ctx.string(ref, "entityRef")
                 for ref in reading.all_children(triggering, "EntityRef")
             ),
