@@ -174,6 +174,10 @@ from simtest_operator.openscenario.model.trigger_conditions import (
     ValueCondition,
     VariableCondition,
 )
+from simtest_operator.openscenario.model.value_conditions import (
+    TimeOfDayCondition,
+    UserDefinedValueCondition,
+)
 
 __all__ = [
     "AbsoluteFinalSpeed",
@@ -301,6 +305,7 @@ __all__ = [
     "SynchronizeAction",
     "TeleportAction",
     "TimeHeadwayCondition",
+    "TimeOfDayCondition",
     "TimeToCollisionCondition",
     "Timing",
     "TrafficAction",
@@ -322,6 +327,7 @@ __all__ = [
     "Trigger",
     "TriggeringEntitiesRule",
     "Unsupported",
+    "UserDefinedValueCondition",
     "ValueCondition",
     "ValueScope",
     "VariableCondition",

@@ -31,14 +31,26 @@ def storyboard_action(el: Element, ctx: reading.Context) -> a.Action:
         body = private(chosen, ctx)
     elif chosen.tag == "GlobalAction":
         body = global_(chosen, ctx)
+    elif chosen.tag == "UserDefinedAction":
+        body = user_defined(chosen, ctx)
     else:
-        body = ctx.unsupported(chosen, "user-defined actions are not supported")
+        body = ctx.unsupported(chosen, f"unknown action {chosen.tag}")
     return a.Action(
         name=ctx.string(el, "name"),
         body=body,
         is_private=chosen.tag == "PrivateAction",
         line=el.sourceline,
     )
+
+
+def user_defined(el: Element, ctx: reading.Context) -> ctl.IgnoredAction:
+    """A ``<UserDefinedAction>`` (a ``CustomCommandAction`` for the user's own tool): nothing in
+    the stand-in can run it, and nothing it does is visible to the scenario, so it completes at
+    once and is listed as ignored (``UserDefinedAction (type)``)."""
+    command = reading.child(el, "CustomCommandAction")
+    kind = ctx.opt_string(command, "type") if command is not None else None
+    ctx.ignore(f"UserDefinedAction ({kind})" if kind else "UserDefinedAction")
+    return ctl.IgnoredAction(kind="UserDefinedAction", line=el.sourceline)
 
 
 def _ignored(el: Element, ctx: reading.Context) -> ctl.IgnoredAction:

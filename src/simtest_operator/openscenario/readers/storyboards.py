@@ -43,8 +43,10 @@ def _init(el: Element, ctx: reading.Context) -> s.Init:
                 )
                 for ref in ctx.entity_refs([ctx.string(node, "entityRef")])
             )
+        elif node.tag == "UserDefinedAction":
+            global_actions.append(actions.user_defined(node, ctx))
         else:
-            global_actions.append(ctx.unsupported(node, "user-defined actions are not supported"))
+            global_actions.append(ctx.unsupported(node, f"unknown Init action {node.tag}"))
     return s.Init(global_actions=tuple(global_actions), private=tuple(private), line=el.sourceline)
 
 
