@@ -24,6 +24,7 @@ from simtest_operator.openscenario.model import entities as e
 from simtest_operator.openscenario.model import scenarios as s
 from simtest_operator.openscenario.readers import (
     entities,
+    monitors,
     selections,
     storyboards,
     traffic_signals,
@@ -132,6 +133,7 @@ def _load(
     )
     ctx, declared = _globals(root, ctx, dict(overrides or {}))
     variables = _variables(root, ctx)
+    declared_monitors = monitors.declarations(reading.child(root, "MonitorDeclarations"), ctx)
     catalogs = Catalogs.from_locations(
         root, ctx, path.parent, confinement=confinement, max_bytes=options.max_bytes
     )
@@ -162,6 +164,7 @@ def _load(
         header=header,
         parameters=declared,
         variables=variables,
+        monitors=declared_monitors,
         road_network=road,
         entities=objects,
         storyboard=board,

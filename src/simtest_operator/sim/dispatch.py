@@ -197,6 +197,15 @@ class Dispatcher:
         if isinstance(body, model.EnvironmentAction):
             world.environments.append((world.time, body.environment))
             return Done()
+        if isinstance(body, model.SetMonitorAction):
+            if body.monitor_ref not in world.monitors:
+                raise ScenarioError(
+                    f"monitor {body.monitor_ref!r} is not declared (MonitorDeclarations)",
+                    element="SetMonitorAction",
+                    line=body.line,
+                )
+            world.monitors[body.monitor_ref] = body.value
+            return Done()
         if isinstance(body, model.IgnoredAction):
             self._ignore(body.kind)
             return Done()

@@ -81,6 +81,7 @@ from simtest_operator.openscenario.model.entities import (
     Performance,
     ScenarioObject,
 )
+from simtest_operator.openscenario.model.monitors import MonitorDeclaration, SetMonitorAction
 from simtest_operator.openscenario.model.positions import (
     Clothoid,
     ClothoidSpline,
@@ -246,6 +247,7 @@ __all__ = [
     "ManeuverGroup",
     "ModifyRule",
     "ModifyValueAction",
+    "MonitorDeclaration",
     "Nurbs",
     "ObjectController",
     "OffRoadCondition",
@@ -286,6 +288,7 @@ __all__ = [
     "Rule",
     "Scenario",
     "ScenarioObject",
+    "SetMonitorAction",
     "SetValueAction",
     "Shape",
     "SimulationTimeCondition",

@@ -11,6 +11,7 @@ from __future__ import annotations
 import dataclasses
 import enum
 
+from simtest_operator.openscenario.model import monitors
 from simtest_operator.openscenario.model.common import (
     CoordinateSystem,
     ReferenceContext,
@@ -369,11 +370,11 @@ GlobalAction = (
     | AddEntityAction
     | DeleteEntityAction
     | EnvironmentAction
+    | monitors.SetMonitorAction
     | IgnoredAction
     | Unsupported
 )
-"""Global actions; traffic signal controller, TrafficArea, SetMonitor and UserDefined actions are
-Unsupported."""
+"""Global actions; TrafficArea actions are Unsupported, UserDefined ones IgnoredActions."""
 
 AnyAction = PrivateAction | GlobalAction
 

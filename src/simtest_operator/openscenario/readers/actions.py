@@ -8,10 +8,14 @@ from simtest_operator.openscenario import reading
 from simtest_operator.openscenario.model import actions as a
 from simtest_operator.openscenario.model import common as m
 from simtest_operator.openscenario.model import controls as ctl
-from simtest_operator.openscenario.readers import controllers, positions, traffic, world_actions
+from simtest_operator.openscenario.readers import (
+    controllers,
+    monitors,
+    positions,
+    traffic,
+    world_actions,
+)
 from simtest_operator.xmlsafe import Element
-
-_GLOBAL_UNSUPPORTED = {"SetMonitorAction": "monitors are not supported"}
 
 
 def storyboard_action(el: Element, ctx: reading.Context) -> a.Action:
@@ -49,8 +53,9 @@ def user_defined(el: Element, ctx: reading.Context) -> ctl.IgnoredAction:
     once and is listed as ignored (``UserDefinedAction (type)``)."""
     command = reading.child(el, "CustomCommandAction")
     kind = ctx.opt_string(command, "type") if command is not None else None
-    ctx.ignore(f"UserDefinedAction ({kind})" if kind else "UserDefinedAction")
-    return ctl.IgnoredAction(kind="UserDefinedAction", line=el.sourceline)
+    label = f"UserDefinedAction ({kind})" if kind else "UserDefinedAction"
+    ctx.ignore(label)
+    return ctl.IgnoredAction(kind=label, line=el.sourceline)
 
 
 def _ignored(el: Element, ctx: reading.Context) -> ctl.IgnoredAction:
@@ -88,7 +93,6 @@ def global_(el: Element, ctx: reading.Context) -> a.GlobalAction:
         ctx.choice(el),
         _GLOBAL_READERS,
         unknown="unknown global action",
-        reasons=_GLOBAL_UNSUPPORTED,
     )
 
 
@@ -424,5 +428,6 @@ _GLOBAL_READERS: Mapping[str, Callable[[Element, reading.Context], a.GlobalActio
     "VariableAction": _value_action,
     "TrafficAction": traffic.traffic_action,
     "InfrastructureAction": _infrastructure,
+    "SetMonitorAction": monitors.set_monitor,
 }
-"""Supported ``<GlobalAction>`` children by tag (others: :data:`_GLOBAL_UNSUPPORTED`)."""
+"""Supported ``<GlobalAction>`` children by tag (any other is unsupported)."""
