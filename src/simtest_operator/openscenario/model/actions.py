@@ -341,6 +341,13 @@ class SynchronizeAction:
     line: int | None = None
 
 
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class RandomRouteAction:
+    """Follow a random route from where the entity is (1.3, no attributes)."""
+
+    line: int | None = None
+
+
 PrivateAction = (
     TeleportAction
     | SpeedAction
@@ -350,6 +357,7 @@ PrivateAction = (
     | LaneOffsetAction
     | LateralDistanceAction
     | AssignRouteAction
+    | RandomRouteAction
     | AcquirePositionAction
     | FollowTrajectoryAction
     | SynchronizeAction
@@ -359,7 +367,7 @@ PrivateAction = (
     | IgnoredAction
     | Unsupported
 )
-"""Private actions; OverrideControllerValue and RandomRoute actions are Unsupported."""
+"""Private actions; OverrideControllerValue actions with an active value are Unsupported."""
 
 GlobalAction = (
     SetValueAction

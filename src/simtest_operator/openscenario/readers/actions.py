@@ -401,6 +401,7 @@ _ROUTING_READERS: Mapping[str, _PrivateReader] = {
     "AssignRouteAction": _assign_route,
     "AcquirePositionAction": _acquire_position,
     "FollowTrajectoryAction": _follow_trajectory,
+    "RandomRouteAction": lambda el, ctx: a.RandomRouteAction(line=el.sourceline),
 }
 
 _PRIVATE_READERS: Mapping[str, _PrivateReader] = {
@@ -411,7 +412,6 @@ _PRIVATE_READERS: Mapping[str, _PrivateReader] = {
     "RoutingAction": _one_of(
         _ROUTING_READERS,
         unknown="unknown routing action",
-        reasons={"RandomRouteAction": "random routes are not supported"},
     ),
     "SynchronizeAction": _synchronize,
     "ActivateControllerAction": controllers.activate,
