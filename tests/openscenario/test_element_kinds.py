@@ -117,6 +117,7 @@ PRIVATE_ACTIONS = [
     '<VisibilityAction graphics="true" traffic="true" sensors="false"/>',
     "<TrailerAction><DisconnectTrailerAction/></TrailerAction>",
     "<RoutingAction><RandomRouteAction/></RoutingAction>",
+    "<RoutingAction><FancyRouteAction/></RoutingAction>",
 ]
 GLOBAL_ACTIONS = [
     '<ParameterAction parameterRef="P"><SetAction value="2"/></ParameterAction>',
@@ -309,14 +310,15 @@ def test_every_action_kind(rich: model.Scenario) -> None:
         "Ignored:LightStateAction",
         "Ignored:VisibilityAction",
         "TrailerAction",
-        "Unsupported:RandomRouteAction",
+        "RandomRouteAction",
+        "Unsupported:FancyRouteAction",
         "SetValueAction",
         "ModifyValueAction",
         "ModifyValueAction",
         "EnvironmentAction",
         "TrafficSignalStateAction",
     ]
-    speed, distance, sync, modify = bodies[1], bodies[2], bodies[9], bodies[18]
+    speed, distance, sync, modify = bodies[1], bodies[2], bodies[9], bodies[19]
     assert isinstance(speed, model.SpeedAction)
     assert speed.dynamics.following_mode is model.FollowingMode.FOLLOW
     assert speed.target == model.RelativeTargetSpeed(
@@ -352,7 +354,7 @@ def test_every_action_kind(rich: model.Scenario) -> None:
 def test_unsupported_listed_in_place(rich: model.Scenario) -> None:
     listed = {(u.element, u.reason) for u in rich.unsupported()}
     assert listed == {
-        ("RandomRouteAction", "random routes are not supported"),
+        ("FancyRouteAction", "unknown routing action FancyRouteAction"),
     }
     for node in rich.unsupported():
         assert node.line is not None and node.file == str(rich.path)

@@ -56,11 +56,11 @@ def test_unsupported_element_is_invalid_with_element_and_line(tmp_path: Path) ->
     start = text.index("<PrivateAction><LongitudinalAction><SpeedAction>\n")
     end = text.index("</PrivateAction>", start) + len("</PrivateAction>")
     unsupported = (
-        "<PrivateAction><RoutingAction><RandomRouteAction/></RoutingAction></PrivateAction>"
+        "<PrivateAction><RoutingAction><FancyRouteAction/></RoutingAction></PrivateAction>"
     )
     text = text[:start] + unsupported + text[end:]
     line = text[:start].count("\n") + 1
-    scenario = tmp_path / "random_route.xosc"
+    scenario = tmp_path / "fancy_route.xosc"
     scenario.write_text(text, encoding="utf-8")
     outcome = scenario_execution.run_scenario(
         scenario_execution.RunRequest(
@@ -72,7 +72,7 @@ def test_unsupported_element_is_invalid_with_element_and_line(tmp_path: Path) ->
         )
     ).outcome
     assert outcome.verdict is Verdict.INVALID
-    assert "<RandomRouteAction>" in outcome.reason and f"line {line}" in outcome.reason
+    assert "<FancyRouteAction>" in outcome.reason and f"line {line}" in outcome.reason
 
 
 def test_ignored_elements_are_listed(tmp_path: Path) -> None:

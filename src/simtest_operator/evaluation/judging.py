@@ -1,10 +1,10 @@
 """Judging: turn what a run produced into one verdict with a one-line reason and its metrics.
 
 Precedence, most specific first: a scenario the engine could not run is ``Invalid``; broken
-infrastructure is ``Error``; a violated criterion (the campaign's, or one of the scenario's own
-ScenarioRunner criteria that is not optional) is ``Failed`` (even if the run also ran out of
-time, the violation is the more useful news); a storyboard that did not complete within the time
-limit is ``Timeout``; everything else ``Passed``.
+infrastructure is ``Error``; a violated criterion (the campaign's, one of the scenario's own
+ScenarioRunner criteria that is not optional, or a 1.3 monitor false at the end) is ``Failed``
+(even if the run also ran out of time, the violation is the more useful news); a storyboard that
+did not complete within the time limit is ``Timeout``; everything else ``Passed``.
 """
 
 from __future__ import annotations
@@ -13,6 +13,7 @@ import dataclasses
 import math
 from collections.abc import Mapping
 
+from simtest_operator.evaluation import monitors
 from simtest_operator.evaluation.carla_criteria import Outcome, Status
 from simtest_operator.evaluation.online import OnlineEvaluator
 from simtest_operator.verdicts import Verdict
@@ -32,6 +33,8 @@ class RunFacts:
     wall_limit_hit: bool = False
     """The run was stopped because it exceeded its wall-clock budget."""
     ignored_elements: tuple[str, ...] = ()
+    monitors: Mapping[str, bool] = dataclasses.field(default_factory=dict)
+    """Final values of the scenario's 1.3 monitors (:mod:`.monitors`); a false one fails."""
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
@@ -53,6 +56,7 @@ def judge(evaluator: OnlineEvaluator, facts: RunFacts) -> Judgement:
     metrics["ignoredElements"] = float(len(facts.ignored_elements))
     outcomes = evaluator.criterion_outcomes()
     metrics.update(_outcome_metrics(evaluator, outcomes))
+    metrics.update(monitors.metrics(facts.monitors))
     metrics = {key: value for key, value in metrics.items() if math.isfinite(value)}
     if facts.invalid_reason is not None:
         return Judgement(verdict=Verdict.INVALID, reason=facts.invalid_reason, metrics=metrics)
@@ -69,7 +73,8 @@ def judge(evaluator: OnlineEvaluator, facts: RunFacts) -> Judgement:
             )
             for o in outcomes
             if o.decisive
-        ],
+        ]
+        + monitors.failures(facts.monitors, facts.simulated_seconds),
         key=lambda failure: failure[0],
     )
     if failures:

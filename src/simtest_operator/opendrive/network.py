@@ -253,10 +253,12 @@ class RoadNetwork:
         ds: float,
         *,
         prefer_roads: Collection[str] = (),
+        straightest: bool = False,
     ) -> LaneLocation:
         """Move ``ds`` metres of s along the lane (positive: towards increasing s on the start
         road), continuing through lane sections, linked roads and junctions. At a fork the first
-        successor whose road is in ``prefer_roads`` is taken, else the first declared one."""
+        successor whose road is in ``prefer_roads`` is taken, else, with ``straightest``, the one
+        that turns least (:meth:`_straightest`), else the first declared one."""
         road = self.road(road_id)
         direction = 1 if ds >= 0 else -1
         remaining = abs(ds)
@@ -295,6 +297,8 @@ class RoadNetwork:
             if not entries:
                 return self._stuck(road.id, end_s, lane_id, direction, remaining)
             entry = self._preferred(entries, prefer_roads)
+            if straightest and not prefer_roads and len(entries) > 1:
+                entry = self._straightest(entries, road.id, end_s, direction)
             road = self._roads[entry.road_id]
             layout = self._layouts[self._slot(road.id)]
             lane_id = entry.lane_id
@@ -326,6 +330,27 @@ class RoadNetwork:
                 if any(after.road_id in prefer_roads for after in onward):
                     return entry
         return entries[0]
+
+    def _straightest(
+        self, entries: Sequence[topology.LaneEntry], road_id: str, s: float, direction: int
+    ) -> topology.LaneEntry:
+        """The successor whose road leaves in the direction closest to the one the lane arrives
+        in (heading at the far end of the entered road against the heading at the end left),
+        the first declared on a tie: what an entity without a route takes at a junction.
+        esmini picks at random there unless told an angle (``junctionSelectorAngle``, 0 for
+        straight on); a reproducible run needs one choice, and straight on is the one its
+        unit test scenario of the junction selector and real traffic mostly take."""
+        arrive = self.reference_pose(road_id, s).heading + (0.0 if direction > 0 else math.pi)
+
+        def turn(entry: topology.LaneEntry) -> float:
+            length = self.road_length(entry.road_id)
+            forward = entry.contact_point is models.ContactPoint.START
+            far = self.reference_pose(entry.road_id, length if forward else 0.0).heading
+            leave = far + (0.0 if forward else math.pi)
+            return abs(math.remainder(leave - arrive, math.tau))
+
+        best = min(turn(entry) for entry in entries)
+        return next(entry for entry in entries if turn(entry) <= best + 1e-6)
 
     @staticmethod
     def _stuck(

@@ -22,7 +22,13 @@ from simtest_operator.openscenario.headers import FileKind
 from simtest_operator.openscenario.model import common as m
 from simtest_operator.openscenario.model import entities as e
 from simtest_operator.openscenario.model import scenarios as s
-from simtest_operator.openscenario.readers import entities, storyboards, traffic_signals
+from simtest_operator.openscenario.readers import (
+    entities,
+    monitors,
+    selections,
+    storyboards,
+    traffic_signals,
+)
 from simtest_operator.xmlsafe import Element
 
 
@@ -127,6 +133,7 @@ def _load(
     )
     ctx, declared = _globals(root, ctx, dict(overrides or {}))
     variables = _variables(root, ctx)
+    declared_monitors = monitors.declarations(reading.child(root, "MonitorDeclarations"), ctx)
     catalogs = Catalogs.from_locations(
         root, ctx, path.parent, confinement=confinement, max_bytes=options.max_bytes
     )
@@ -147,13 +154,17 @@ def _load(
     road = _road_network(
         reading.child(root, "RoadNetwork"), ctx, path.parent, confinement, libraries
     )
-    objects = _entities(ctx.require(root, "Entities"), ctx)
+    entities_el = ctx.require(root, "Entities")
+    objects = _entities(entities_el, ctx)
+    chosen = selections.resolve(reading.all_children(entities_el, "EntitySelection"), objects, ctx)
+    ctx = dataclasses.replace(ctx, selections=chosen)
     board = storyboards.storyboard(ctx.require(root, "Storyboard"), ctx)
     return s.Scenario(
         path=path,
         header=header,
         parameters=declared,
         variables=variables,
+        monitors=declared_monitors,
         road_network=road,
         entities=objects,
         storyboard=board,
@@ -274,8 +285,7 @@ def _entities(el: Element, ctx: reading.Context) -> tuple[e.ScenarioObject, ...]
         )
     for node in nodes:
         if node.tag == "EntitySelection":
-            ctx.unsupported(node, "entity selections are not supported", name=node.get("name"))
-            continue
+            continue  # resolved once every object is known (readers.selections)
         obj = entities.scenario_object(node, ctx)
         # An inline trailer (and its own, ...) becomes an entity after its tractor, named
         # ``<tractor>+`` as esmini names it (the Trailer element's own name is not used).

@@ -116,10 +116,20 @@ class Context:
     positive to the right, as ScenarioRunner places them whatever the header (its waypoint
     arithmetic runs in CARLA's frame): set for ``CARLA:`` files and files under ScenarioRunner's
     rules; they are negated while reading."""
+    selections: Mapping[str, tuple[str, ...]] = dataclasses.field(default_factory=dict)
+    """Members of each EntitySelection by its name (:mod:`.readers.selections`)."""
 
     def with_scope(self, scope: parameters.Scope) -> Context:
         """The same context with another parameter scope."""
         return dataclasses.replace(self, scope=scope)
+
+    def entity_refs(self, names: Iterable[str]) -> tuple[str, ...]:
+        """``names`` with each EntitySelection replaced by its members (no repeats): what a list
+        of entities (triggering entities, actors) means."""
+        out: list[str] = []
+        for name in names:
+            out.extend(self.selections.get(name, (name,)))
+        return tuple(dict.fromkeys(out))
 
     def for_entry(self, file: str, assignments: Mapping[str, str]) -> Context:
         """A context for reading a catalog entry of ``file`` with its ParameterAssignments."""

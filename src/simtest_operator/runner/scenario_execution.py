@@ -243,6 +243,7 @@ def run_scenario(
         error_reason=error,
         wall_limit_hit=wall_hit,
         ignored_elements=simulation.ignored,
+        monitors=simulation.monitors,
     )
     judgement = evaluation.judge(evaluator, facts)
     verdict, reason = judgement.verdict, judgement.reason

@@ -14,7 +14,14 @@ from collections.abc import Callable
 from simtest_operator import geometry
 from simtest_operator.errors import ScenarioError
 from simtest_operator.openscenario import model
-from simtest_operator.sim import angles, clearance, measures, placements, positions
+from simtest_operator.sim import (
+    angles,
+    clearance,
+    measures,
+    placements,
+    positions,
+    time_of_day,
+)
 from simtest_operator.sim.actors import Actor
 from simtest_operator.sim.triggers import Truth
 from simtest_operator.sim.world import World
@@ -138,6 +145,11 @@ class Conditions:
             return world.signals.get(condition.name) == condition.state
         if isinstance(condition, model.TrafficSignalControllerCondition):
             return world.signal_controllers.phase(condition.controller_ref) == condition.phase
+        if isinstance(condition, model.TimeOfDayCondition):
+            past = time_of_day.seconds_past(condition.date_time, world)
+            return past is not None and compare(past, condition.rule, 0.0)
+        if isinstance(condition, model.UserDefinedValueCondition):
+            return False  # no source of user values in the stand-in; listed as ignored
         raise placements.unsupported(condition)
 
     # --- entity conditions --------------------------------------------------------------------

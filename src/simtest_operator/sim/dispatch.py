@@ -25,6 +25,7 @@ from simtest_operator.sim import (
     carla,
     placements,
     positions,
+    random_routes,
     route_legs,
     route_planning,
     trailers,
@@ -197,6 +198,15 @@ class Dispatcher:
         if isinstance(body, model.EnvironmentAction):
             world.environments.append((world.time, body.environment))
             return Done()
+        if isinstance(body, model.SetMonitorAction):
+            if body.monitor_ref not in world.monitors:
+                raise ScenarioError(
+                    f"monitor {body.monitor_ref!r} is not declared (MonitorDeclarations)",
+                    element="SetMonitorAction",
+                    line=body.line,
+                )
+            world.monitors[body.monitor_ref] = body.value
+            return Done()
         if isinstance(body, model.IgnoredAction):
             self._ignore(body.kind)
             return Done()
@@ -272,6 +282,18 @@ class Dispatcher:
                 actor.route = tuple(approach + leg_roads)
                 actor.route_index = 0
             return self._routed(actor, route.waypoints[-1].position)
+        if isinstance(body, model.RandomRouteAction):
+            if world.roads is None or actor.mode is not Mode.ROAD or actor.road_id is None:
+                raise ScenarioError(
+                    f"a random route needs {actor.name} on a road",
+                    element="RandomRouteAction",
+                    line=body.line,
+                )
+            actor.route = random_routes.draw(
+                world.roads, (actor.road_id, actor.direction), world.rng
+            )
+            actor.route_index = 0
+            return Done(actor)
         if isinstance(body, model.AcquirePositionAction):
             self._route(actor, [body.position])
             return self._routed(actor, body.position)

@@ -17,6 +17,7 @@ completions propagate through the storyboard, the backend is synchronised, and a
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 
 from simtest_operator.drivermodel import DriverModel, SutConfig, Takeover
 from simtest_operator.errors import ScenarioError
@@ -104,6 +105,7 @@ class Simulation:
             variables={v.name: v.value for v in scenario.variables},
             controllers=scenario.road_network.controllers,
         )
+        self.world.monitors.update((m.name, m.value) for m in scenario.monitors)
         self._traffic = Traffic(seed=backend_config.seed)
         header = scenario.header
         self.rules = rulesets.rules_of(scenario)
@@ -152,6 +154,11 @@ class Simulation:
     def ignored(self) -> tuple[str, ...]:
         """Elements accepted but not simulated, from the file and met during the run."""
         return tuple(dict.fromkeys((*self._scenario.ignored_kinds, *self.world.ignored)))
+
+    @property
+    def monitors(self) -> Mapping[str, bool]:
+        """The 1.3 monitors' values now (at the end: whether each passed)."""
+        return dict(self.world.monitors)
 
     @property
     def intended_differences(self) -> tuple[str, ...]:

@@ -88,6 +88,7 @@ def move(
             actor.lane_id,
             stretched * actor.direction,
             prefer_roads=actor.route[actor.route_index + 1 : actor.route_index + _LOOKAHEAD],
+            straightest=not actor.route,
         )
         walked = 1 if distance >= 0 else -1
         actor.stuck = location.remaining > 1e-9 or (was_stuck and distance == 0.0)

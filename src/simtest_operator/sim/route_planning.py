@@ -18,7 +18,7 @@ MAX_ROADS = 10_000
 """Search bound; real maps have a few hundred roads."""
 
 
-def _exits(roads: RoadNetwork, road_id: str, direction: int) -> set[tuple[str, int]]:
+def exits(roads: RoadNetwork, road_id: str, direction: int) -> set[tuple[str, int]]:
     """(road, direction) pairs reachable by leaving ``road_id`` travelling ``direction``."""
     end = ContactPoint.END if direction > 0 else ContactPoint.START
     s = roads.road_length(road_id) if direction > 0 else 0.0
@@ -61,7 +61,7 @@ def plan(
                 path.append(back)
                 back = previous[back]
             return path[::-1]
-        for nxt in sorted(_exits(roads, *node)):
+        for nxt in sorted(exits(roads, *node)):
             total = cost + roads.road_length(nxt[0])
             if total < best.get(nxt, math.inf):
                 best[nxt] = total

@@ -34,6 +34,7 @@ class World:
         "environments",
         "hitches",
         "ignored",
+        "monitors",
         "parameters",
         "rng",
         "roads",
@@ -70,6 +71,8 @@ class World:
         """Traffic signal states by signal name (as TrafficSignalStateActions and the
         controllers' phases set them)."""
         self.signal_controllers = SignalControllers(controllers, self.signals)
+        self.monitors: dict[str, bool] = {}
+        """1.3 monitors by name: declared values, then as SetMonitorActions set them."""
         self.environments: list[tuple[float, model.Environment]] = []
         """Environments set by EnvironmentActions, with the time they were set (not rendered:
         recorded for the result)."""

@@ -28,6 +28,7 @@ from simtest_operator.openscenario.model.actions import (
     LongitudinalDisplacement,
     LongitudinalDistanceAction,
     PrivateAction,
+    RandomRouteAction,
     RelativeFinalSpeed,
     RelativeTargetLane,
     RelativeTargetLaneOffset,
@@ -81,6 +82,7 @@ from simtest_operator.openscenario.model.entities import (
     Performance,
     ScenarioObject,
 )
+from simtest_operator.openscenario.model.monitors import MonitorDeclaration, SetMonitorAction
 from simtest_operator.openscenario.model.positions import (
     Clothoid,
     ClothoidSpline,
@@ -174,6 +176,10 @@ from simtest_operator.openscenario.model.trigger_conditions import (
     ValueCondition,
     VariableCondition,
 )
+from simtest_operator.openscenario.model.value_conditions import (
+    TimeOfDayCondition,
+    UserDefinedValueCondition,
+)
 
 __all__ = [
     "AbsoluteFinalSpeed",
@@ -242,6 +248,7 @@ __all__ = [
     "ManeuverGroup",
     "ModifyRule",
     "ModifyValueAction",
+    "MonitorDeclaration",
     "Nurbs",
     "ObjectController",
     "OffRoadCondition",
@@ -258,6 +265,7 @@ __all__ = [
     "PrivateAction",
     "PrivateInit",
     "Property",
+    "RandomRouteAction",
     "ReachPositionCondition",
     "ReferenceContext",
     "RelativeAngleCondition",
@@ -282,6 +290,7 @@ __all__ = [
     "Rule",
     "Scenario",
     "ScenarioObject",
+    "SetMonitorAction",
     "SetValueAction",
     "Shape",
     "SimulationTimeCondition",
@@ -301,6 +310,7 @@ __all__ = [
     "SynchronizeAction",
     "TeleportAction",
     "TimeHeadwayCondition",
+    "TimeOfDayCondition",
     "TimeToCollisionCondition",
     "Timing",
     "TrafficAction",
@@ -322,6 +332,7 @@ __all__ = [
     "Trigger",
     "TriggeringEntitiesRule",
     "Unsupported",
+    "UserDefinedValueCondition",
     "ValueCondition",
     "ValueScope",
     "VariableCondition",

@@ -11,6 +11,7 @@ from __future__ import annotations
 import dataclasses
 import enum
 
+from simtest_operator.openscenario.model import monitors
 from simtest_operator.openscenario.model.common import (
     CoordinateSystem,
     ReferenceContext,
@@ -340,6 +341,13 @@ class SynchronizeAction:
     line: int | None = None
 
 
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class RandomRouteAction:
+    """Follow a random route from where the entity is (1.3, no attributes)."""
+
+    line: int | None = None
+
+
 PrivateAction = (
     TeleportAction
     | SpeedAction
@@ -349,6 +357,7 @@ PrivateAction = (
     | LaneOffsetAction
     | LateralDistanceAction
     | AssignRouteAction
+    | RandomRouteAction
     | AcquirePositionAction
     | FollowTrajectoryAction
     | SynchronizeAction
@@ -358,7 +367,7 @@ PrivateAction = (
     | IgnoredAction
     | Unsupported
 )
-"""Private actions; OverrideControllerValue and RandomRoute actions are Unsupported."""
+"""Private actions; OverrideControllerValue actions with an active value are Unsupported."""
 
 GlobalAction = (
     SetValueAction
@@ -369,11 +378,11 @@ GlobalAction = (
     | AddEntityAction
     | DeleteEntityAction
     | EnvironmentAction
+    | monitors.SetMonitorAction
     | IgnoredAction
     | Unsupported
 )
-"""Global actions; traffic signal controller, TrafficArea, SetMonitor and UserDefined actions are
-Unsupported."""
+"""Global actions; TrafficArea actions are Unsupported, UserDefined ones IgnoredActions."""
 
 AnyAction = PrivateAction | GlobalAction
 

@@ -16,6 +16,7 @@ from simtest_operator.openscenario.deviations import Deviation
 from simtest_operator.openscenario.model.actions import Action, GlobalAction, PrivateAction
 from simtest_operator.openscenario.model.common import ParameterDeclaration, Unsupported
 from simtest_operator.openscenario.model.entities import ScenarioObject
+from simtest_operator.openscenario.model.monitors import MonitorDeclaration
 from simtest_operator.openscenario.model.trigger_conditions import Criterion, Trigger
 
 
@@ -184,6 +185,8 @@ class Scenario:
     """Global parameters with final values (declarations, then caller overrides)."""
     variables: tuple[ParameterDeclaration, ...]
     """1.2+ VariableDeclarations with initial values."""
+    monitors: tuple[MonitorDeclaration, ...] = ()
+    """1.3 MonitorDeclarations with initial values (see :mod:`.monitors`)."""
     road_network: RoadNetwork
     entities: tuple[ScenarioObject, ...]
     storyboard: Storyboard

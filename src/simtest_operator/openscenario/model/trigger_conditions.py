@@ -10,6 +10,7 @@ from __future__ import annotations
 import dataclasses
 import enum
 
+from simtest_operator.openscenario.model import value_conditions
 from simtest_operator.openscenario.model.common import (
     AngleType,
     CoordinateSystem,
@@ -336,9 +337,10 @@ ValueCondition = (
     | VariableCondition
     | TrafficSignalCondition
     | TrafficSignalControllerCondition
+    | value_conditions.TimeOfDayCondition
+    | value_conditions.UserDefinedValueCondition
     | Unsupported
 )
-"""TimeOfDay and UserDefinedValue conditions arrive as :class:`Unsupported`."""
 
 
 # --- triggers ---------------------------------------------------------------------------------

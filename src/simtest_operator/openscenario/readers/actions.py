@@ -8,10 +8,14 @@ from simtest_operator.openscenario import reading
 from simtest_operator.openscenario.model import actions as a
 from simtest_operator.openscenario.model import common as m
 from simtest_operator.openscenario.model import controls as ctl
-from simtest_operator.openscenario.readers import controllers, positions, traffic, world_actions
+from simtest_operator.openscenario.readers import (
+    controllers,
+    monitors,
+    positions,
+    traffic,
+    world_actions,
+)
 from simtest_operator.xmlsafe import Element
-
-_GLOBAL_UNSUPPORTED = {"SetMonitorAction": "monitors are not supported"}
 
 
 def storyboard_action(el: Element, ctx: reading.Context) -> a.Action:
@@ -31,14 +35,27 @@ def storyboard_action(el: Element, ctx: reading.Context) -> a.Action:
         body = private(chosen, ctx)
     elif chosen.tag == "GlobalAction":
         body = global_(chosen, ctx)
+    elif chosen.tag == "UserDefinedAction":
+        body = user_defined(chosen, ctx)
     else:
-        body = ctx.unsupported(chosen, "user-defined actions are not supported")
+        body = ctx.unsupported(chosen, f"unknown action {chosen.tag}")
     return a.Action(
         name=ctx.string(el, "name"),
         body=body,
         is_private=chosen.tag == "PrivateAction",
         line=el.sourceline,
     )
+
+
+def user_defined(el: Element, ctx: reading.Context) -> ctl.IgnoredAction:
+    """A ``<UserDefinedAction>`` (a ``CustomCommandAction`` for the user's own tool): nothing in
+    the stand-in can run it, and nothing it does is visible to the scenario, so it completes at
+    once and is listed as ignored (``UserDefinedAction (type)``)."""
+    command = reading.child(el, "CustomCommandAction")
+    kind = ctx.opt_string(command, "type") if command is not None else None
+    label = f"UserDefinedAction ({kind})" if kind else "UserDefinedAction"
+    ctx.ignore(label)
+    return ctl.IgnoredAction(kind=label, line=el.sourceline)
 
 
 def _ignored(el: Element, ctx: reading.Context) -> ctl.IgnoredAction:
@@ -76,7 +93,6 @@ def global_(el: Element, ctx: reading.Context) -> a.GlobalAction:
         ctx.choice(el),
         _GLOBAL_READERS,
         unknown="unknown global action",
-        reasons=_GLOBAL_UNSUPPORTED,
     )
 
 
@@ -385,6 +401,7 @@ _ROUTING_READERS: Mapping[str, _PrivateReader] = {
     "AssignRouteAction": _assign_route,
     "AcquirePositionAction": _acquire_position,
     "FollowTrajectoryAction": _follow_trajectory,
+    "RandomRouteAction": lambda el, ctx: a.RandomRouteAction(line=el.sourceline),
 }
 
 _PRIVATE_READERS: Mapping[str, _PrivateReader] = {
@@ -395,7 +412,6 @@ _PRIVATE_READERS: Mapping[str, _PrivateReader] = {
     "RoutingAction": _one_of(
         _ROUTING_READERS,
         unknown="unknown routing action",
-        reasons={"RandomRouteAction": "random routes are not supported"},
     ),
     "SynchronizeAction": _synchronize,
     "ActivateControllerAction": controllers.activate,
@@ -412,5 +428,6 @@ _GLOBAL_READERS: Mapping[str, Callable[[Element, reading.Context], a.GlobalActio
     "VariableAction": _value_action,
     "TrafficAction": traffic.traffic_action,
     "InfrastructureAction": _infrastructure,
+    "SetMonitorAction": monitors.set_monitor,
 }
-"""Supported ``<GlobalAction>`` children by tag (others: :data:`_GLOBAL_UNSUPPORTED`)."""
+"""Supported ``<GlobalAction>`` children by tag (any other is unsupported)."""

@@ -31,18 +31,22 @@ def _init(el: Element, ctx: reading.Context) -> s.Init:
         if node.tag == "GlobalAction":
             global_actions.append(actions.global_(node, ctx))
         elif node.tag == "Private":
-            private.append(
+            # A selection's Private applies to each member (read once per member).
+            private.extend(
                 s.PrivateInit(
-                    entity_ref=ctx.string(node, "entityRef"),
+                    entity_ref=ref,
                     actions=tuple(
                         actions.private(pa, ctx)
                         for pa in reading.all_children(node, "PrivateAction")
                     ),
                     line=node.sourceline,
                 )
+                for ref in ctx.entity_refs([ctx.string(node, "entityRef")])
             )
+        elif node.tag == "UserDefinedAction":
+            global_actions.append(actions.user_defined(node, ctx))
         else:
-            global_actions.append(ctx.unsupported(node, "user-defined actions are not supported"))
+            global_actions.append(ctx.unsupported(node, f"unknown Init action {node.tag}"))
     return s.Init(global_actions=tuple(global_actions), private=tuple(private), line=el.sourceline)
 
 
@@ -83,7 +87,7 @@ def _maneuver_group(el: Element, ctx: reading.Context) -> s.ManeuverGroup:
         maximum_execution_count=ctx.integer(el, "maximumExecutionCount"),
         actors=s.Actors(
             select_triggering_entities=ctx.boolean(actors_el, "selectTriggeringEntities"),
-            entity_refs=tuple(
+            entity_refs=ctx.entity_refs(
                 ctx.string(ref, "entityRef") for ref in reading.all_children(actors_el, "EntityRef")
             ),
             line=actors_el.sourceline,

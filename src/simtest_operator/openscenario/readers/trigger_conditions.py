@@ -8,17 +8,13 @@ from typing import Protocol
 from simtest_operator.openscenario import reading
 from simtest_operator.openscenario.model import common as m
 from simtest_operator.openscenario.model import trigger_conditions as c
-from simtest_operator.openscenario.readers import positions
+from simtest_operator.openscenario.readers import positions, value_conditions
 from simtest_operator.xmlsafe import Element
 
 _EntityReader = Callable[[Element, reading.Context], c.EntityCondition]
 _ValueReader = Callable[[Element, reading.Context], c.ValueCondition]
 
 _DISTANCE_ALIASES = {"cartesianDistance": m.RelativeDistanceType.EUCLIDEAN}
-_UNSUPPORTED_VALUE = {
-    "TimeOfDayCondition": "time of day is not simulated",
-    "UserDefinedValueCondition": "user-defined values have no source in the stand-in",
-}
 
 
 def trigger(el: Element | None, ctx: reading.Context) -> c.Trigger | None:
@@ -109,7 +105,7 @@ def condition(el: Element, ctx: reading.Context) -> c.Condition:
     if chosen.tag == "ByEntityCondition":
         triggering = ctx.require(chosen, "TriggeringEntities")
         body = c.ByEntity(
-            triggering_entities=tuple(
+            triggering_entities=ctx.entity_refs(
                 ctx.string(ref, "entityRef")
                 for ref in reading.all_children(triggering, "EntityRef")
             ),
@@ -339,9 +335,7 @@ def _time_to_collision(el: Element, ctx: reading.Context) -> c.TimeToCollisionCo
 
 def value_condition(el: Element, ctx: reading.Context) -> c.ValueCondition:
     """Read the chosen child of ``<ByValueCondition>``."""
-    return ctx.by_tag(
-        el, _VALUE_READERS, unknown="unknown value condition", reasons=_UNSUPPORTED_VALUE
-    )
+    return ctx.by_tag(el, _VALUE_READERS, unknown="unknown value condition")
 
 
 def _simulation_time(el: Element, ctx: reading.Context) -> c.SimulationTimeCondition:
@@ -422,5 +416,7 @@ _VALUE_READERS: Mapping[str, _ValueReader] = {
     "VariableCondition": _variable,
     "TrafficSignalCondition": _traffic_signal,
     "TrafficSignalControllerCondition": _traffic_signal_controller,
+    "TimeOfDayCondition": value_conditions.time_of_day,
+    "UserDefinedValueCondition": value_conditions.user_defined_value,
 }
-"""Supported ``<ByValueCondition>`` children by tag (others: :data:`_UNSUPPORTED_VALUE`)."""
+"""Supported ``<ByValueCondition>`` children by tag (any other is unsupported)."""
