@@ -70,6 +70,7 @@ def compare(relative: str, tmp_path: Path) -> references.Comparison:
         "relative_lane_change.xosc",
         "instant_lane_change.xosc",
         "relative_clearance_freeSpace.xosc",
+        "relative_clearance_oppositLane.xosc",  # one lane of the range is enough for the area
         "multi_lane_changes.xosc",
         "lateral_maneuvers_test.xosc",
         "relative_lane_offset.xosc",
