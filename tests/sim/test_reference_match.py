@@ -154,3 +154,14 @@ def test_a_lane_change_into_an_exit_lane_takes_the_exit(tmp_path: Path) -> None:
     comparison = compare("highway_exit.xosc", tmp_path)
     assert comparison.match, comparison
     assert all(e.maximum < 0.05 for e in comparison.entities), comparison
+
+
+def test_a_file_the_reference_player_failed_on_is_a_declared_difference() -> None:
+    # direction_dimension_demo names its road relative to another folder: esmini stopped with
+    # rc 255 and recorded nothing, while the run here finds the road; nothing to compare
+    ref = references.load(CORPUS / "esmini-unittest-reference.json")
+    key = references.find(ref, UNITTEST / "direction_dimension_demo.xosc")
+    assert key is not None
+    comparison = references.compare(key, ref[key], samples={}, end_time=60.0)
+    assert comparison.intended == ("reference player failed (rc 255)",)
+    assert not comparison.match
