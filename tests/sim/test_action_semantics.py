@@ -214,6 +214,26 @@ def test_relative_target_speed_not_continuous_is_sampled_at_the_start() -> None:
     assert bench.actor("Car").speed == pytest.approx(12.0)
 
 
+def test_a_speed_change_ends_in_the_step_that_completes_its_duration() -> None:
+    # 10 -> 15 m/s at 10 m/s² lasts 0.5 s: ten steps of 0.05 s add up to 0.49999999999999994 s,
+    # and esmini (within its SMALL_NUMBER) ends the action in the tenth step, not the eleventh,
+    # so an event waiting for its end starts a step earlier (repeated_relative_speed: 0.69 m)
+    bench = Bench("Car")
+    bench.start("Car", teleport(lane(-1, 100.0)))
+    bench.start("Car", speed(10.0))
+    dynamics = model.TransitionDynamics(
+        shape=model.DynamicsShape.LINEAR, dimension=model.DynamicsDimension.RATE, value=10.0
+    )
+    bench.start(
+        "Car", model.SpeedAction(dynamics=dynamics, target=model.AbsoluteTargetSpeed(value=15.0))
+    )
+    bench.step(9)
+    assert bench.dispatcher.runs(bench.actor("Car"))
+    bench.step(1)
+    assert bench.actor("Car").speed == 15.0
+    assert not bench.dispatcher.runs(bench.actor("Car"))
+
+
 def test_a_lane_change_rate_is_its_peak_lateral_speed() -> None:
     # esmini (TransitionDynamics, dimension rate): a sinusoidal change of 3.5 m at 2 m/s
     # lasts pi/2 * 3.5 / 2 = 2.75 s (not 3.5 / 2 = 1.75 s: the rate is not the mean).

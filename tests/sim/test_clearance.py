@@ -1,5 +1,5 @@
-"""RelativeClearanceCondition: the lanes of the range must exist where the entity is (and run
-its way unless opposite lanes count), and no other entity may be in them within the distances
+"""RelativeClearanceCondition: a lane of the range must exist where the entity is (and run its
+way unless opposite lanes count), and no other entity may be in them within the distances
 ahead and behind (reference points, or bounding boxes with free space)."""
 
 from __future__ import annotations
@@ -50,3 +50,14 @@ def test_an_entity_in_the_lanes_within_the_distances_blocks() -> None:
 def test_entities_in_other_lanes_do_not_block() -> None:
     b = bench(-1, 110.0)  # same lane, not in the range -1..-1
     assert is_clear(b.world, b.actor("Car"), clearance(-1, -1))
+
+
+def test_a_range_reaching_past_the_road_needs_one_of_its_lanes() -> None:
+    # esmini's RelativeClearanceCondition: the area exists when any lane of the range does
+    # (relative_clearance_oppositLane: -1..3 from the right lane of a two-lane road is clear)
+    b = bench(-2, 500.0)
+    car = b.actor("Car")
+    assert is_clear(b.world, car, clearance(-2, -1))  # -1 (lane -2) exists, -2 does not
+    assert is_clear(b.world, car, clearance(-1, 3))  # own lane and lane -2
+    assert not is_clear(b.world, car, clearance(-4, -2))  # none of them
+    assert not is_clear(b.world, car, clearance(1, 2))  # only oncoming lanes

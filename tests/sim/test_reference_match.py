@@ -70,11 +70,13 @@ def compare(relative: str, tmp_path: Path) -> references.Comparison:
         "relative_lane_change.xosc",
         "instant_lane_change.xosc",
         "relative_clearance_freeSpace.xosc",
+        "relative_clearance_oppositLane.xosc",  # one lane of the range is enough for the area
         "multi_lane_changes.xosc",
         "lateral_maneuvers_test.xosc",
         "relative_lane_offset.xosc",
         "traj_use_cases.xosc",
         "trajectory_speed.xosc",
+        "follow_trajectory_reverse.xosc",  # an Init path moves before the story's speed step
         "trajectory_heading.xosc",
         "traj_heading_and_interpolation.xosc",
         "xosc/cut-in_cr.xosc",  # ends 10 s after a "continuous" lane offset ended (Event::Action)
@@ -128,16 +130,11 @@ def test_relative_positions_past_a_junction_take_the_placed_entitys_route(tmp_pa
     # targets placed 100 m ahead of (or 70 m behind) the ego across a junction take the exit of
     # their own route, or of the ego's when they have none (was: the first declared connection,
     # 17-68 m off); a lane offset along a route is to the left of the route's direction.
-    # Target_going_left is not held: esmini counts its dLane from the ego's side of the road.
+    # Target_going_left's dLane 1 applies after the move along its route: the lane left of the
+    # route's direction, facing that lane's traffic (was: moved along the shifted lane, 67 m off)
     comparison = compare("relative_pos_over_intersection.xosc", tmp_path)
-    worst = {e.name: e.maximum for e in comparison.entities}
-    for name in (
-        "Target_going_straight",
-        "Target_going_right",
-        "Target_going_along_Ego_route",
-        "Target_starting_behind_route",
-    ):
-        assert worst[name] < 0.05, comparison
+    assert comparison.match, comparison
+    assert all(e.maximum < 0.05 for e in comparison.entities), comparison
 
 
 def test_paths_are_reported_in_the_frame_of_the_opendrive_header_offset(tmp_path: Path) -> None:
@@ -157,3 +154,14 @@ def test_a_lane_change_into_an_exit_lane_takes_the_exit(tmp_path: Path) -> None:
     comparison = compare("highway_exit.xosc", tmp_path)
     assert comparison.match, comparison
     assert all(e.maximum < 0.05 for e in comparison.entities), comparison
+
+
+def test_a_file_the_reference_player_failed_on_is_a_declared_difference() -> None:
+    # direction_dimension_demo names its road relative to another folder: esmini stopped with
+    # rc 255 and recorded nothing, while the run here finds the road; nothing to compare
+    ref = references.load(CORPUS / "esmini-unittest-reference.json")
+    key = references.find(ref, UNITTEST / "direction_dimension_demo.xosc")
+    assert key is not None
+    comparison = references.compare(key, ref[key], samples={}, end_time=60.0)
+    assert comparison.intended == ("reference player failed (rc 255)",)
+    assert not comparison.match

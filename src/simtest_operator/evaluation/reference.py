@@ -114,6 +114,11 @@ def compare(
     ):
         end_difference = 0.0
         labels.append(f"neither ended within {time_limit:g} s")
+    rc = entry.get("rc")
+    if rc not in (None, 0, "timeout"):
+        # the reference player failed on the file (a path only valid from another folder):
+        # there is nothing to match, and running it is the intended difference
+        labels.append(f"reference player failed (rc {rc})")
     errors: list[EntityError] = []
     missing: list[str] = []
     for name, ref_samples in (entry.get("samples_1hz") or {}).items():

@@ -1,9 +1,11 @@
 """RelativeClearanceCondition: is an area of lanes around an entity free of other entities?
 
 The area is given in lanes relative to the entity's lane (0 its own lane, positive to its left
-in its driving direction) and in metres along the road ahead and behind it. A lane of the range
-that does not exist where the entity is, or runs the other way without ``oppositeLanes``, is not
-clear (the reference player waits on a 2+1 road until the extra lane begins). Another entity is
+in its driving direction) and in metres along the road ahead and behind it. The area exists when
+at least one lane of the range exists where the entity is (and runs the entity's way unless
+``oppositeLanes``); where none does, it is not clear (the reference player waits on a 2+1 road
+until the extra lane begins, and takes a range reaching past the road's edge as clear when one of
+its lanes is there, as esmini's RelativeClearanceCondition does). Another entity is
 in the area when it is on the same road, in one of the lanes, and its reference point (free
 space: its bounding box) lies within the distances. Entities on other roads are not in the area.
 """
@@ -79,8 +81,8 @@ def _lanes_available(
     for lo, hi in condition.lane_ranges:
         for relative in range(min(lo, hi), max(lo, hi) + 1):
             index = here + relative
-            if not 0 <= index < len(ordered):
-                return False
-            if ordered[index] * own_lane < 0 and not condition.opposite_lanes:
-                return False
-    return True
+            if 0 <= index < len(ordered) and (
+                ordered[index] * own_lane > 0 or condition.opposite_lanes
+            ):
+                return True
+    return not condition.lane_ranges

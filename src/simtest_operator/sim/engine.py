@@ -28,6 +28,7 @@ from simtest_operator.sim.actors import Actor, Domain, Mode
 from simtest_operator.sim.backends import ActorSpec, Backend, BackendConfig
 from simtest_operator.sim.condition_checks import Conditions
 from simtest_operator.sim.dispatch import Dispatcher
+from simtest_operator.sim.runs import Run
 from simtest_operator.sim.storyboard import Storyboard
 from simtest_operator.sim.sut import Pilot, PilotView
 from simtest_operator.sim.traffic import Traffic
@@ -67,6 +68,7 @@ class Simulation:
         "_conditions",
         "_dispatcher",
         "_external_ids",
+        "_init_runs",
         "_pilot",
         "_scenario",
         "_snapshot",
@@ -135,6 +137,11 @@ class Simulation:
             scenario_runner=scenario_runner,
         )
         self._steps = 0
+        self._init_runs: list[Run] = []
+        """The Init actions' runs in declaration order: the reference player steps actions in
+        storyboard order (Init first, as declared, then the stories), so a trajectory declared
+        before the longitudinal action driving its speed moves the entity before that action
+        changes the speed in the same step."""
         self._external_ids: dict[str, int] = {}
         self._sut_engaged = False
         self._snapshot = WorldSnapshot(time=0.0, entities=())
@@ -210,7 +217,7 @@ class Simulation:
         for private in init.private:
             actor = world.actor(private.entity_ref)
             for body in private.actions:
-                self._dispatcher.start_private(actor, body)
+                self._init_runs.append(self._dispatcher.start_private(actor, body))
         for global_action in init.global_actions:
             self._dispatcher.start_global(global_action)
         self._initial_takeover()
@@ -333,6 +340,15 @@ class Simulation:
         driver = actor.driver
         if driver is not None and driver.follows_limits:
             carla.keep_to_limit(world, actor, driver)
+        path_first = (
+            isinstance(lateral, PathRun)
+            and longitudinal is not None
+            and lateral is not longitudinal
+            and self._init_index(lateral) < self._init_index(longitudinal)
+        )
+        if path_first:
+            assert lateral is not None
+            lateral.step(world, dt)
         if longitudinal is not None:
             longitudinal.step(world, dt)
         elif driver is not None and self._pilot is not None and actor.name == self.ego:
@@ -347,7 +363,7 @@ class Simulation:
             ahead = perception.leader(world, actor, self._sut.sensor_range)
             command = driver.command(speed=actor.speed, leader=ahead)
             actor.speed = max(actor.speed + command.acceleration * dt, 0.0)
-        if lateral is not None and lateral is not longitudinal:
+        if lateral is not None and lateral is not longitudinal and not path_first:
             lateral.step(world, dt)
         elif (
             lateral is None
@@ -380,6 +396,13 @@ class Simulation:
         motion.move(world, actor, dt, before=before, start=start[:2], placed=placed)
         actor.acceleration = (actor.speed - speed_before) / dt if dt > 0 else 0.0
         actor.measure_motion(start, dt, teleported=actor.name in self._dispatcher.teleported)
+
+    def _init_index(self, run: Run) -> int:
+        """Where ``run`` is in the Init actions (after all of them if a story started it)."""
+        for index, other in enumerate(self._init_runs):
+            if other is run:
+                return index
+        return len(self._init_runs)
 
     def _sync(self) -> WorldSnapshot:
         """Push poses to the backend, step it, and build the snapshot."""

@@ -208,16 +208,18 @@ def _relative_lane(
         # offset is to the left of the route's direction (esmini's route positions); without
         # one it keeps its side of the reference line, which flips where the roads meet head on.
         route = _route_through(world, mover, position.entity_ref)
-        location = roads.advance(road_id, s, lane_id, target_s - s, prefer_roads=route)
+        location = roads.advance(
+            road_id, s, world.current_lane(ref), target_s - s, prefer_roads=route
+        )
         sense = location.direction * (1 if target_s >= s else -1)
         return placements.lane_placement(
             world,
             location.road_id,
-            location.lane_id,
+            placements.add_lanes(location.lane_id, position.d_lane * sense * direction),
             location.s,
             position.offset * (sense * direction if route else sense),
             orientation=position.orientation,
-            direction=sense * direction,
+            direction=None,
         )
     offset = position.offset
     beyond = placements.lane_beyond(world, road_id, target_s, lane_id)

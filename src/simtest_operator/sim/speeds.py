@@ -25,6 +25,11 @@ DEFAULT_ACCELERATION = 5.0
 """Acceleration (m/s^2) for speed-profile entries that give no time, without constraints or
 vehicle performance."""
 
+END_EPSILON = 1e-9
+"""Seconds by which a transition's elapsed time may fall short of its duration and still end:
+the sum of steps is a float (30 x 0.05 s < 1.5 s), and the reference player ends the action in
+the step that reaches the duration (within its SMALL_NUMBER), not one step later."""
+
 
 def target_speed(
     world: World, target: model.AbsoluteTargetSpeed | model.RelativeTargetSpeed
@@ -106,7 +111,7 @@ class SpeedRun(Run):
             self._track(target, dt)
             return
         self._elapsed += dt
-        if self._duration <= 0.0 or self._elapsed >= self._duration:
+        if self._duration <= 0.0 or self._elapsed >= self._duration - END_EPSILON:
             self.actor.speed = target
             self.finished = not self._continuous
             return
