@@ -15,10 +15,11 @@ import dataclasses
 import json
 import socket
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from types import TracebackType
 from typing import Any
 
+from simtest_operator.opendrive import TrafficControl
 from simtest_operator.sim.sut import Order, PilotView
 from simtest_operator.snapshots import EntityState
 from simtest_operator.sut import framing, messages
@@ -108,11 +109,12 @@ class RemotePilot:
         step_deadline: float,
         perception_range: float | None,
         map_reference: str = "map",
+        signals: Sequence[TrafficControl] = (),
     ) -> None:
         self._sock = sock
         self._deadline = step_deadline
         self._encoder = messages.SensorViewEncoder(
-            perception_range=perception_range, map_reference=map_reference
+            perception_range=perception_range, map_reference=map_reference, signals=signals
         )
         self._last_speed: float | None = None
         self._action_id = 0
