@@ -44,7 +44,13 @@ RED_THEN_GREEN = """
 
 
 def scenario(
-    *, control: str = cs.HERO_CONTROL, signals: str = "", start: float = 20.0, end: float = 25.0
+    *,
+    control: str = cs.HERO_CONTROL,
+    signals: str = "",
+    start: float = 20.0,
+    end: float = 25.0,
+    speed: float = 10.0,
+    adversary: str = "",
 ) -> str:
     criteria = cs.criteria("RunningRedLightTest", "RunningStopTest", distance=None)
     return f"""<?xml version="1.0" encoding="UTF-8"?>
@@ -55,7 +61,7 @@ def scenario(
   </ParameterDeclarations>
   <CatalogLocations/>
   <RoadNetwork><LogicFile filepath="crossing.xodr"/><SceneGraphFile filepath=""/>{signals}</RoadNetwork>
-  <Entities>{cs.vehicle("hero", "ego_vehicle")}
+  <Entities>{cs.vehicle("hero", "ego_vehicle")}{cs.vehicle("adversary", "simulation") if adversary else ""}
   </Entities>
   <Storyboard>
     <Init><Actions>
@@ -65,9 +71,9 @@ def scenario(
         </Position></TeleportAction></PrivateAction>
         <PrivateAction><LongitudinalAction><SpeedAction>
           <SpeedActionDynamics dynamicsShape="step" value="0" dynamicsDimension="time"/>
-          <SpeedActionTarget><AbsoluteTargetSpeed value="10"/></SpeedActionTarget>
+          <SpeedActionTarget><AbsoluteTargetSpeed value="{speed:g}"/></SpeedActionTarget>
         </SpeedAction></LongitudinalAction></PrivateAction>{control}
-      </Private>
+      </Private>{adversary}
     </Actions></Init>
     <Story name="Crossing">
       <Act name="Drive">
@@ -107,9 +113,12 @@ def run(tmp_path: Path, text: str, sut: SutConfig | None = None) -> scenario_exe
     return cs.run(path, sut=sut)
 
 
-def front_at(report: scenario_execution.RunReport, seconds: float) -> tuple[float, float]:
-    """The hero's front bumper (x = s on the avenue) and speed at the 1 Hz sample ``seconds``."""
-    for time, x, _, _, speed in report.samples["hero"]:
+def front_at(
+    report: scenario_execution.RunReport, seconds: float, entity: str = "hero"
+) -> tuple[float, float]:
+    """The front bumper (x = s on the avenue) and speed of ``entity`` at the 1 Hz sample
+    ``seconds``."""
+    for time, x, _, _, speed in report.samples[entity]:
         if time == pytest.approx(seconds):
             return x + FRONT, speed
     raise AssertionError(f"no sample at t={seconds}")
@@ -128,6 +137,27 @@ def test_the_hero_stops_at_red_and_goes_on_green(tmp_path: Path, control: str) -
     assert "RunningRedLightTest passed (passed traffic lights 1 time, never on red)" in (
         outcome.reason
     )
+
+
+AUTOPILOT_ADVERSARY = """
+      <Private entityRef="adversary">
+        <PrivateAction><TeleportAction><Position>
+          <LanePosition roadId="1" laneId="-2" s="20" offset="0"/>
+        </Position></TeleportAction></PrivateAction>
+        <PrivateAction><ActivateControllerAction longitudinal="true" lateral="true"/>
+        </PrivateAction>
+      </Private>"""
+
+
+def test_a_vehicle_on_carla_autopilot_stops_at_red_and_goes_on_green(tmp_path: Path) -> None:
+    # ScenarioRunner's ActivateControllerAction puts the adversary on CARLA's autopilot (8.33 m/s
+    # on a road without a speed limit); the hero stands still, scripted.
+    text = scenario(control="", speed=0.0, signals=RED_THEN_GREEN, adversary=AUTOPILOT_ADVERSARY)
+    report = run(tmp_path, text)
+    front, speed = front_at(report, 13.0, "adversary")  # (coming to rest: it started at 0)
+    assert LINE_S - STOP_MARGIN - 0.5 <= front < LINE_S
+    assert speed < 0.1
+    assert front_at(report, 20.0, "adversary")[0] > LINE_S + 10.0
 
 
 def test_braking_for_red_is_comfortable_and_late(tmp_path: Path) -> None:
