@@ -26,13 +26,12 @@ import operator
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from types import TracebackType
-from typing import BinaryIO
+from typing import TYPE_CHECKING, BinaryIO
 
 from mcap.writer import CompressionType, Writer
 
 from simtest_operator.errors import ResultsError
-from simtest_operator.opendrive import TrafficControl
-from simtest_operator.recording import descriptors, osiwire, signalwire
+from simtest_operator.recording import descriptors, osiwire
 from simtest_operator.snapshots import (
     BoundingBox,
     Discontinuity,
@@ -40,6 +39,10 @@ from simtest_operator.snapshots import (
     EntityState,
     WorldSnapshot,
 )
+
+if TYPE_CHECKING:  # the SUT processes read recordings without the road network (numpy)
+    from simtest_operator.opendrive import TrafficControl
+    from simtest_operator.recording import signalwire
 
 GROUND_TRUTH_TOPIC = "ground_truth"
 MAP_TOPIC = "ground_truth_map"
@@ -112,8 +115,12 @@ class Recorder:
         signals: Sequence[TrafficControl] = (),
     ) -> None:
         self.path = path
-        self._signals = signalwire.SignalWire(signals) if signals else None
+        self._signals: signalwire.SignalWire | None = None
         """The map's traffic lights and stop signs, written into every frame."""
+        if signals:
+            from simtest_operator.recording import signalwire
+
+            self._signals = signalwire.SignalWire(signals)
         self._map = (
             opendrive.decode("utf-8", "replace") if isinstance(opendrive, bytes) else opendrive
         )

@@ -17,14 +17,16 @@ import socket
 import time
 from collections.abc import Callable, Mapping, Sequence
 from types import TracebackType
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from simtest_operator.opendrive import TrafficControl
 from simtest_operator.sim.sut import Order, PilotView
 from simtest_operator.snapshots import EntityState
 from simtest_operator.sut import framing, messages
 from simtest_operator.sut.errors import SutDeadlineError, SutError, SutProtocolError
 from simtest_operator.sut.framing import Kind
+
+if TYPE_CHECKING:
+    from simtest_operator.opendrive import TrafficControl
 
 CONNECT_POLL = 0.02
 """Seconds between connection attempts while the SUT starts (readiness polling)."""

@@ -15,15 +15,17 @@ import socket
 import sys
 from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from simtest_operator.drivermodel import ExternalSut, Lifetime
-from simtest_operator.opendrive import TrafficControl
 from simtest_operator.settings import SUT_ENDPOINT
 from simtest_operator.sut import client
 from simtest_operator.sut.errors import SutError
 from simtest_operator.sut.output import files_said, take_files
 from simtest_operator.sut.processes import OUTPUT_TAIL, SutProcess, SutProcesses
+
+if TYPE_CHECKING:
+    from simtest_operator.opendrive import TrafficControl
 
 
 def free_port() -> int:

@@ -13,12 +13,16 @@ from __future__ import annotations
 import math
 import operator
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
-from simtest_operator.opendrive import TrafficControl
-from simtest_operator.recording import osiwire, signalwire
+from simtest_operator.recording import osiwire
 from simtest_operator.sim.sut import Order
 from simtest_operator.snapshots import EntityKind, EntityState, WorldSnapshot
 from simtest_operator.sut import protowire as pw
+
+if TYPE_CHECKING:  # a SUT process imports this without the road network (numpy)
+    from simtest_operator.opendrive import TrafficControl
+    from simtest_operator.recording import signalwire
 
 OSI_VERSION = osiwire.OSI_VERSION
 _VEHICLE_CLASSES = {
@@ -85,8 +89,12 @@ class SensorViewEncoder:
         signals: Sequence[TrafficControl] = (),
     ) -> None:
         self._range = perception_range
-        self._signals = signalwire.SignalWire(signals) if signals else None
+        self._signals: signalwire.SignalWire | None = None
         """The map's traffic lights (with their states) and stop signs, in every SensorView."""
+        if signals:
+            from simtest_operator.recording import signalwire
+
+            self._signals = signalwire.SignalWire(signals)
         self._tail = osiwire.ground_truth_tail(country_code=276, map_reference=map_reference)
         self._signature: tuple[tuple[object, ...], ...] | None = None
         self._frame = osiwire.frame_layout((), host_id=None, tail=self._tail)
