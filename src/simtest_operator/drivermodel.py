@@ -21,7 +21,7 @@ from __future__ import annotations
 import dataclasses
 import enum
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 
@@ -70,6 +70,9 @@ class SutConfig:
     """AEB braking (m/s^2)."""
     sensor_range: float = 200.0
     """How far ahead (m) the model sees other road users."""
+    traffic_signals: bool = True
+    """Obey the map's traffic lights and stop signs (red: stop at the line, yellow: stop if it
+    can comfortably, stop sign: stand still at the line, then go); off: drive through them."""
     external: ExternalSut | None = None
     """Where an external SUT runs; None drives the ego with the in-process model above."""
 
@@ -168,6 +171,46 @@ class Leader:
     """Its speed along the ego's heading (m/s)."""
 
 
+class Aspect(enum.StrEnum):
+    """What a traffic light shows, as far as a driver cares."""
+
+    RED = "red"
+    YELLOW = "yellow"
+    GREEN = "green"
+    UNKNOWN = "unknown"
+    """Off, flashing, or never set: the light does not regulate (go)."""
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class SignalAhead:
+    """A stop line ahead in the driver's path: a traffic light's or a stop sign's."""
+
+    key: str
+    """Which signal (the OpenDRIVE id): a stop sign is served once per approach."""
+    distance: float
+    """Metres from the front bumper to the line along the path."""
+    stop_sign: bool = False
+    aspect: Aspect = Aspect.UNKNOWN
+    """The light's aspect (stop signs: unused)."""
+
+
+STOP_MARGIN = 0.5
+"""Metres before the line where the front bumper comes to rest."""
+STOP_HOLD = 1.5
+"""Metres of gap to that point within which a stopped vehicle holds instead of creeping on;
+a standstill that near the line serves a stop sign."""
+STANDSTILL = 0.1
+"""m/s below which a vehicle stands still at a stop sign (ScenarioRunner's RunningStopTest)."""
+
+
+def signal_horizon(speed: float, config: SutConfig) -> float:
+    """How far ahead (m) stop lines matter at ``speed``: the comfortable stopping distance,
+    plus a few seconds of travel and a margin (a light further on needs no braking yet)."""
+    v = max(speed, 0.0)
+    reach = v * v / (2.0 * config.comfortable_deceleration) + 3.0 * v + 30.0
+    return min(reach, config.sensor_range)
+
+
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
 class Command:
     """What the driver model wants this step."""
@@ -176,10 +219,25 @@ class Command:
     aeb_active: bool
 
 
+def _stopping(speed: float, gap: float, dt: float, comfortable: float) -> float:
+    """Acceleration that stops within ``gap`` metres: none (inf) while cruising on one more
+    step would still leave room to stop at ``comfortable`` deceleration, then the constant
+    deceleration that ends exactly there (about ``comfortable``: braking starts as late as
+    comfort allows, not with IDM's early, gentle approach); held still once there."""
+    if gap <= STOP_HOLD and speed < STANDSTILL:
+        return -comfortable
+    if gap <= 0.0:
+        return -math.inf
+    room = gap - speed * dt
+    if room > 0.0 and speed * speed < 2.0 * comfortable * room:
+        return math.inf
+    return -speed * speed / (2.0 * gap)
+
+
 class DriverModel:
     """Longitudinal decision of the SUT for one ego, with AEB latch state."""
 
-    __slots__ = ("_aeb_latched", "config", "follows_limits", "set_speed")
+    __slots__ = ("_aeb_latched", "_served", "_yellow", "config", "follows_limits", "set_speed")
 
     def __init__(self, config: SutConfig, *, set_speed: float) -> None:
         self.config = config
@@ -188,9 +246,21 @@ class DriverModel:
         self.follows_limits = False
         """Set for CARLA's autopilot: the road's speed limit is the set speed, not requests."""
         self._aeb_latched = False
+        self._served: set[str] = set()
+        """Stop signs stood at on the current approach (go on through them)."""
+        self._yellow: dict[str, bool] = {}
+        """Per light seen yellow: whether the driver decided to stop (kept while yellow)."""
 
-    def command(self, *, speed: float, leader: Leader | None) -> Command:
-        """Acceleration for this step given the ego speed and the perceived leader."""
+    def command(
+        self,
+        *,
+        speed: float,
+        leader: Leader | None,
+        signals: Sequence[SignalAhead] = (),
+        dt: float = 0.0,
+    ) -> Command:
+        """Acceleration for this step given the ego speed, the perceived leader and the stop
+        lines ahead (``dt``: the step, for braking that starts in time)."""
         cfg = self.config
         if self.set_speed > 0.0:
             free = cfg.max_acceleration * (1.0 - (max(speed, 0.0) / self.set_speed) ** IDM_DELTA)
@@ -208,11 +278,49 @@ class DriverModel:
                 / (2.0 * math.sqrt(cfg.max_acceleration * cfg.comfortable_deceleration)),
             )
             acceleration = free - cfg.max_acceleration * (wanted / max(leader.gap, 0.1)) ** 2
+        if signals or self._served or self._yellow:
+            acceleration = min(acceleration, self._obey(speed, signals, dt))
         acceleration = max(acceleration, -cfg.max_deceleration)
         aeb = self._aeb(speed=speed, leader=leader)
         if aeb:
             acceleration = min(acceleration, -cfg.aeb_deceleration)
         return Command(acceleration=acceleration, aeb_active=aeb)
+
+    def _obey(self, speed: float, signals: Sequence[SignalAhead], dt: float) -> float:
+        """The most acceleration the stop lines ahead allow (inf: no limit). Red: stop before
+        the line unless even full braking cannot any more (then it is committed: go, not stop
+        in the junction); yellow: the dilemma rule, decided when first seen yellow: stop if
+        comfortable braking can, else go; a stop sign: stop, then go once stood still near
+        its line; green or unknown: go."""
+        cfg = self.config
+        seen = {signal.key for signal in signals}
+        self._served &= seen
+        self._yellow = {key: stop for key, stop in self._yellow.items() if key in seen}
+        limit = math.inf
+        v = max(speed, 0.0)
+        for signal in sorted(signals, key=lambda signal: signal.distance):
+            gap = signal.distance - STOP_MARGIN
+            if signal.stop_sign:
+                if signal.key in self._served:
+                    continue
+                if v < STANDSTILL and gap <= STOP_HOLD:
+                    self._served.add(signal.key)
+                    continue
+            elif signal.aspect is Aspect.YELLOW:
+                if signal.key not in self._yellow:
+                    needed = v * v / (2.0 * max(signal.distance, 1e-6))
+                    self._yellow[signal.key] = needed <= cfg.comfortable_deceleration
+                if not self._yellow[signal.key]:
+                    continue
+            elif signal.aspect is Aspect.RED:
+                self._yellow.pop(signal.key, None)
+                if v * v > 2.0 * cfg.max_deceleration * max(signal.distance, 0.0):
+                    continue
+            else:
+                self._yellow.pop(signal.key, None)
+                continue
+            limit = min(limit, _stopping(v, gap, dt, cfg.comfortable_deceleration))
+        return limit
 
     def _aeb(self, *, speed: float, leader: Leader | None) -> bool:
         cfg = self.config

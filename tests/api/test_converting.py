@@ -103,7 +103,7 @@ def test_criteria_overrides_in_order() -> None:
 def test_sut_simulation_and_pins() -> None:
     environment = spec(environment={
         "sut": {"name": "acc", "version": "2.0", "driverModel": {
-            "desiredSpeed": 30, "timeHeadway": 2.0, "acc": False,
+            "desiredSpeed": 30, "timeHeadway": 2.0, "acc": False, "trafficSignals": False,
             "aeb": {"enabled": False, "ttcThreshold": 2.5, "deceleration": 6}}},
         "simulator": {"stepLength": 0.1, "seed": 7, "recordHz": 20},
     }).environment  # fmt: skip
@@ -112,6 +112,8 @@ def test_sut_simulation_and_pins() -> None:
         "acc", "2.0", 30.0, 2.0, False,
     )  # fmt: skip
     assert (sut.aeb, sut.aeb_ttc_threshold, sut.aeb_deceleration) == (False, 2.5, 6.0)
+    assert sut.traffic_signals is False
+    assert converting.sut(type(environment.sut).model_validate({})).traffic_signals is True
     simulation = converting.simulation(environment.simulator)
     assert (simulation.step_length, simulation.seed, simulation.record_hz) == (0.1, 7, 20.0)
     pinned = PinnedScenario(id="a#1", source="file:///a", sha256="b" * 64, overrides={"x": "1"})

@@ -114,6 +114,7 @@ def sut(spec: environment.SutConfig) -> SutConfig:
         max_deceleration=model.max_deceleration,
         acc=model.acc,
         lane_keeping=model.lane_keeping,
+        traffic_signals=model.traffic_signals,
         aeb=model.aeb.enabled,
         aeb_ttc_threshold=model.aeb.ttc_threshold,
         aeb_deceleration=model.aeb.deceleration,

@@ -26,6 +26,7 @@ import dataclasses
 import math
 from collections.abc import Sequence
 
+from simtest_operator import opendrive
 from simtest_operator.opendrive import Control, TrafficControl
 from simtest_operator.snapshots import EntityState
 
@@ -38,8 +39,6 @@ STOP_BOX_SHARE = 0.9
 """CARLA's stop box is as long as 90 % of the lane width, ending at the stop line."""
 TAIL = 1.0
 """Metres behind the ego's centre of the point that must not pass a red light's line."""
-POSITION_MATCH = 2.0
-"""Metres within which ``pos=x,y`` names a light (ScenarioRunner's tolerance)."""
 SAME_APPROACH = 10.0
 """Metres within which the lines of one signal count as one crossing: CARLA puts a reference in
 each junction road a lane continues into, up to 4 m apart along the same path."""
@@ -184,27 +183,7 @@ class SignalWatch:
         return states
 
     def _light_named(self, name: str) -> str | None:
-        text = name.strip()
-        ids = {light.signal_id for light in self._lights}
-        if text in ids:
-            return text
-        if text.startswith("id=") and text[3:].strip() in ids:
-            return text[3:].strip()
-        if text.startswith("pos="):
-            try:
-                px, py = (float(part) for part in text[4:].split(","))
-            except ValueError:
-                return None
-            best = min(
-                self._lights,
-                key=lambda light: math.hypot(light.position.x - px, -light.position.y - py),
-                default=None,
-            )
-            if best is not None and (
-                math.hypot(best.position.x - px, -best.position.y - py) <= POSITION_MATCH
-            ):
-                return best.signal_id
-        return None
+        return opendrive.light_named(self._lights, name)
 
     def red_light(self) -> Finding:
         """RunningRedLightTest's result so far."""

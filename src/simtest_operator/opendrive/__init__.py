@@ -16,13 +16,22 @@ from simtest_operator.opendrive.models import (
 from simtest_operator.opendrive.network import (
     DRIVABLE_LANE_TYPES,
     LaneLocation,
+    LaneStretch,
     Pose,
     RoadCoord,
     RoadNetwork,
 )
 from simtest_operator.opendrive.parsing import load, parse, without_signals
 from simtest_operator.opendrive.rewriting import flat_curves_rewritten
-from simtest_operator.opendrive.signals import Control, StopLine, TrafficControl, traffic_controls
+from simtest_operator.opendrive.signals import (
+    Control,
+    SignalIndex,
+    StopLine,
+    TrafficControl,
+    aspect_of,
+    light_named,
+    traffic_controls,
+)
 from simtest_operator.opendrive.topology import LaneEntry
 
 __all__ = [
@@ -33,15 +42,19 @@ __all__ = [
     "LaneBounds",
     "LaneEntry",
     "LaneLocation",
+    "LaneStretch",
     "OpenDrive",
     "Pose",
     "Road",
     "RoadCoord",
     "RoadNetwork",
+    "SignalIndex",
     "StopLine",
     "TrafficControl",
     "TrafficRule",
+    "aspect_of",
     "flat_curves_rewritten",
+    "light_named",
     "load",
     "parse",
     "traffic_controls",

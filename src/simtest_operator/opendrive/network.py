@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Collection, Mapping, Sequence
+from collections.abc import Collection, Iterator, Mapping, Sequence
 from pathlib import Path
 
 from simtest_operator.errors import ScenarioError
@@ -68,6 +68,20 @@ class LaneLocation:
     lane_id: int
     direction: int
     remaining: float = 0.0
+
+
+@dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
+class LaneStretch:
+    """A piece of one lane (within one lane section) a walk along lanes passes: from ``s_from``
+    to ``s_to`` on ``road_id`` (``direction`` +1 when s grows on the way), starting ``start``
+    metres of s after the walk's start."""
+
+    road_id: str
+    lane_id: int
+    s_from: float
+    s_to: float
+    direction: int
+    start: float
 
 
 class RoadNetwork:
@@ -307,6 +321,64 @@ class RoadNetwork:
             else:
                 direction, s = -1, road.length
         raise ScenarioError(f"lane walk from road {road_id!r} does not terminate")
+
+    def walk(
+        self,
+        road_id: str,
+        s: float,
+        lane_id: int,
+        distance: float,
+        *,
+        direction: int = 1,
+        prefer_roads: Collection[str] = (),
+    ) -> Iterator[LaneStretch]:
+        """The lane stretches ahead of (road, s, lane) for ``distance`` metres of s travelling
+        in ``direction``, through sections, links and junctions as :meth:`advance` goes (the
+        route's ``prefer_roads`` first at forks); ends early where the lane ends. What lies
+        ahead on a route (stop lines, ...) is looked up stretch by stretch."""
+        road = self.road(road_id)
+        layout = self._layouts[self._slot(road_id)]
+        done = 0.0
+        for _ in range(10_000):
+            section = layout.section_index(s)
+            if direction > 0:
+                last = section + 1 >= len(layout.sections)
+                end_s = road.length if last else layout.sections[section + 1].s
+            else:
+                end_s = layout.sections[section].s
+            room = max((end_s - s) * direction, 0.0)
+            reach = min(room, distance - done)
+            yield LaneStretch(
+                road_id=road.id,
+                lane_id=lane_id,
+                s_from=s,
+                s_to=s + direction * reach,
+                direction=direction,
+                start=done,
+            )
+            done += reach
+            if done >= distance:
+                return
+            inner = section + 1 < len(layout.sections) if direction > 0 else section > 0
+            if inner:
+                next_lane = self._graph.next_section_lane(road, section, lane_id, direction > 0)
+                if next_lane is None:
+                    return
+                lane_id = next_lane
+                s = end_s if direction > 0 else math.nextafter(end_s, -math.inf)
+                continue
+            end = models.ContactPoint.END if direction > 0 else models.ContactPoint.START
+            entries = self._graph.next_lanes(road.id, lane_id, end)
+            if not entries:
+                return
+            entry = self._preferred(entries, prefer_roads)
+            road = self._roads[entry.road_id]
+            layout = self._layouts[self._slot(road.id)]
+            lane_id = entry.lane_id
+            if entry.contact_point is models.ContactPoint.START:
+                direction, s = 1, 0.0
+            else:
+                direction, s = -1, road.length
 
     def _preferred(
         self, entries: Sequence[topology.LaneEntry], prefer_roads: Collection[str]

@@ -19,11 +19,14 @@ from __future__ import annotations
 import dataclasses
 import enum
 import math
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping, Sequence
 
+from simtest_operator.drivermodel import Aspect
 from simtest_operator.opendrive import models
 from simtest_operator.opendrive.network import Pose, RoadNetwork
 
+POSITION_MATCH = 2.0
+"""Metres within which a state action's ``pos=x,y`` names a light (ScenarioRunner's tolerance)."""
 _LINE_SHARE = 0.9
 """Share of the lane width a stop line spans (CARLA's trigger boxes: 90 %, so that they do not
 reach into the next lane)."""
@@ -147,3 +150,97 @@ def _faces(network: RoadNetwork, road_id: str, lane_id: int, orientation: str) -
         return True
     direction = network.driving_direction(road_id, lane_id)
     return direction > 0 if orientation == "+" else direction < 0
+
+
+_WORDS = {
+    "red": Aspect.RED,
+    "stop": Aspect.RED,
+    "redyellow": Aspect.RED,
+    "yellow": Aspect.YELLOW,
+    "amber": Aspect.YELLOW,
+    "green": Aspect.GREEN,
+    "go": Aspect.GREEN,
+}
+
+
+def aspect_of(state: str) -> Aspect:
+    """The aspect a TrafficSignalStateAction's ``state`` shows: a word (``Red``, ``Yellow``,
+    ``Green`` as ScenarioRunner writes them; red-and-yellow still means stop), or esmini's lamp
+    list ``red;yellow;green`` of ``on``/``off`` (a lit red lamp wins). Off, flashing or anything
+    else is UNKNOWN: the light does not regulate."""
+    text = state.strip().lower()
+    lamps = [lamp.strip() for lamp in text.split(";")]
+    if len(lamps) >= 2:
+        lit = [lamp == "on" for lamp in lamps[:3]]
+        for on, aspect in zip(lit, (Aspect.RED, Aspect.YELLOW, Aspect.GREEN), strict=False):
+            if on:
+                return aspect
+        return Aspect.UNKNOWN
+    word = "".join(char for char in text if char.isalpha())
+    return _WORDS.get(word, Aspect.UNKNOWN)
+
+
+def light_named(lights: Sequence[TrafficControl], name: str) -> str | None:
+    """The id of the light a TrafficSignalStateAction's ``name`` means: the OpenDRIVE signal id,
+    ScenarioRunner's ``id=<id>``, or its ``pos=x,y`` (the light standing within
+    :data:`POSITION_MATCH` of that point in CARLA's frame, y negated); None when none."""
+    text = name.strip()
+    ids = {light.signal_id for light in lights}
+    if text in ids:
+        return text
+    if text.startswith("id=") and text[3:].strip() in ids:
+        return text[3:].strip()
+    if text.startswith("pos="):
+        try:
+            px, py = (float(part) for part in text[4:].split(","))
+        except ValueError:
+            return None
+        best = min(
+            lights,
+            key=lambda light: math.hypot(light.position.x - px, -light.position.y - py),
+            default=None,
+        )
+        if best is not None and (
+            math.hypot(best.position.x - px, -best.position.y - py) <= POSITION_MATCH
+        ):
+            return best.signal_id
+    return None
+
+
+class SignalIndex:
+    """A map's traffic controls, found by the lane their stop lines cross, and the light each
+    state name means: what a driver looks up along its path every step."""
+
+    __slots__ = ("_by_lane", "_names", "controls", "lights")
+
+    def __init__(self, controls: Sequence[TrafficControl]) -> None:
+        self.controls = tuple(controls)
+        self.lights = tuple(c for c in self.controls if c.control is Control.TRAFFIC_LIGHT)
+        self._by_lane: dict[tuple[str, int], list[tuple[StopLine, TrafficControl]]] = {}
+        for control in self.controls:
+            for line in control.lines:
+                self._by_lane.setdefault((line.road_id, line.lane_id), []).append((line, control))
+        self._names: dict[str, str | None] = {}
+
+    def __bool__(self) -> bool:
+        return bool(self._by_lane)
+
+    def lines(self, road_id: str, lane_id: int) -> Sequence[tuple[StopLine, TrafficControl]]:
+        """The stop lines across lane ``lane_id`` of road ``road_id``, with their controls."""
+        return self._by_lane.get((road_id, lane_id), ())
+
+    def light_of(self, name: str) -> str | None:
+        """:func:`light_named`, remembered per name."""
+        if name not in self._names:
+            self._names[name] = light_named(self.lights, name)
+        return self._names[name]
+
+    def aspects(self, states: Mapping[str, str]) -> dict[str, Aspect]:
+        """The aspect of every light whose state is set, by signal id (a light never set is
+        absent: unknown)."""
+        result: dict[str, Aspect] = {}
+        for name, state in states.items():
+            light = self.light_of(name)
+            if light is not None:
+                result[light] = aspect_of(state)
+        return result

@@ -9,7 +9,9 @@ Layout of a recording, as omega-prime and the OSI MCAP trace convention expect:
   from the scenario start, log time equal to the timestamp;
 - topic ``ground_truth_map``: one ``osi3.MapAsamOpenDrive`` with the road file, whose
   ``map_reference`` matches every GroundTruth's.
-Every entity is an ``osi3.MovingObject`` at its bounding-box centre. Misc objects are written as
+Every entity is an ``osi3.MovingObject`` at its bounding-box centre; the map's traffic lights
+(bulb by bulb, with their current modes) and stop signs are ``traffic_light``/``traffic_sign``
+messages (:mod:`~simtest_operator.recording.signalwire`). Misc objects are written as
 moving objects of type OTHER, because omega-prime ignores ``stationary_object`` when reading and
 obstacles would otherwise vanish from every consumer. An entity that reappears after missing from
 a frame gets a fresh id, since omega-prime forbids gaps in an object's frames.
@@ -24,7 +26,7 @@ import operator
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from types import TracebackType
-from typing import BinaryIO
+from typing import TYPE_CHECKING, BinaryIO
 
 from mcap.writer import CompressionType, Writer
 
@@ -37,6 +39,10 @@ from simtest_operator.snapshots import (
     EntityState,
     WorldSnapshot,
 )
+
+if TYPE_CHECKING:  # the SUT processes read recordings without the road network (numpy)
+    from simtest_operator.opendrive import TrafficControl
+    from simtest_operator.recording import signalwire
 
 GROUND_TRUTH_TOPIC = "ground_truth"
 MAP_TOPIC = "ground_truth_map"
@@ -106,8 +112,15 @@ class Recorder:
         host_id: int | None = None,
         period: float = 0.0,
         country_code: int = 276,
+        signals: Sequence[TrafficControl] = (),
     ) -> None:
         self.path = path
+        self._signals: signalwire.SignalWire | None = None
+        """The map's traffic lights and stop signs, written into every frame."""
+        if signals:
+            from simtest_operator.recording import signalwire
+
+            self._signals = signalwire.SignalWire(signals)
         self._map = (
             opendrive.decode("utf-8", "replace") if isinstance(opendrive, bytes) else opendrive
         )
@@ -294,7 +307,8 @@ class Recorder:
         self._writer.add_message(
             self._gt_channel,
             log_time=nanos,
-            data=self._frame.encode(nanos, values),
+            data=self._frame.encode(nanos, values)
+            + (self._signals.encode(snapshot.signals) if self._signals is not None else b""),
             publish_time=nanos,
             sequence=self._frames,
         )

@@ -209,6 +209,7 @@ def run_scenario(
             map_reference=logic.name if logic is not None else "map",
             host_id=_ego_id(simulation),
             period=1.0 / request.simulation.record_hz,
+            signals=simulation.world.signal_index.controls,
         )
         if keep:
             artifacts["recording"] = str(recording_path)

@@ -102,6 +102,7 @@ class SutLink:
                 map_reference=map_reference,
                 log=log,
                 processes=self._processes,
+                signals=simulation.world.signal_index.controls,
             )
         )
         simulation.attach_pilot(self._pilot)

@@ -19,7 +19,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 
-from simtest_operator.drivermodel import DriverModel, SutConfig, Takeover
+from simtest_operator.drivermodel import DriverModel, SutConfig, Takeover, signal_horizon
 from simtest_operator.errors import ScenarioError
 from simtest_operator.opendrive import RoadNetwork
 from simtest_operator.openscenario import model, rulesets
@@ -361,7 +361,12 @@ class Simulation:
                 actor.offset += order.lateral
         elif driver is not None:
             ahead = perception.leader(world, actor, self._sut.sensor_range)
-            command = driver.command(speed=actor.speed, leader=ahead)
+            lines = (
+                perception.signals_ahead(world, actor, signal_horizon(actor.speed, driver.config))
+                if driver.config.traffic_signals
+                else ()
+            )
+            command = driver.command(speed=actor.speed, leader=ahead, signals=lines, dt=dt)
             actor.speed = max(actor.speed + command.acceleration * dt, 0.0)
         if lateral is not None and lateral is not longitudinal and not path_first:
             lateral.step(world, dt)

@@ -12,7 +12,7 @@ import random
 from collections.abc import Iterable, Sequence
 
 from simtest_operator.errors import ScenarioError
-from simtest_operator.opendrive import RoadCoord, RoadNetwork
+from simtest_operator.opendrive import RoadCoord, RoadNetwork, SignalIndex, traffic_controls
 from simtest_operator.openscenario import model
 from simtest_operator.sim.actors import Actor, Mode
 from simtest_operator.sim.lanecache import LaneCache
@@ -26,6 +26,7 @@ class World:
 
     __slots__ = (
         "_lanes",
+        "_signal_index",
         "_states",
         "_undated",
         "actors",
@@ -71,6 +72,7 @@ class World:
         """Traffic signal states by signal name (as TrafficSignalStateActions and the
         controllers' phases set them)."""
         self.signal_controllers = SignalControllers(controllers, self.signals)
+        self._signal_index: SignalIndex | None = None
         self.monitors: dict[str, bool] = {}
         """1.3 monitors by name: declared values, then as SetMonitorActions set them."""
         self.environments: list[tuple[float, model.Environment]] = []
@@ -128,6 +130,15 @@ class World:
         self.states()
 
     # --- roads --------------------------------------------------------------------------------
+
+    @property
+    def signal_index(self) -> SignalIndex:
+        """The map's traffic lights and stop signs by the lanes their stop lines cross (built
+        on first use: only drivers that obey signals need it)."""
+        if self._signal_index is None:
+            controls = traffic_controls(self.roads) if self.roads is not None else ()
+            self._signal_index = SignalIndex(controls)
+        return self._signal_index
 
     def road_coord(self, x: float, y: float, heading: float | None = None) -> RoadCoord | None:
         if self.roads is None:

@@ -15,15 +15,18 @@ import dataclasses
 import json
 import socket
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from types import TracebackType
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from simtest_operator.sim.sut import Order, PilotView
 from simtest_operator.snapshots import EntityState
 from simtest_operator.sut import framing, messages
 from simtest_operator.sut.errors import SutDeadlineError, SutError, SutProtocolError
 from simtest_operator.sut.framing import Kind
+
+if TYPE_CHECKING:
+    from simtest_operator.opendrive import TrafficControl
 
 CONNECT_POLL = 0.02
 """Seconds between connection attempts while the SUT starts (readiness polling)."""
@@ -108,11 +111,12 @@ class RemotePilot:
         step_deadline: float,
         perception_range: float | None,
         map_reference: str = "map",
+        signals: Sequence[TrafficControl] = (),
     ) -> None:
         self._sock = sock
         self._deadline = step_deadline
         self._encoder = messages.SensorViewEncoder(
-            perception_range=perception_range, map_reference=map_reference
+            perception_range=perception_range, map_reference=map_reference, signals=signals
         )
         self._last_speed: float | None = None
         self._action_id = 0

@@ -13,9 +13,9 @@ from __future__ import annotations
 import contextlib
 import socket
 import sys
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from simtest_operator.drivermodel import ExternalSut, Lifetime
 from simtest_operator.settings import SUT_ENDPOINT
@@ -23,6 +23,9 @@ from simtest_operator.sut import client
 from simtest_operator.sut.errors import SutError
 from simtest_operator.sut.output import files_said, take_files
 from simtest_operator.sut.processes import OUTPUT_TAIL, SutProcess, SutProcesses
+
+if TYPE_CHECKING:
+    from simtest_operator.opendrive import TrafficControl
 
 
 def free_port() -> int:
@@ -41,6 +44,7 @@ def open_pilot(
     map_reference: str = "map",
     log: Path | None = None,
     processes: SutProcesses | None = None,
+    signals: Sequence[TrafficControl] = (),
 ) -> Iterator[client.RemotePilot]:
     """A connected, handshaken pilot for one run (SutError when the SUT cannot be reached).
 
@@ -92,6 +96,7 @@ def open_pilot(
             step_deadline=external.step_deadline,
             perception_range=external.perception_range,
             map_reference=map_reference,
+            signals=signals,
         )
         if process is not None:
             pilot.postmortem = process.postmortem

@@ -3,8 +3,9 @@ answers into the engine's :class:`~simtest_operator.sim.sut.Order`.
 
 ``SensorView`` wraps the ``GroundTruth`` the recorder's fast encoder writes (same layout, ids and
 conventions as the recording: every entity an ``osi3.MovingObject`` at its bounding-box centre),
-so the SUT sees exactly what is recorded. Frame layouts are cached per set of objects, which
-keeps encoding at a few microseconds per object.
+so the SUT sees exactly what is recorded, the map's traffic lights (their bulbs as lit now) and
+stop signs included. Frame layouts are cached per set of objects, which keeps encoding at a few
+microseconds per object.
 """
 
 from __future__ import annotations
@@ -12,11 +13,16 @@ from __future__ import annotations
 import math
 import operator
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 from simtest_operator.recording import osiwire
 from simtest_operator.sim.sut import Order
 from simtest_operator.snapshots import EntityKind, EntityState, WorldSnapshot
 from simtest_operator.sut import protowire as pw
+
+if TYPE_CHECKING:  # a SUT process imports this without the road network (numpy)
+    from simtest_operator.opendrive import TrafficControl
+    from simtest_operator.recording import signalwire
 
 OSI_VERSION = osiwire.OSI_VERSION
 _VEHICLE_CLASSES = {
@@ -73,10 +79,22 @@ def _kinematics(state: EntityState) -> tuple[float, ...]:
 class SensorViewEncoder:
     """Encodes ``osi3.SensorView`` messages of one run (layouts cached across steps)."""
 
-    __slots__ = ("_frame", "_layouts", "_range", "_signature", "_tail")
+    __slots__ = ("_frame", "_layouts", "_range", "_signals", "_signature", "_tail")
 
-    def __init__(self, *, perception_range: float | None, map_reference: str = "map") -> None:
+    def __init__(
+        self,
+        *,
+        perception_range: float | None,
+        map_reference: str = "map",
+        signals: Sequence[TrafficControl] = (),
+    ) -> None:
         self._range = perception_range
+        self._signals: signalwire.SignalWire | None = None
+        """The map's traffic lights (with their states) and stop signs, in every SensorView."""
+        if signals:
+            from simtest_operator.recording import signalwire
+
+            self._signals = signalwire.SignalWire(signals)
         self._tail = osiwire.ground_truth_tail(country_code=276, map_reference=map_reference)
         self._signature: tuple[tuple[object, ...], ...] | None = None
         self._frame = osiwire.frame_layout((), host_id=None, tail=self._tail)
@@ -111,6 +129,8 @@ class SensorViewEncoder:
             values.extend(_kinematics(state))
         nanos = round(snapshot.time * 1e9)
         ground_truth = self._frame.encode(nanos, values)
+        if self._signals is not None:
+            ground_truth += self._signals.encode(snapshot.signals)
         head = osiwire.ground_truth_head(nanos=nanos)  # version and timestamp, shared layout
         return (
             head

@@ -52,6 +52,9 @@ class DriverModel(ApiModel):
     """Adaptive cruise control: follow the vehicle ahead; off means constant-speed cruise."""
     lane_keeping: bool = True
     """Keep the lane centre; off lets the ego hold its heading."""
+    traffic_signals: bool = True
+    """Obey the map's traffic lights and stop signs (stop at red, stop on yellow when it
+    comfortably can, stand still at a stop sign, then go); off drives through them."""
     aeb: AebConfig = Field(default_factory=AebConfig)
     """Emergency braking."""
 
