@@ -65,10 +65,12 @@ def test_boundary_strategy_finds_both_regions_and_the_boundary(cut_in: Path) -> 
 def test_hybrid_finds_both_regions_and_more_failures_than_boundary(cut_in: Path) -> None:
     searcher = run(cut_in, SearchStrategy.HYBRID, 80)
     summary = summarise(searcher.space, searcher.records, searcher.spec.objectives)
-    # Reported at the runs' own resolution: the corner and the pocket, not a region per failure.
-    assert len(summary.regions) == 2
+    # Reported at the runs' own resolution: the corner and the pocket, not a region per failure
+    # (a pocket failure the sample reaches across a gap wider than its step may stand alone).
+    assert 2 <= len(summary.regions) <= 3
     gaps = sorted(float(r.centre["CutInGap"]) for r in summary.regions)
-    assert gaps[0] < 13 and gaps[1] > 29
+    assert gaps[0] < 13 and gaps[-1] > 29
+    assert all(g < 13 or g > 29 for g in gaps)
     assert failures(searcher) > failures(run(cut_in, SearchStrategy.BOUNDARY, 80))
     assert failures(searcher) >= 1.5 * failures(run(cut_in, SearchStrategy.RANDOM, 80))
 
