@@ -39,6 +39,7 @@ import dataclasses
 import hashlib
 import json
 import multiprocessing
+import os
 import statistics
 import time
 from collections.abc import Iterator, Mapping, Sequence
@@ -106,6 +107,16 @@ CASES = (
         ],
         (8, 8, 6),
     ),
+    Case(
+        "pedestrian-turn-back",
+        LIBRARY / "pedestrian-turn-back" / "pedestrian-turn-back_junction_v8_tta7_walk2.5.xosc",
+        [
+            {"name": "EgoSpeed", "min": 6, "max": 16, "step": 0.1},
+            {"name": "TriggerDistance", "min": 15, "max": 60, "step": 0.25},
+            {"name": "WalkSpeed", "min": 0.8, "max": 3.0, "step": 0.05},
+        ],
+        (8, 8, 6),
+    ),
 )
 
 
@@ -159,7 +170,13 @@ class Simulator:
             yield todo[j], Outcome(outcome.verdict, metrics)
 
     def save(self) -> None:
-        self.path.write_text(json.dumps(self.runs, sort_keys=True))
+        """Merge with what is on disk (another invocation may have cached runs meanwhile) and
+        replace the file atomically."""
+        if self.path.is_file():
+            self.runs = json.loads(self.path.read_text()) | self.runs
+        partial = self.path.with_suffix(f".{os.getpid()}.tmp")
+        partial.write_text(json.dumps(self.runs, sort_keys=True))
+        partial.replace(self.path)
 
 
 _METRICS = ("minTTC", "minTHW", "minDistance", "maxDecel")
@@ -301,7 +318,13 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--seeds", type=int, nargs="+", default=[0])
     parser.add_argument("--workers", type=int, default=2)
-    parser.add_argument("--only", nargs="*", default=None, help="scenario names")
+    parser.add_argument("--only", nargs="*", default=None, help="scenario names, in run order")
+    parser.add_argument(
+        "--strategies",
+        nargs="*",
+        default=[s.value for s in SearchStrategy],
+        help="strategies to run (random and the default are always run: search.json needs them)",
+    )
     parser.add_argument("--json", type=Path, default=RESULTS / "search.json")
     parser.add_argument("--png", type=Path, default=RESULTS / "search.png")
     args = parser.parse_args()
@@ -311,10 +334,14 @@ def main() -> None:
     out: dict[str, Any] = {"scenarios": []}
     details: list[dict[str, Any]] = []
     curves: dict[str, dict[str, list[tuple[int, int]]]] = {}
+    chosen = [
+        s
+        for s in SearchStrategy
+        if s.value in args.strategies or s in (SearchStrategy.RANDOM, SearchStrategy(_default()))
+    ]
     with context.Pool(processes=args.workers) as pool:
-        for case in CASES:
-            if args.only and case.name not in args.only:
-                continue
+        order = [c for name in args.only for c in CASES if c.name == name] if args.only else CASES
+        for case in order:
             sim = Simulator(pool, settings, case)
             spec = SearchSpec.model_validate(
                 {"scenario": str(case.scenario), "parameters": case.parameters, "budget": 1}
@@ -340,7 +367,7 @@ def main() -> None:
             )
             per: dict[str, dict[int, list[dict[str, Any]]]] = {}
             for seed in args.seeds:
-                for strategy in SearchStrategy:
+                for strategy in chosen:
                     budgets = BUDGETS if strategy is SearchStrategy.GRID else (max(BUDGETS),)
                     for budget in budgets:
                         hits, misses = sim.hits, sim.misses
@@ -365,12 +392,23 @@ def main() -> None:
             entries = summarise_case(case, t, len(values), per, details)
             out["scenarios"].extend(entries)
             table(console, case, t, per)
-    args.json.parent.mkdir(parents=True, exist_ok=True)
-    args.json.write_text(json.dumps(out, indent=2) + "\n")
+            # Written after every scenario: a long run that is stopped keeps what it measured.
+            write(args.json, args.png, out, details, curves)
+            console.print(f"wrote {args.json} and {args.png}")
+
+
+def write(
+    json_path: Path,
+    png: Path,
+    out: dict[str, Any],
+    details: list[dict[str, Any]],
+    curves: dict[str, dict[str, list[tuple[int, int]]]],
+) -> None:
+    json_path.parent.mkdir(parents=True, exist_ok=True)
+    json_path.write_text(json.dumps(out, indent=2) + "\n")
     # The issue fixes search.json's shape; the rest of the measurements sit beside it.
-    args.json.with_suffix(".details.json").write_text(json.dumps(details, indent=2) + "\n")
-    plot(curves, args.png)
-    console.print(f"wrote {args.json} and {args.png}")
+    json_path.with_suffix(".details.json").write_text(json.dumps(details, indent=2) + "\n")
+    plot(curves, png)
 
 
 def median(results: list[dict[str, Any]], key: str) -> Any:
@@ -398,6 +436,8 @@ def summarise_case(
     for budget in BUDGETS:
         adaptive = []
         for strategy in ADAPTIVE:
+            if strategy.value not in per:
+                continue
             results = per[strategy.value][budget]
             adaptive.append(
                 {"strategy": strategy.value}
@@ -413,7 +453,7 @@ def summarise_case(
                 }
             )
         random = per[SearchStrategy.RANDOM.value][budget]
-        grid = per[SearchStrategy.GRID.value][budget]
+        grid = per.get(SearchStrategy.GRID.value, {}).get(budget, [])
         chosen = {
             k: v
             for k, v in next(a for a in adaptive if a["strategy"] == _default()).items()
@@ -441,7 +481,7 @@ def summarise_case(
                     "balanced_accuracy": round(t.accuracy, 4),
                     "misclassification": round(t.misclassification, 4),
                 },
-                "grid": {k: median(grid, k) for k in (*keys, *more)},
+                "grid": {k: median(grid, k) for k in (*keys, *more)} if grid else None,
                 "random": {k: median(random, k) for k in (*keys, *more)},
                 "adaptive": adaptive,
                 "seeds": len(random),
@@ -475,7 +515,9 @@ def table(
         out.add_column(column, justify="right")
     for strategy in SearchStrategy:
         for budget in BUDGETS:
-            results = per[strategy.value][budget]
+            results = per.get(strategy.value, {}).get(budget)
+            if not results:
+                continue
             out.add_row(
                 strategy.value,
                 str(budget),

@@ -17,7 +17,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, default=Path(__file__).resolve().parent)
     args = parser.parse_args(argv)
-    files = writing.write_all(args.out, suite.suite(), suite.smoke())
+    files = writing.write_all(args.out, suite.suite(), suite.smoke(), suite.search_cases())
     sys.stdout.write(f"wrote {len(files)} files under {args.out}\n")
     return 0
 

@@ -24,7 +24,12 @@ CATEGORIES = (
     "ltap",
     "pedestrian-crossing",
 )
-"""The eight templates; each is a folder under `library/` and the `simtest:category` value."""
+"""The eight templates of the suite; each is a folder under `library/` and the
+`simtest:category` value."""
+
+SEARCH_CATEGORIES = ("pedestrian-turn-back",)
+"""Templates outside the suite: logical scenarios for the search benchmark (bench/search.py),
+a folder under `library/` each, excluded from the 200-scenario campaigns."""
 
 INTERACTIONS = {
     "following": "longitudinal",
@@ -35,6 +40,7 @@ INTERACTIONS = {
     "merge": "lateral",
     "ltap": "crossing",
     "pedestrian-crossing": "crossing",
+    "pedestrian-turn-back": "crossing",
 }
 """Which way the critical actor approaches the ego's path."""
 
@@ -81,7 +87,7 @@ def tags_for(
     category: str, road: roads.RoadNet, ego_speed: float, extra: Sequence[str] = ()
 ) -> tuple[str, ...]:
     """The standard tag set: category, road kind, road feature, interaction, actor, speed band."""
-    actor = "pedestrian" if category == "pedestrian-crossing" else "vehicle"
+    actor = "pedestrian" if category.startswith("pedestrian-") else "vehicle"
     base = (
         category,
         road.kind,

@@ -6,6 +6,9 @@ ltap: left turn across path, opposite direction (LTAP/OD). The ego goes straight
     the ego would at constant speeds (negative: the target is there first).
 pedestrian-crossing: a pedestrian waiting at the kerb starts to walk across the road when the
     ego's front is `tta` seconds away from the crossing line (time to arrival at constant speed).
+pedestrian-turn-back: the same start, but at the far kerb the pedestrian turns round and walks
+    back across, so a logical scenario over the same parameters has two separate failure
+    regions (the ego meets the pedestrian stepping out, or coming back); a search benchmark case.
 
 Geometry (see roads.py): the junction centre is the origin, road 1 runs north along x=0 from
 y=-215 to y=-15, lane -1 of road 1 is centred on x=+1.75. The rural road starts at the origin
@@ -90,6 +93,7 @@ def _pedestrian_scenario(
     extra_init: list[xosc.AssignRouteAction],
     extra_tags: list[str],
     duration: float,
+    category: str = "pedestrian-crossing",
 ) -> Blueprint:
     entities = xosc.Entities()
     parts.add_ego(entities)
@@ -111,7 +115,7 @@ def _pedestrian_scenario(
         ),
     )
     return Blueprint(
-        category="pedestrian-crossing",
+        category=category,
         road=road,
         stem=stem,
         description=description,
@@ -122,7 +126,7 @@ def _pedestrian_scenario(
             ("TriggerDistance", trigger_distance),
         ),
         duration=duration,
-        tags=tags_for("pedestrian-crossing", road, speed, extra_tags),
+        tags=tags_for(category, road, speed, extra_tags),
         entities=entities,
         init=init,
         stories=(parts.story("Pedestrian", "Pedestrian", [start]),),
@@ -151,6 +155,39 @@ def pedestrian_junction(
         extra_init=[parts.route("EgoStraight", [(1, -1, ego_s), (3, -1, 60.0)])],
         extra_tags=["from-right", "crosswalk"],
         duration=duration,
+    )
+
+
+def pedestrian_turn_back(
+    *, speed: float, tta: float, walk_speed: float, duration: float = 20.0
+) -> Blueprint:
+    """Pedestrian crosses road 1 from the right like :func:`pedestrian_junction`, turns back at
+    the far kerb and walks back across (then away along the near side)."""
+    crossing_y = -(roads.JUNCTION_RADIUS + 8.0)
+    ego_s = round(roads.ARM_LENGTH - 8.0 - speed * (tta + 4.0) - EGO_FRONT, 1)
+    west, east, south = math.pi, 0.0, -math.pi / 2
+    walk = [
+        (KERB, crossing_y, west),
+        (-KERB, crossing_y, west),
+        (KERB, crossing_y, east),
+        (KERB, crossing_y - 10.0, south),
+    ]
+    return _pedestrian_scenario(
+        road=roads.JUNCTION,
+        stem=f"pedestrian-turn-back_junction_v{number(speed)}_tta{number(tta)}"
+        f"_walk{number(walk_speed)}",
+        description=f"A pedestrian at {number(walk_speed)} m/s crosses from the right in front "
+        f"of the junction when the ego ({number(speed)} m/s) is {number(tta)} s away, turns "
+        "back at the far kerb and crosses again",
+        speed=speed,
+        walk_speed=walk_speed,
+        tta=tta,
+        ego_start=(1, -1, ego_s),
+        walk=walk,
+        extra_init=[parts.route("EgoStraight", [(1, -1, ego_s), (3, -1, 60.0)])],
+        extra_tags=["from-right", "crosswalk", "turn-back"],
+        duration=duration,
+        category="pedestrian-turn-back",
     )
 
 

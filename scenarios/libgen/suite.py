@@ -11,7 +11,7 @@ from __future__ import annotations
 from itertools import product
 
 from libgen import crossing, lateral, longitudinal, roads
-from libgen.blueprints import CATEGORIES, Blueprint
+from libgen.blueprints import CATEGORIES, SEARCH_CATEGORIES, Blueprint
 
 SUITE_SIZE = 200
 
@@ -107,6 +107,15 @@ def suite() -> list[Blueprint]:
     return blueprints
 
 
+def search_cases() -> list[Blueprint]:
+    """Logical scenarios the search benchmark needs beyond the suite (outside its 200): a
+    pedestrian who turns back, whose failures form two separate regions over (EgoSpeed,
+    TriggerDistance, WalkSpeed)."""
+    blueprints = [crossing.pedestrian_turn_back(speed=8.0, tta=7.0, walk_speed=2.5)]
+    _check(blueprints, len(blueprints), SEARCH_CATEGORIES)
+    return blueprints
+
+
 def smoke() -> list[Blueprint]:
     """Six short scenarios (10 s each) for the quick start: five a sensible SUT passes and
     one close cut-in it cannot avoid, so both verdicts show up."""
@@ -132,13 +141,15 @@ def smoke() -> list[Blueprint]:
     return blueprints
 
 
-def _check(blueprints: list[Blueprint], size: int) -> None:
+def _check(
+    blueprints: list[Blueprint], size: int, categories: tuple[str, ...] = CATEGORIES
+) -> None:
     stems = [(b.category, b.stem) for b in blueprints]
     if len(set(stems)) != len(stems):
         raise ValueError("two scenarios share a file name")
     if len(blueprints) != size:
         raise ValueError(f"expected {size} scenarios, built {len(blueprints)}")
-    unknown = {b.category for b in blueprints} - set(CATEGORIES)
+    unknown = {b.category for b in blueprints} - set(categories)
     if unknown:
         raise ValueError(f"unknown categories: {sorted(unknown)}")
     for b in blueprints:

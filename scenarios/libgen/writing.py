@@ -2,7 +2,7 @@
 
 Layout under the output folder:
     roads/<road>.xodr                 OpenDRIVE networks
-    library/<category>/<stem>.xosc    the 200-scenario suite
+    library/<category>/<stem>.xosc    the 200-scenario suite and the search cases
     smoke/<stem>.xosc                 the short quick-start set
 
 Scenario files reference their road relative to themselves, so a copy of the whole folder
@@ -92,12 +92,14 @@ def _write(path: Path, data: bytes, written: set[Path]) -> None:
     written.add(path)
 
 
-def write_all(out: Path, suite: list[Blueprint], smoke: list[Blueprint]) -> list[Path]:
-    """Write roads, suite and smoke set under `out`; return the files, sorted."""
+def write_all(
+    out: Path, suite: list[Blueprint], smoke: list[Blueprint], search: list[Blueprint]
+) -> list[Path]:
+    """Write roads, suite, search cases and smoke set under `out`; return the files, sorted."""
     written: set[Path] = set()
     for net in roads.ALL:
         _write(out / "roads" / f"{net.name}.xodr", road_bytes(net), written)
-    for blueprint in suite:
+    for blueprint in suite + search:
         road = f"../../roads/{blueprint.road.name}.xodr"
         target = out / "library" / blueprint.category / f"{blueprint.stem}.xosc"
         _write(target, scenario_bytes(blueprint, road), written)

@@ -1,6 +1,8 @@
 """The library has the promised shape and every scenario is a self-contained SUT test case.
 
-Covers: 200 suite scenarios in the eight category folders, on at least three road networks;
+Covers: 200 suite scenarios in the eight category folders, on at least three road networks,
+plus the search benchmark's folders (SEARCH_CATEGORIES, outside the 200, which the seed campaign
+excludes);
 the smoke set has 5-6 scenarios of at most 10 s; FileHeader properties simtest:tags /
 simtest:category / simtest:road agree with the folder and the referenced road, and tags use
 the documented vocabulary; the ego is called Ego, carries the simtest:sut controller, gets its
@@ -15,8 +17,11 @@ from collections import Counter
 from pathlib import Path
 
 import pytest
+import yaml
 from lxml import etree
 
+from simtest_operator.api import v1alpha1
+from simtest_operator.scenarios import selecting
 from tests.library.conftest import LIBRARY_ROOT
 
 CATEGORIES = {
@@ -29,7 +34,11 @@ CATEGORIES = {
     "ltap",
     "pedestrian-crossing",
 }
-SUITE = sorted(LIBRARY_ROOT.glob("library/*/*.xosc"))
+SEARCH_CATEGORIES = {"pedestrian-turn-back"}
+"""Logical scenarios for bench/search.py, generated into library/ but not part of the suite."""
+LIBRARY = sorted(LIBRARY_ROOT.glob("library/*/*.xosc"))
+SUITE = [path for path in LIBRARY if path.parent.name not in SEARCH_CATEGORIES]
+SEARCH = [path for path in LIBRARY if path.parent.name in SEARCH_CATEGORIES]
 SMOKE = sorted(LIBRARY_ROOT.glob("smoke/*.xosc"))
 PARAMETER_REF = re.compile(r"\$([A-Za-z_][A-Za-z0-9_]*)")
 
@@ -52,6 +61,19 @@ def test_suite_size_categories_and_roads() -> None:
     assert min(per_category.values()) >= 10
     roads = {_properties(etree.parse(str(path)))["simtest:road"] for path in SUITE}
     assert len(roads) >= 3
+    assert {path.parent.name for path in SEARCH} == SEARCH_CATEGORIES
+
+
+def test_the_seed_campaign_runs_exactly_the_suite() -> None:
+    document = yaml.safe_load((LIBRARY_ROOT / "seed-experiment-campaign.yaml").read_text())
+    scenarios = v1alpha1.parse_campaign(document).spec.scenarios
+    library = LIBRARY_ROOT / "library"
+    chosen = selecting.by_globs(
+        [path.relative_to(library).as_posix() for path in LIBRARY],
+        include=tuple(scenarios.include),
+        exclude=tuple(scenarios.exclude),
+    )
+    assert chosen == sorted(path.relative_to(library).as_posix() for path in SUITE)
 
 
 def test_smoke_set_is_small_and_short() -> None:
@@ -63,13 +85,13 @@ def test_smoke_set_is_small_and_short() -> None:
         assert end is not None and float(end.get("value")) <= 10.0, path.name
 
 
-@pytest.mark.parametrize("path", SUITE + SMOKE, ids=lambda p: p.stem)
+@pytest.mark.parametrize("path", LIBRARY + SMOKE, ids=lambda p: p.stem)
 def test_scenario_is_a_self_contained_sut_case(path: Path) -> None:
     tree = etree.parse(str(path))
     props = _properties(tree)
     assert set(props) == {"simtest:tags", "simtest:category", "simtest:road"}
     tags = props["simtest:tags"].split(",")
-    assert props["simtest:category"] in CATEGORIES
+    assert props["simtest:category"] in CATEGORIES | SEARCH_CATEGORIES
     assert tags[0] == props["simtest:category"]
     assert set(tags) <= _vocabulary(), set(tags) - _vocabulary()
     if path.parent.parent.name == "library":
@@ -110,5 +132,5 @@ def test_scenario_is_a_self_contained_sut_case(path: Path) -> None:
 
 
 def test_names_are_unique_across_the_library() -> None:
-    stems = [path.stem for path in SUITE]
+    stems = [path.stem for path in LIBRARY]
     assert len(stems) == len(set(stems))

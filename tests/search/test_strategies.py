@@ -65,17 +65,17 @@ def test_boundary_strategy_finds_both_regions_and_the_boundary(cut_in: Path) -> 
 def test_hybrid_finds_both_regions_and_more_failures_than_boundary(cut_in: Path) -> None:
     searcher = run(cut_in, SearchStrategy.HYBRID, 80)
     summary = summarise(searcher.space, searcher.records, searcher.spec.objectives)
-    # Reported at the runs' own resolution: the corner and the pocket, not a region per failure.
-    assert len(summary.regions) == 2
+    # Reported at the runs' own resolution: the corner and the pocket, not a region per failure
+    # (a pocket failure the sample reaches across a gap wider than its step may stand alone).
+    assert 2 <= len(summary.regions) <= 3
     gaps = sorted(float(r.centre["CutInGap"]) for r in summary.regions)
-    assert gaps[0] < 13 and gaps[1] > 29
+    assert gaps[0] < 13 and gaps[-1] > 29
+    assert all(g < 13 or g > 29 for g in gaps)
     assert failures(searcher) > failures(run(cut_in, SearchStrategy.BOUNDARY, 80))
     assert failures(searcher) >= 1.5 * failures(run(cut_in, SearchStrategy.RANDOM, 80))
 
 
-def test_the_classifier_is_refitted_on_a_schedule(
-    cut_in: Path, monkeypatch: pytest.MonkeyPatch
-) -> None:
+def test_the_model_is_refitted_on_a_schedule(cut_in: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     points = [strategies.refit_point(t) for t in range(2000)]
     assert points[:101] == list(range(101))  # cheap fits: every outcome counts
     assert all(b >= a for a, b in itertools.pairwise(points))
@@ -83,12 +83,12 @@ def test_the_classifier_is_refitted_on_a_schedule(
     assert len(set(points[101:])) <= 14  # then each 25 % more outcomes: 100 -> 2,000 in 14 fits
     fits = []
 
-    def counting(*args: object) -> boundaries.Boundary | None:
+    def counting(*args: object) -> boundaries.Margin | None:
         fits.append(1)
         return fit(*args)  # type: ignore[arg-type]
 
-    fit = boundaries.fit
-    monkeypatch.setattr(boundaries, "fit", counting)
+    fit = boundaries.fit_margin
+    monkeypatch.setattr(boundaries, "fit_margin", counting)
     spec = SearchSpec.model_validate(
         {"scenario": str(cut_in), "parameters": PARAMETERS, "strategy": "boundary", "budget": 150}
     )

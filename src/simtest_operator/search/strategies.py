@@ -9,6 +9,7 @@ asks and tells) however the asks were batched, and a replay reproduces it.
 from __future__ import annotations
 
 import dataclasses
+import enum
 import logging
 import math
 from collections.abc import Sequence
@@ -61,7 +62,7 @@ def create(spec: SearchSpec, space: SearchSpace) -> Strategy:
         case SearchStrategy.BOUNDARY:
             return ActiveBoundary(space, spec.seed)
         case SearchStrategy.HYBRID:
-            return Hybrid(space, spec.seed, spec.objectives[0])
+            return Hybrid(space, spec.seed)
 
 
 def _rng(seed: int, index: int) -> np.random.Generator:
@@ -166,22 +167,36 @@ class Tpe:
 
 
 CANDIDATES = 2048
-"""Random candidates scored per proposal of the boundary strategy."""
+"""Random candidates scored per proposal of the boundary and hybrid strategies."""
 EXPLORATION = 0.5
-"""Weight of the distance to the nearest known point against the classifier's uncertainty: keeps
+"""Weight of the distance to the nearest known point against the boundary's uncertainty: keeps
 part of every batch on unexplored ground, where a small failure region may hide."""
 
 
+@dataclasses.dataclass(frozen=True, slots=True)
+class _Scene:
+    """What a model-based proposal scores: candidates, their distance to the nearest told or
+    pending point (relative to the spacing the points so far would have on a grid) and the
+    margin model (None while the told runs hold one class)."""
+
+    candidates: Points
+    distance: npt.NDArray[np.float64]
+    model: boundaries.Margin | None
+
+    def pick(self, score: npt.NDArray[np.float64]) -> Point:
+        return tuple(float(u) for u in self.candidates[int(np.argmax(score))])
+
+
 class ActiveBoundary:
-    """Active learning of the pass/fail boundary with a Gaussian process classifier.
+    """Active learning of the pass/fail boundary with a Gaussian process on the verdict margin.
 
     The first points are a scrambled Sobol design (``2^m >= max(10, 4 d)`` of them, seeded);
     while the told runs hold only one class the next point is the candidate farthest from every
-    known point; then a candidate maximises the classifier's uncertainty ``1 - |2p - 1|`` plus
-    ``EXPLORATION`` times its distance to the nearest told or pending point (relative to the
-    spacing the points so far would have on a grid), so a batch spreads along the boundary
-    instead of stacking where it is least certain. The classifier is refitted on the schedule
-    of :func:`refit_point`, so one fit serves a whole batch and long searches stay cheap.
+    known point; then a candidate maximises the uncertainty ``1 - |2p - 1|`` of the failure
+    probability ``p`` of :class:`.boundaries.Margin` plus ``EXPLORATION`` times its relative
+    distance to the nearest told or pending point, so a batch spreads along the boundary
+    instead of stacking where it is least certain. The model is refitted on the schedule of
+    :func:`refit_point`, so one fit serves a whole batch and long searches stay cheap.
     """
 
     def __init__(self, space: SearchSpace, seed: int) -> None:
@@ -192,7 +207,7 @@ class ActiveBoundary:
         initial = max(10, 4 * space.size)
         sobol = qmc.Sobol(d=space.size, scramble=True, seed=seed)
         self._design: Points = sobol.random_base2(m=math.ceil(math.log2(initial)))
-        self._fit: tuple[int, boundaries.Boundary | None] | None = None
+        self._fit: tuple[int, boundaries.Margin | None] | None = None
 
     @property
     def capacity(self) -> int | None:
@@ -207,46 +222,64 @@ class ActiveBoundary:
     def propose(self, history: History) -> Point:
         if history.index < len(self._design):
             return tuple(float(u) for u in self._design[history.index])
+        scene = self.scene(history)
+        if scene.model is None:
+            return scene.pick(scene.distance)
+        return self.refine(scene)
+
+    def refine(self, scene: _Scene) -> Point:
+        """The candidate nearest the boundary where the model is least sure, spread out."""
+        assert scene.model is not None
+        probability = scene.model.failure_probability(scene.candidates)
+        uncertainty = 1.0 - np.abs(2.0 * probability - 1.0)
+        return scene.pick(uncertainty + EXPLORATION * np.minimum(scene.distance, 1.0))
+
+    def scene(self, history: History, candidates: Points | None = None) -> _Scene:
+        """The candidates of proposal ``history.index`` (random unless given), scored."""
         known = np.array(
             [p for p, _ in history.told] + list(history.pending), dtype=np.float64
         ).reshape(-1, self._size)
-        candidates = _rng(self._seed, history.index).random((CANDIDATES, self._size))
-        distance = _nearest(candidates, known)
+        if candidates is None:
+            candidates = _rng(self._seed, history.index).random((CANDIDATES, self._size))
         spacing = max(len(known), 1) ** (-1.0 / self._size)
-        boundary = self.boundary(history)
-        if boundary is None:
-            return tuple(float(u) for u in candidates[int(np.argmax(distance))])
-        probability = boundary.failure_probability(candidates)
-        uncertainty = 1.0 - np.abs(2.0 * probability - 1.0)
-        score = uncertainty + EXPLORATION * np.minimum(distance / spacing, 1.0)
-        return tuple(float(u) for u in candidates[int(np.argmax(score))])
+        return _Scene(candidates, _nearest(candidates, known) / spacing, self.model(history))
 
-    def boundary(self, history: History) -> boundaries.Boundary | None:
-        """The classifier of the first told outcomes the refit schedule allows (None while they
-        hold one class)."""
+    def model(self, history: History) -> boundaries.Margin | None:
+        """The margin model of the first told outcomes the refit schedule allows (None while
+        they hold one class: a margin without a failure says nothing about where one is)."""
         told = refit_point(len(history.told))
-        judged = [(p, o.failed) for p, o in history.told[:told] if o.judged]
         # The told sequence only grows: the last fit serves until the schedule moves on.
         if self._fit is None or self._fit[0] != told:
-            labels: npt.NDArray[np.bool_] = np.array([f for _, f in judged], dtype=bool)
-            fitted = boundaries.fit(
-                np.array([p for p, _ in judged], dtype=np.float64).reshape(-1, self._size), labels
-            )
-            self._fit = (told, fitted if fitted is not None and fitted.constant is None else None)
+            judged = [(p, o) for p, o in history.told[:told] if o.judged]
+            margins = np.array([margin(o) for _, o in judged], dtype=np.float64)
+            labels = margins < 0
+            fitted = None
+            if labels.any() and not labels.all():
+                points = np.array([p for p, _ in judged], dtype=np.float64)
+                fitted = boundaries.fit_margin(points.reshape(-1, self._size), margins)
+            self._fit = (told, fitted)
         return self._fit[1]
 
 
+def margin(outcome: Outcome) -> float:
+    """The verdict's continuous margin of a judged outcome: -1 for a failure, ``[0, 1)`` for a
+    pass (see :func:`.criticality`), whatever the search's own objective is."""
+    score = criticality(outcome, SearchObjective())
+    assert score is not None
+    return score
+
+
 REFIT_ALWAYS = 100
-"""Up to this many told outcomes the classifier is refitted on every proposal (a fit on 100
+"""Up to this many told outcomes the model is refitted on every proposal (a fit on 100
 points takes a few hundredths of a second)."""
 REFIT_GROWTH = 0.25
-"""Beyond ``REFIT_ALWAYS`` the classifier is refitted once the told outcomes grew by this share:
+"""Beyond ``REFIT_ALWAYS`` the model is refitted once the told outcomes grew by this share:
 a Gaussian process fit costs n³, so all fits of a search together cost about two of the last
 (0.4 s at 400 points, 4 s at 800), and budgets in the thousands stay usable."""
 
 
 def refit_point(told: int) -> int:
-    """On how many of the first ``told`` outcomes the classifier is fitted: a function of the
+    """On how many of the first ``told`` outcomes the model is fitted: a function of the
     count alone, so a replay fits on the same outcomes."""
     point = 0
     while True:
@@ -256,24 +289,60 @@ def refit_point(told: int) -> int:
         point = following
 
 
-EXPLOITATION = 0.6
-"""Share of the hybrid's proposals after the initial design that TPE makes."""
+class Role(enum.Enum):
+    """What one hybrid proposal is for."""
+
+    SEEK = "seek"
+    """The candidate most likely to fail, away from the points so far: failures."""
+    REFINE = "refine"
+    """The boundary strategy's proposal: where the boundary is least certain."""
+    EXPLORE = "explore"
+    """The candidate farthest from every point so far: a small region nobody has hit yet."""
+
+
+EXPLORE_SHARE = 0.15
+"""Share of the hybrid's proposals after the design that explore, throughout."""
+SEEK_SHARE = (0.65, 0.35)
+"""Share that seeks failures: at the first proposal after the design, and from
+``SCHEDULE_RUNS`` proposals on (linearly in between); the rest refine the boundary."""
+SCHEDULE_RUNS = 150
+"""Proposals after the design over which the hybrid moves from seeking failures to refining."""
+SEEK_SPREAD = 0.5
+"""Relative distance to the nearest known point from which a seeking candidate counts fully:
+closer ones are discounted, so a batch does not pile onto the likeliest failure."""
+
+
+def role(k: int) -> Role:
+    """The role of the ``k``-th proposal after the design: a function of ``k`` alone (not of
+    the budget, so a longer search starts as a shorter one does), the shares of
+    ``EXPLORE_SHARE`` and ``SEEK_SHARE`` evenly spread by a golden-ratio sequence."""
+    u = math.fmod((k + 1) * _GOLDEN, 1.0)
+    if u < EXPLORE_SHARE:
+        return Role.EXPLORE
+    progress = min(max(k, 0) / SCHEDULE_RUNS, 1.0)
+    seek = SEEK_SHARE[0] + (SEEK_SHARE[1] - SEEK_SHARE[0]) * progress
+    return Role.SEEK if u < EXPLORE_SHARE + (1.0 - EXPLORE_SHARE) * seek else Role.REFINE
+
+
+_GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
 
 
 class Hybrid:
-    """Boundary active learning for where the system fails, TPE for how often.
+    """Failures first, then the boundary, with a share of exploration throughout.
 
-    After the boundary strategy's Sobol design, proposals alternate by index (``EXPLOITATION``
-    of them, spread evenly) between optuna's TPE, which samples near the most critical runs so
-    far, and the boundary strategy, which samples where the classifier is least certain and on
-    unexplored ground. Each sees every told and pending point whoever proposed it: TPE
-    exploits the failures the boundary runs discover (including a thin band random start-up
-    trials would miss), the classifier learns from TPE's runs on the failing side.
+    After the boundary strategy's Sobol design every proposal has a :func:`role`: *seek* takes
+    the candidate the margin model gives the highest failure probability, discounted close to
+    known points (``SEEK_SPREAD``); *refine* is the boundary strategy's proposal; *explore*
+    takes the point of a Sobol pool farthest from every told and pending point (maximin), so a
+    small failure region apart from the first one gets hit, after which seeking and refining
+    work on it too. Seeking dominates early (failures for the budget), refining later (the
+    boundary's accuracy). All roles share one model and see every told and pending point.
     """
 
-    def __init__(self, space: SearchSpace, seed: int, objective: SearchObjective) -> None:
+    def __init__(self, space: SearchSpace, seed: int) -> None:
         self._boundary = ActiveBoundary(space, seed)
-        self._tpe = Tpe(space, seed, objective)
+        self._size = space.size
+        self._seed = seed
 
     @property
     def capacity(self) -> int | None:
@@ -281,15 +350,27 @@ class Hybrid:
         return None
 
     def propose(self, history: History) -> Point:
-        if exploits(history.index - self._boundary.design):
-            return self._tpe.propose(history)
-        return self._boundary.propose(history)
+        k = history.index - self._boundary.design
+        if k < 0:
+            return self._boundary.propose(history)
+        match role(k):
+            case Role.EXPLORE:
+                from scipy.stats import qmc
 
-
-def exploits(k: int) -> bool:
-    """Whether the ``k``-th proposal after the design is TPE's: ``EXPLOITATION`` of them, evenly
-    spread (the design itself, ``k < 0``, is never)."""
-    return k >= 0 and math.floor((k + 1) * EXPLOITATION) > math.floor(k * EXPLOITATION)
+                pool = qmc.Sobol(
+                    d=self._size, scramble=True, seed=_rng(self._seed, history.index)
+                ).random(CANDIDATES)
+                scene = self._boundary.scene(history, pool)
+                return scene.pick(scene.distance)
+            case Role.REFINE:
+                return self._boundary.propose(history)
+            case Role.SEEK:
+                scene = self._boundary.scene(history)
+                if scene.model is None:
+                    return scene.pick(scene.distance)
+                probability = scene.model.failure_probability(scene.candidates)
+                spread = np.minimum(scene.distance / SEEK_SPREAD, 1.0)
+                return scene.pick(probability * spread)
 
 
 def _nearest(candidates: Points, known: Points) -> npt.NDArray[np.float64]:

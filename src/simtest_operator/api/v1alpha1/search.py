@@ -42,11 +42,11 @@ class SearchStrategy(enum.StrEnum):
     """Optuna's tree-structured Parzen estimator on a continuous criticality, batched with a
     constant liar: finds many failures quickly."""
     BOUNDARY = "boundary"
-    """Active learning of the pass/fail boundary: a classifier's most uncertain points, spread
-    within each batch, after a quasi-random initial design."""
+    """Active learning of the pass/fail boundary: where a Gaussian process on the verdict's
+    margin is least sure, spread within each batch, after a quasi-random initial design."""
     HYBRID = "hybrid"
-    """Boundary active learning for where the system fails, with a share of every batch spent
-    inside the estimated failure set for how often: many failures and the whole boundary."""
+    """The boundary strategy's model, used to seek likely failures (early), refine the boundary
+    (later) and explore the emptiest ground (throughout, for a small second failure region)."""
 
 
 class SearchParameter(ApiModel):
