@@ -60,8 +60,10 @@ def test_vru_reaches_its_trajectory_position_when_the_ego_reaches_its_target(
     for t, x, y, _, v in after:
         assert v == pytest.approx(vru_speed, abs=1e-6)
         expected = LANE_CENTRE_Y - tolerance + vru_speed * (t - sync_time)
-        # re-planned each step, the profile arrives up to a step late (as esmini's)
-        assert y == pytest.approx(expected, abs=DT * vru_speed + 0.05), t
+        # re-planned each step, the profile arrives up to a step late (as esmini's); and the
+        # Init trajectory steps before the story's SynchronizeAction sets the speed (esmini's
+        # storyboard order, checked on follow_trajectory_reverse), which costs one more step
+        assert y == pytest.approx(expected, abs=2 * DT * vru_speed + 0.05), t
         assert x == pytest.approx(150.0, abs=1e-6)
 
 
