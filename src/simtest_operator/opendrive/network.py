@@ -7,7 +7,6 @@ heading in radians counter-clockwise from +x, s along the reference line, t posi
 
 from __future__ import annotations
 
-import collections
 import dataclasses
 import math
 from collections.abc import Collection, Iterator, Mapping, Sequence
@@ -274,29 +273,54 @@ class RoadNetwork:
         road), continuing through lane sections, linked roads and junctions. At a fork the first
         successor whose road is in ``prefer_roads`` is taken, else, with ``straightest``, the one
         that turns least (:meth:`_straightest`), else the first declared one."""
+        road = self.road(road_id)
         direction = 1 if ds >= 0 else -1
-        distance = abs(ds)
-        # the walk's last stretch is where the move ends (deque(maxlen=1): consume, keep last)
-        (last,) = collections.deque(
-            self.walk(
-                road_id,
-                s,
-                lane_id,
-                distance,
-                direction=direction,
-                prefer_roads=prefer_roads,
-                straightest=straightest,
-            ),
-            maxlen=1,
-        )
-        covered = last.start + abs(last.s_to - last.s_from)
-        return LaneLocation(
-            road_id=last.road_id,
-            s=last.s_to,
-            lane_id=last.lane_id,
-            direction=last.direction,
-            remaining=max(distance - covered, 0.0),
-        )
+        remaining = abs(ds)
+        layout = self._layouts[self._slot(road_id)]
+        for _ in range(10_000):
+            section = layout.section_index(s)
+            if direction > 0:
+                end_s = (
+                    layout.sections[section + 1].s
+                    if section + 1 < len(layout.sections)
+                    else road.length
+                )
+                room = end_s - s
+            else:
+                end_s = layout.sections[section].s
+                room = s - end_s
+            if remaining <= room:
+                return LaneLocation(
+                    road_id=road.id,
+                    s=s + direction * remaining,
+                    lane_id=lane_id,
+                    direction=direction,
+                )
+            remaining -= max(room, 0.0)
+            inner = section + 1 < len(layout.sections) if direction > 0 else section > 0
+            if inner:
+                next_lane = self._graph.next_section_lane(road, section, lane_id, direction > 0)
+                if next_lane is None:
+                    return self._stuck(road.id, end_s, lane_id, direction, remaining)
+                lane_id = next_lane
+                # Step just past the boundary so section lookup lands in the next section.
+                s = end_s if direction > 0 else math.nextafter(end_s, -math.inf)
+                continue
+            end = models.ContactPoint.END if direction > 0 else models.ContactPoint.START
+            entries = self._graph.next_lanes(road.id, lane_id, end)
+            if not entries:
+                return self._stuck(road.id, end_s, lane_id, direction, remaining)
+            entry = self._preferred(entries, prefer_roads)
+            if straightest and not prefer_roads and len(entries) > 1:
+                entry = self._straightest(entries, road.id, end_s, direction)
+            road = self._roads[entry.road_id]
+            layout = self._layouts[self._slot(road.id)]
+            lane_id = entry.lane_id
+            if entry.contact_point is models.ContactPoint.START:
+                direction, s = 1, 0.0
+            else:
+                direction, s = -1, road.length
+        raise ScenarioError(f"lane walk from road {road_id!r} does not terminate")
 
     def walk(
         self,
@@ -307,13 +331,11 @@ class RoadNetwork:
         *,
         direction: int = 1,
         prefer_roads: Collection[str] = (),
-        straightest: bool = False,
     ) -> Iterator[LaneStretch]:
         """The lane stretches ahead of (road, s, lane) for ``distance`` metres of s travelling
-        in ``direction``, through sections, links and junctions (forks chosen as
-        :meth:`advance` says); ends early where the lane ends. One traversal for both: moving
-        an entity (:meth:`advance`, the last stretch) and looking ahead on its way (stop lines,
-        stretch by stretch)."""
+        in ``direction``, through sections, links and junctions as :meth:`advance` goes (the
+        route's ``prefer_roads`` first at forks); ends early where the lane ends. What lies
+        ahead on a route (stop lines, ...) is looked up stretch by stretch."""
         road = self.road(road_id)
         layout = self._layouts[self._slot(road_id)]
         done = 0.0
@@ -350,8 +372,6 @@ class RoadNetwork:
             if not entries:
                 return
             entry = self._preferred(entries, prefer_roads)
-            if straightest and not prefer_roads and len(entries) > 1:
-                entry = self._straightest(entries, road.id, end_s, direction)
             road = self._roads[entry.road_id]
             layout = self._layouts[self._slot(road.id)]
             lane_id = entry.lane_id
@@ -359,7 +379,6 @@ class RoadNetwork:
                 direction, s = 1, 0.0
             else:
                 direction, s = -1, road.length
-        raise ScenarioError(f"lane walk from road {road_id!r} does not terminate")
 
     def _preferred(
         self, entries: Sequence[topology.LaneEntry], prefer_roads: Collection[str]
@@ -404,6 +423,14 @@ class RoadNetwork:
 
         best = min(turn(entry) for entry in entries)
         return next(entry for entry in entries if turn(entry) <= best + 1e-6)
+
+    @staticmethod
+    def _stuck(
+        road_id: str, s: float, lane_id: int, direction: int, remaining: float
+    ) -> LaneLocation:
+        return LaneLocation(
+            road_id=road_id, s=s, lane_id=lane_id, direction=direction, remaining=remaining
+        )
 
     # -- projection ----------------------------------------------------------------------------
 

@@ -104,7 +104,6 @@ def signals_ahead(world: World, actor: Actor, horizon: float) -> tuple[SignalAhe
         horizon + max(front, 0.0),
         direction=actor.direction,
         prefer_roads=actor.route[actor.route_index + 1 : actor.route_index + _ROUTE_LOOKAHEAD],
-        straightest=not actor.route,
     ):
         lines = index.lines(stretch.road_id, stretch.lane_id)
         if not lines or roads.driving_direction(stretch.road_id, stretch.lane_id) != (
