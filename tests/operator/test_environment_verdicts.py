@@ -127,9 +127,14 @@ def terminated(message: str, *, code: int = 0, reason: str = "Completed") -> dic
 
 
 def assess(
-    e: observed.EnvironmentView, p: observed.PodView | None, now: float = 20, nodes: Any = NODES
+    e: observed.EnvironmentView,
+    p: observed.PodView | None,
+    now: float = 20,
+    nodes: Any = NODES,
+    *,
+    seen: bool = False,
 ) -> environments.Assessment:
-    return environments.assess(e, p, nodes=nodes, now=at(now), limits=LIMITS)
+    return environments.assess(e, p, nodes=nodes, now=at(now), limits=LIMITS, seen=seen)
 
 
 def test_termination_message_gives_the_runner_verdict() -> None:
@@ -366,6 +371,14 @@ def test_a_pod_the_cache_never_showed_gets_the_pending_time_not_the_missing_grac
     never = assess(provisioned, None, now=301)
     assert never.results is not None and never.results[0].verdict is Verdict.ERROR
     assert "never appeared in 300s" in never.reason
+
+
+def test_a_watched_pod_that_is_gone_was_deleted_after_the_missing_grace() -> None:
+    provisioned = env()  # the pod ran and was deleted before any status write recorded it
+    assert assess(provisioned, None, now=5, seen=True).results is None
+    gone = assess(provisioned, None, now=11, seen=True)
+    assert gone.results is not None and gone.results[0].verdict is Verdict.ERROR
+    assert "disappeared before it finished (deleted)" in gone.reason
 
 
 def test_deleted_environment_is_an_error() -> None:

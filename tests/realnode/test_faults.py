@@ -31,7 +31,9 @@ def test_a_memory_limit_too_low_is_oomkilled_error_and_retried(
     real_operator: support.OperatorProcess,
     tmp_path: Path,
 ) -> None:
-    memory = {"requests": {"cpu": "500m", "memory": "48Mi"}, "limits": {"memory": "48Mi"}}
+    # The runner's imports alone take ~39 MiB of anonymous memory; file pages count only when
+    # no other cgroup has them cached, so a limit near the peak (48Mi) let a run pass at times.
+    memory = {"requests": {"cpu": "500m", "memory": "32Mi"}, "limits": {"memory": "32Mi"}}
     path = smoke_variant(tmp_path, "oom", "hard-braking_*.xosc", retries=1, resources=memory)
     submitted = support.submit(
         path, namespace=real_namespace, kubeconfig=real_cluster.kubeconfig, timeout=180

@@ -87,8 +87,10 @@ def assess(
     nodes: Mapping[str, NodeView] | None,
     now: datetime.datetime,
     limits: Limits,
+    seen: bool = False,
 ) -> Assessment:
-    """Judge one environment from its pod."""
+    """Judge one environment from its pod; ``seen``: this operator has watched the pod exist
+    or be deleted (its absence is then a delete, even before the status recorded the pod)."""
     queued = env.status.timings.queued or env.created
     if env.finished:
         return Assessment(
@@ -110,7 +112,7 @@ def assess(
             reason=reason,
         )
     if pod is None:
-        return _without_pod(env, now=now, limits=limits, queued=queued)
+        return _without_pod(env, now=now, limits=limits, queued=queued, seen=seen)
     timings = Timings(
         queued=queued,
         scheduled=pod.scheduled_at,
@@ -167,6 +169,7 @@ def _without_pod(
     now: datetime.datetime,
     limits: Limits,
     queued: datetime.datetime | None,
+    seen: bool,
 ) -> Assessment:
     timings = env.status.timings.model_copy(update={"queued": queued})
     if env.provisioned_at is None and env.status.pod is None:
@@ -175,7 +178,7 @@ def _without_pod(
         )
     since = env.provisioned_at or queued or now
     recorded = env.status.timings
-    seen = env.status.node is not None or recorded.started is not None
+    seen = seen or env.status.node is not None or recorded.started is not None
     seen = seen or recorded.scheduled is not None
     # A pod the cache never showed may exist behind a lagging watch (a starved operator under
     # load: 10,000 scenarios on 2 busy cores lost 6 running pods to a 10 s grace). Until the

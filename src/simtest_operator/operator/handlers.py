@@ -104,10 +104,22 @@ async def child_event(namespace: str | None, spec: kopf.Spec, memo: Any, **_: An
 
 @kopf.on.event(admission.GROUP, admission.VERSION, "workloads", labels=CAMPAIGN_LABEL)
 @kopf.on.event("batch", "v1", "jobs", labels=CAMPAIGN_LABEL)
-@kopf.on.event("v1", "pods", labels=CAMPAIGN_LABEL)
-async def pod_event(namespace: str | None, labels: kopf.Labels, memo: Any, **_: Any) -> None:
-    """A simulator pod, helmfile Job or Kueue Workload changed: wake its campaign."""
+async def job_event(namespace: str | None, labels: kopf.Labels, memo: Any, **_: Any) -> None:
+    """A helmfile Job or Kueue Workload changed: wake its campaign."""
     memo.runtime.loops.wake((namespace or "", labels[names.LABEL_CAMPAIGN]))
+
+
+@kopf.on.event("v1", "pods", labels=CAMPAIGN_LABEL)
+async def pod_event(
+    namespace: str | None, name: str, type: str, labels: kopf.Labels, memo: Any, **_: Any
+) -> None:
+    """A simulator pod changed: wake its campaign (told a deleted pod's name — its environment
+    may not have recorded the pod yet, and the loop must not mistake it for a lagging watch)."""
+    key = (namespace or "", labels[names.LABEL_CAMPAIGN])
+    if type == "DELETED":
+        memo.runtime.loops.pod_deleted(key, name)
+    else:
+        memo.runtime.loops.wake(key)
 
 
 @kopf.on.event("v1", "nodes")

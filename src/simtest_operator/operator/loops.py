@@ -77,6 +77,9 @@ class CampaignLoop:
         self.refused: dict[tuple[Kind, str], str] = {}
         """Creates the API server refused for good while this loop ran (the planner words them
         where they matter: the evaluation Job)."""
+        self.seen_pods: set[str] = set()
+        """Simulator pods the cache has shown or the watch reported deleted while this loop ran
+        (a pod deleted before a status write recorded it is still known to have existed)."""
         self.last_status_write: datetime.datetime | None = None
         self.wake_at: datetime.datetime | None = None
         self.backoff = 1.0
@@ -146,13 +149,16 @@ class CampaignLoop:
         planning_started = time.perf_counter()  # reading the cache and planning: no API calls
         if self.search is not None:
             self.search.learn(cache.batches_of(self.key))
+        pods = cache.pods_of(self.key)
+        self.seen_pods.update(pods)
         inputs = planning.Inputs(
             campaign=campaign,
             stored=self.stored,
             resolution_error=self.resolution_error,
             batches=cache.batches_of(self.key),
             envs=cache.environments_of(self.key),
-            pods=cache.pods_of(self.key),
+            pods=pods,
+            seen_pods=frozenset(self.seen_pods),
             nodes=cache.node_map(),
             now=now,
             last_status_write=self.last_status_write,
@@ -274,6 +280,13 @@ class Loops:
         """Wake a campaign's loop (no-op when it has none)."""
         entry = self.loops.get(key)
         if entry is not None:
+            entry[0].wake.set()
+
+    def pod_deleted(self, key: CampaignKey, pod: str) -> None:
+        """The watch reported a campaign's simulator pod deleted: remember it, wake the loop."""
+        entry = self.loops.get(key)
+        if entry is not None:
+            entry[0].seen_pods.add(pod)
             entry[0].wake.set()
 
     def wake_all(self) -> None:

@@ -94,14 +94,15 @@ def assess(
     nodes: Mapping[str, NodeView] | None,
     now: datetime.datetime,
     limits: Limits,
+    seen: bool = False,
 ) -> Assessment:
     """Judge one environment: its pod as :func:`environments.assess` does, and before the pod
     exists (or if provisioning breaks) its helmfile sync Job."""
     if env.status.provisioner != HELMFILE or env.finished or env.deleting:
-        return environments.assess(env, pod, nodes=nodes, now=now, limits=limits)
+        return environments.assess(env, pod, nodes=nodes, now=now, limits=limits, seen=seen)
     job = jobs.get(sync_job(env))
     if pod is not None:
-        judged = environments.assess(env, pod, nodes=nodes, now=now, limits=limits)
+        judged = environments.assess(env, pod, nodes=nodes, now=now, limits=limits, seen=seen)
         if judged.ended or job is None or not job.failed:
             return judged
         # The simulator started but the rest of the stack did not install: not a usable run.

@@ -43,6 +43,7 @@ def assessments(step: Step, cancellation: cancelling.Cancellation | None) -> dic
             nodes=inputs.nodes,
             now=step.now,
             limits=limits(step, env),
+            seen=(env.status.pod or env.name) in inputs.seen_pods,
         )
         for env in step.envs
     }

@@ -10,6 +10,7 @@ from __future__ import annotations
 import dataclasses
 import datetime
 from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Set as AbstractSet
 
 from simtest_operator.api.v1alpha1 import TestCampaignSpec
 from simtest_operator.operator import recording_results
@@ -45,6 +46,9 @@ class Inputs:
     batches: Sequence[BatchView] = ()
     envs: Sequence[EnvironmentView] = ()
     pods: Mapping[str, PodView] = dataclasses.field(default_factory=dict)
+    seen_pods: AbstractSet[str] = frozenset()
+    """Simulator pods the loop has watched exist or be deleted, named even when the cache no
+    longer shows them: a seen pod that is gone was deleted, not hidden by a lagging watch."""
     nodes: Mapping[str, NodeView] | None = None
     """None when the operator cannot see nodes (then maxParallel defaults to batchSize)."""
     now: datetime.datetime
