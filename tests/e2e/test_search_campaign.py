@@ -37,7 +37,7 @@ def _campaign(name: str, *, search: bool) -> dict[str, Any]:
                 {"name": "EgoSpeed", "min": 15, "max": 35},
                 {"name": "CutInGap", "min": 5, "max": 40},
             ],
-            "strategy": "random",
+            "strategy": "hybrid",  # the default: its model fits must not stall the waves
             "budget": BUDGET,
             "seed": 11,
         }

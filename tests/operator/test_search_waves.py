@@ -22,7 +22,8 @@ from typing import Any, TypeVar, cast
 
 import pytest
 
-from simtest_operator.operator import observed, planning, resolving
+from simtest_operator.api.v1alpha1.search import SearchSpec
+from simtest_operator.operator import observed, planning, resolving, searching
 from simtest_operator.operator.actions import Kind, Plan
 from simtest_operator.operator.batches import Layout
 from simtest_operator.operator.client import Client
@@ -347,3 +348,42 @@ DISTRIBUTION = """<?xml version="1.0"?>
   </ParameterValueDistribution>
 </OpenSCENARIO>
 """
+
+
+@pytest.mark.parametrize(
+    ("strategy", "libraries"),
+    [("hybrid", ("sklearn.gaussian_process", "scipy.stats")), ("tpe", ("optuna",)), ("random", ())],
+)
+def test_a_model_based_search_imports_its_libraries_while_the_first_wave_runs(
+    monkeypatch: pytest.MonkeyPatch, strategy: str, libraries: tuple[str, ...]
+) -> None:
+    """Importing scikit-learn takes seconds on a busy node; asked only when the start-up design
+    is spent, every slot would wait for it."""
+    imported: list[str] = []
+    monkeypatch.setattr(searching, "import_module", imported.append)
+    spec = SearchSpec.model_validate({**SEARCH, "strategy": strategy})
+    space = SearchSpace.from_spec(spec, CUT_IN)
+    base = PinnedScenario(id="cut-in.xosc", source="file:///cut-in.xosc", sha256="0" * 64)
+
+    async def replay() -> None:
+        search = await CampaignSearch.replayed(spec, space, base, [])
+        assert search.preloading is not None
+        await search.preloading
+
+    asyncio.run(replay())
+    assert tuple(imported) == libraries
+
+
+def test_a_model_based_search_keeps_a_quarter_of_the_window_queued_ahead() -> None:
+    """A slot that frees while the model is fitted starts a queued proposal at once; a
+    ``random`` search needs no lookahead (its first wave is the window, as above)."""
+    cluster = SearchCluster(nodes={"n0": 4, "n1": 4})
+    cluster.start({**SEARCH, "strategy": "hybrid", "budget": 24}, maxParallel=8)
+    cluster.step()
+    waves = sorted(cluster.of(Kind.BATCH), key=lambda b: b["spec"]["index"])
+    assert len(waves[0]["spec"]["scenarios"]) == 8 + 2
+    cluster.run()
+    status = cluster.status()
+    assert (status["search"]["asked"], status["total"]) == (24, 24)
+    running, slots = map(sum, zip(*cluster.busy, strict=True))
+    assert running / slots >= 0.9, f"slots busy {running / slots:.0%} while searching"
