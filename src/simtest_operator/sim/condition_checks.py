@@ -191,7 +191,7 @@ class Conditions:
             return self._collision(actor, condition)
         if isinstance(condition, model.ReachPositionCondition):
             target = positions.resolve(world, condition.position)
-            if math.hypot(target.x - actor.x, target.y - actor.y) > condition.tolerance:
+            if not math.hypot(target.x - actor.x, target.y - actor.y) <= condition.tolerance:
                 return False
             # a position written with an Orientation is reached only facing that way (esmini)
             oriented = getattr(condition.position, "orientation", None) is not None
