@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from simtest_operator.openscenario import LoadOptions, StrictDeviationError, load_scenario
+from simtest_operator.openscenario import LoadOptions, StrictDeviationError, load_scenario, model
 from simtest_operator.openscenario.deviations import Deviation, Deviations
 from tests.openscenario.conftest import ScenarioWriter
 
@@ -168,3 +168,23 @@ def test_prefixed_global_and_variable_names(write_scenario: ScenarioWriter) -> N
     assert lanes is not None and lanes.value == 3
     assert n is not None and n.value == 1
     assert [d.code for d in scenario.deviations] == ["parameter-name-with-prefix"] * 2
+
+
+def test_relative_lane_position_without_ds_is_at_the_entitys_s(
+    write_scenario: ScenarioWriter,
+) -> None:
+    """esmini's unit test traj-heading-trig writes a RelativeLanePosition with neither ``ds`` nor
+    ``dsLane`` (the schema wants one): esmini reads ds 0, and so do we, reporting it."""
+    init = """<Private entityRef="Ego"><PrivateAction><TeleportAction><Position>
+      <RelativeLanePosition entityRef="Ego" dLane="0" offset="0.5"/>
+    </Position></TeleportAction></PrivateAction></Private>"""
+    path = write_scenario(minor=1, init=init)
+    scenario = load_scenario(path)
+    (action,) = scenario.storyboard.init.private[0].actions
+    assert isinstance(action, model.TeleportAction)
+    position = action.position
+    assert isinstance(position, model.RelativeLanePosition)
+    assert (position.ds, position.ds_lane) == (0.0, None)
+    assert [d.code for d in scenario.deviations] == ["relative-lane-position-without-ds"]
+    with pytest.raises(StrictDeviationError):
+        load_scenario(path, options=STRICT)

@@ -35,6 +35,9 @@ SCENARIO_RUNNER_STILL = 0.1
 StandStill restarts its clock above 0.001 m/s, but CARLA's physics brings a braking vehicle to
 rest while the stand-in's car-following model only approaches zero; 0.1 m/s is ScenarioRunner's
 own standstill in its RunningStopTest."""
+REACH_HEADING_TOLERANCE = 0.05
+"""Radians within which an entity must face a ReachPositionCondition's position that is written
+with an ``Orientation`` (esmini's ``TrigByReachPosition`` angular tolerance)."""
 _OBJECT_TYPES = {
     "vehicle": EntityKind.VEHICLE,
     "pedestrian": EntityKind.PEDESTRIAN,
@@ -188,7 +191,13 @@ class Conditions:
             return self._collision(actor, condition)
         if isinstance(condition, model.ReachPositionCondition):
             target = positions.resolve(world, condition.position)
-            return math.hypot(target.x - actor.x, target.y - actor.y) <= condition.tolerance
+            if not math.hypot(target.x - actor.x, target.y - actor.y) <= condition.tolerance:
+                return False
+            # a position written with an Orientation is reached only facing that way (esmini)
+            oriented = getattr(condition.position, "orientation", None) is not None
+            return not oriented or angles.within(
+                actor.heading, target.heading, REACH_HEADING_TOLERANCE
+            )
         if isinstance(condition, model.DistanceCondition):
             target = positions.resolve(world, condition.position)
             point = measures.point_state(target.x, target.y, target.heading)

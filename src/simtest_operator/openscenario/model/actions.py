@@ -367,7 +367,7 @@ PrivateAction = (
     | IgnoredAction
     | Unsupported
 )
-"""Private actions; OverrideControllerValue actions with an active value are Unsupported."""
+"""Private actions; an OverrideControllerValueAction alone is an IgnoredAction."""
 
 GlobalAction = (
     SetValueAction

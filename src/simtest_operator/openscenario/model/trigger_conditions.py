@@ -170,7 +170,8 @@ class TraveledDistanceCondition:
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
 class ReachPositionCondition:
-    """Entity is within ``tolerance`` metres of ``position``."""
+    """Entity is within ``tolerance`` metres of ``position`` (facing its ``Orientation`` when
+    the position is written with one, as esmini checks)."""
 
     position: Position
     tolerance: float

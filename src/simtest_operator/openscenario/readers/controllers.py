@@ -83,16 +83,17 @@ def controller_action(el: Element, ctx: reading.Context) -> a.PrivateAction:
 
     1.0 requires AssignControllerAction plus OverrideControllerValueAction; 1.1 allows any
     combination of assign/override/activate; 1.2+ exactly one. Assign and activate are merged
-    into one AssignControllerAction (activate flags filled from the ActivateControllerAction);
-    an override with any active value is unsupported, an all-inactive one is a no-op (also alone).
+    into one AssignControllerAction (activate flags filled from the ActivateControllerAction).
+    An override with an active value (or alone) is listed as ignored: its values replace the
+    pedal, steering and gear inputs of a controller that reads them, which no motion here does
+    (esmini's default motion drives on unchanged, ``override_action.xosc``); alone it completes
+    at once.
     """
     assign = reading.child(el, "AssignControllerAction")
     activate_el = reading.child(el, "ActivateControllerAction")
     override = reading.child(el, "OverrideControllerValueAction")
     if override is not None and _override_active(override, ctx):
-        return ctx.unsupported(
-            override, "overriding controller values (pedals, steering, gear) is not supported"
-        )
+        ctx.ignore("OverrideControllerValueAction")
     switch = activate(activate_el, ctx) if activate_el is not None else None
     if assign is not None:
         lateral = ctx.opt_boolean(assign, "activateLateral")
@@ -116,7 +117,6 @@ def controller_action(el: Element, ctx: reading.Context) -> a.PrivateAction:
     if switch is not None:
         return switch
     if override is not None:
-        # All values inactive (ScenarioRunner's only supported form): it changes nothing.
         ctx.ignore("OverrideControllerValueAction")
         return ctl.IgnoredAction(kind="OverrideControllerValueAction", line=override.sourceline)
     return ctx.unsupported(ctx.choice(el), "unknown controller action")

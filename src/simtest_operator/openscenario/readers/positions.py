@@ -143,7 +143,12 @@ def _relative_lane(el: Element, ctx: reading.Context) -> p.RelativeLanePosition:
     ds = ctx.opt_double(el, "ds")
     ds_lane = ctx.opt_double(el, "dsLane")
     if ds is None and ds_lane is None:
-        raise ctx.error(el, "one of 'ds' or 'dsLane' is required")
+        # esmini reads the missing distance as 0 (no move along the road), as a 1.0 file's
+        # required ds="0" would be
+        ctx.deviation(
+            el, "relative-lane-position-without-ds", "neither 'ds' nor 'dsLane' given: ds read as 0"
+        )
+        ds = 0.0
     return p.RelativeLanePosition(
         entity_ref=ctx.string(el, "entityRef"),
         d_lane=ctx.integer(el, "dLane"),
