@@ -114,9 +114,7 @@ class CampaignSearch:
         pins = [p.proposal for p in frozen if p.proposal is not None]
         replayed = await asyncio.to_thread(resolving.replay_search, spec, space, pins, outcomes)
         search = cls(spec, space, replayed.searcher, base)
-        search.preloading = asyncio.get_running_loop().run_in_executor(
-            None, preload, spec.strategy
-        )
+        search.preloading = asyncio.get_running_loop().run_in_executor(None, preload, spec.strategy)
         search.waves = len(starts)
         search.unpinned = list(replayed.unpinned)
         for index, outcome in replayed.pinned:
