@@ -42,11 +42,18 @@ def test_no_headway_to_a_reference_alongside() -> None:
     assert math.isnan(headway(bench))
 
 
-def arrival(bench: Bench, *, freespace: bool = False) -> float:
+def arrival(bench: Bench, *, freespace: bool = False, along_route: bool = False) -> float:
     """ScenarioRunner's reading of a headway/TTC to ``Lead``: the time to arrival."""
     conditions = Conditions(bench.world, lambda *args: False, scenario_runner=True)
+    condition = model.TimeHeadwayCondition(
+        entity_ref="Lead",
+        value=1.0,
+        rule=model.Rule.LESS_THAN,
+        freespace=freespace,
+        along_route=along_route,
+    )
     bench.world.refresh()
-    return conditions._arrival(bench.actor("Car"), "Lead", freespace)
+    return conditions._arrival(bench.actor("Car"), "Lead", condition)
 
 
 def test_scenario_runner_reads_the_time_to_arrival() -> None:
@@ -89,3 +96,20 @@ def test_a_headway_condition_follows_the_rule_set() -> None:
     # esmini: 30 m / 10 m/s = 3 s < 4 s; ScenarioRunner: 30 m / 6 m/s = 5 s.
     assert Conditions(bench.world, lambda *args: False)(body)[0] is True
     assert Conditions(bench.world, lambda *args: False, scenario_runner=True)(body)[0] is False
+
+
+def test_scenario_runner_along_route_is_the_way_along_the_lane() -> None:
+    # InTimeToArrivalToVehicle with alongRoute: its route planner's way between the two lane
+    # waypoints, 60 m of the reference arc on a lane centre 1.75 m further out; the chord
+    # across the curve without it.
+    bench = Bench("Car", "Lead", road="arc.xodr")
+    bench.start("Car", teleport(lane(-1, 10.0)))
+    bench.start("Car", speed(10.0))
+    bench.start("Lead", teleport(lane(-1, 70.0)))
+    chord = 2.0 * (RADIUS + 1.75) * math.sin(60.0 / RADIUS / 2.0)
+    along = 60.0 * (RADIUS + 1.75) / RADIUS
+    assert arrival(bench) == pytest.approx(chord / 10.0, rel=1e-3)
+    assert arrival(bench, along_route=True) == pytest.approx(along / 10.0, rel=2e-3)
+    # No lane leads back to an entity behind: the straight distance stands in.
+    bench.start("Lead", teleport(lane(-1, 5.0)))
+    assert arrival(bench, along_route=True) == pytest.approx(arrival(bench), rel=1e-9)
