@@ -155,12 +155,23 @@ def test_collision_and_driven_distance_fail(tmp_path: Path) -> None:
     assert outcome.metrics["criteria.DrivenDistanceTest"] == 0.0
 
 
-def test_unknown_criterion_is_reported_not_judged(tmp_path: Path) -> None:
+def test_a_criterion_scenario_runner_cannot_build_makes_the_run_invalid(tmp_path: Path) -> None:
+    # ScenarioRunner raises while building criteria_HoverTest (no such class in
+    # OpenScenarioParser's globals) and refuses the file: "The scenario cannot be loaded".
     text = cs.follow_leading(stop=cs.criteria("CollisionTest", "HoverTest"))
     report = run(cs.write(tmp_path, text))
-    assert report.outcome.verdict is Verdict.PASSED
-    assert "HoverTest not evaluated (unknown criterion)" in report.outcome.reason
+    assert report.outcome.verdict is Verdict.INVALID
+    assert report.outcome.reason.startswith(
+        "ScenarioRunner cannot load the file: criteria_HoverTest (line "
+    )
+    assert report.outcome.reason.endswith("ScenarioRunner has no such test")
+    assert report.outcome.simulated_seconds == 0.0
     assert [d.code for d in report.deviations] == ["carla-criterion-unknown"]
+    # Its class names are case-sensitive: OnSideWalkTest is no class (OnSidewalkTest is).
+    text = cs.follow_leading(stop=cs.criteria("CollisionTest", "OnSideWalkTest"))
+    report = run(cs.write(tmp_path, text))
+    assert report.outcome.verdict is Verdict.INVALID
+    assert "criteria_OnSideWalkTest" in report.outcome.reason
 
 
 _LATE = cs.vehicle("late", "simulation")

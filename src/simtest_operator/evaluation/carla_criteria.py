@@ -29,8 +29,10 @@ ScenarioRunner criterion      Judged here as
                               the stop's reach (see :mod:`.signal_criteria`)
 ============================  ====================================================================
 
-A criterion ScenarioRunner cannot build from that call (an unknown name, a test that needs more
-arguments, a non-numeric value) is listed as not evaluated.
+A criterion ScenarioRunner cannot build from that call (an unknown or differently spelled name, a
+test that needs more arguments, a missing or non-numeric value) makes ScenarioRunner refuse the
+whole file ("The scenario cannot be loaded", ``scenario_runner.py``):
+:attr:`ScenarioCriteria.refusal` says why, and the runner reports the run ``Invalid`` unrun.
 """
 
 from __future__ import annotations
@@ -105,10 +107,13 @@ class Outcome:
 
 @dataclasses.dataclass(frozen=True, slots=True)
 class _Built:
-    """A criterion as ScenarioRunner builds it: its value, or why it cannot be built."""
+    """A criterion as ScenarioRunner builds it: its value, or why it cannot be judged."""
 
     value: float | None
     problem: str = ""
+    refused: bool = True
+    """With a problem: ScenarioRunner raises while building it (it refuses the file); else it
+    builds a test the stand-in cannot judge."""
 
 
 def _build(criterion: model.Criterion) -> _Built:
@@ -116,7 +121,7 @@ def _build(criterion: model.Criterion) -> _Built:
     only), or the reason the call fails."""
     name = criterion.test
     if not criterion.known:
-        return _Built(None, "unknown criterion")
+        return _Built(None, "ScenarioRunner has no such test")
     if not criterion.arguments:
         if name in _REQUIRED:
             return _Built(None, f"ScenarioRunner needs a value ({_SECOND_ARGUMENT[name]})")
@@ -131,7 +136,9 @@ def _build(criterion: model.Criterion) -> _Built:
     if not math.isfinite(value):
         return _Built(None, f"value {text!r} is not a number")
     if name == "CollisionTest" and value != 0.0:
-        return _Built(None, "ScenarioRunner reads a non-zero value as the other actor")
+        return _Built(
+            None, "ScenarioRunner reads a non-zero value as the other actor", refused=False
+        )
     return _Built(value)
 
 
@@ -184,6 +191,19 @@ class ScenarioCriteria:
     @property
     def names(self) -> tuple[str, ...]:
         return tuple(c.test for c in self._criteria)
+
+    @property
+    def refusal(self) -> str | None:
+        """Why ScenarioRunner refuses to load the file (a test it cannot build: it raises while
+        building its criteria, ``OpenScenarioParser.convert_condition_to_atomic``), or None."""
+        for criterion, built in zip(self._criteria, self._built, strict=True):
+            if built.problem and built.refused:
+                where = f" (line {criterion.line})" if criterion.line is not None else ""
+                return (
+                    f"ScenarioRunner cannot load the file: criteria_{criterion.test}{where}: "
+                    f"{built.problem}"
+                )
+        return None
 
     @property
     def driven_distance(self) -> float:

@@ -168,14 +168,13 @@ def run_scenario(
         f"{opened.net_seconds:.2f} s); ego {simulation.ego}"
     )
     log.append(f"rules: {simulation.rules.describe()}")
+    checks = evaluation.ScenarioCriteria.of(opened.scenario, roads=simulation.world.roads)
     evaluator = evaluation.OnlineEvaluator(
         request.criteria,
         ego=simulation.ego,
         off_road=simulation.off_road,
         coupled=simulation.coupled,
-        scenario_criteria=evaluation.ScenarioCriteria.of(
-            opened.scenario, roads=simulation.world.roads
-        ),
+        scenario_criteria=checks,
     )
     roads = simulation.world.roads
     samples = _Samples(roads.document.offset if roads is not None else None)
@@ -192,6 +191,8 @@ def run_scenario(
     scratch = None if keep else tempfile.TemporaryDirectory(prefix="simtest-evidence-")
     recording_path = Path(scratch.name if scratch is not None else str(out)) / "recording.mcap"
     try:
+        if checks is not None and checks.refusal is not None:
+            raise ScenarioError(checks.refusal)
         link.attach(
             simulation,
             scenario_id=scenario_id,
