@@ -388,3 +388,28 @@ def test_walkers_have_carla_size(tmp_path: Path) -> None:
     # A file under esmini's rules keeps its pedestrian's box (0.6 x 0.5 m in its catalog).
     esmini = CORPUS / "esmini" / "resources" / "xosc" / "pedestrian.xosc"
     assert walker_box(esmini, "pedestrian_adult") == pytest.approx((0.6, 0.5))
+
+
+def test_a_failed_end_of_road_test_ends_the_run(tmp_path: Path) -> None:
+    # ScenarioRunner's EndofRoadTest returns SUCCESS once it failed, which ends its criteria
+    # group and the scenario: the run stops there, long before the act (1 km) or time limit.
+    from tests.evaluation.test_lane_criteria import TWO_ROADS
+
+    (tmp_path / "two.xodr").write_bytes(TWO_ROADS)
+    adversary = """
+        <Private entityRef="adversary"><PrivateAction><TeleportAction><Position>
+          <LanePosition roadId="2" laneId="-1" s="90" offset="0"/>
+        </Position></TeleportAction></PrivateAction></Private>"""
+    text = cs.follow_leading(
+        stop=cs.criterion("EndofRoadTest", "duration", "1") + cs.criteria(distance=None),
+        hero_position='<LanePosition roadId="1" laneId="-1" s="80" offset="0"/>',
+        adversary_init=adversary,
+        act_distance=1000.0,
+        logic_file="two.xodr",
+    )
+    outcome = run(cs.write(tmp_path, text), time_limit=40.0).outcome
+    assert outcome.verdict is Verdict.FAILED
+    assert outcome.reason.startswith("criteria_EndofRoadTest failed: hero left road 1 at t=")
+    failed_at = float(outcome.reason.split(" at t=")[2].split(" s")[0])
+    assert outcome.simulated_seconds == pytest.approx(failed_at, abs=1e-6)
+    assert outcome.simulated_seconds < 20.0

@@ -193,6 +193,19 @@ class ScenarioCriteria:
         return tuple(c.test for c in self._criteria)
 
     @property
+    def ends_run(self) -> bool:
+        """Whether ScenarioRunner would stop the run now: a failed EndofRoadTest. Its ``update``
+        returns ``SUCCESS`` on failure (every other criterion it builds for a file returns
+        ``RUNNING``: ``terminate_on_failure`` stays off), which ends its criteria group
+        (``OpenScenario._create_test_criteria``: a ``SUCCESS_ON_ONE`` parallel) and with it the
+        scenario tree (``SUCCESS_ON_ONE`` over behaviour, timeout and criteria)."""
+        return (
+            self._lanes is not None
+            and "EndofRoadTest" in self.names
+            and self._lanes.failure("EndofRoadTest") is not None
+        )
+
+    @property
     def refusal(self) -> str | None:
         """Why ScenarioRunner refuses to load the file (a test it cannot build: it raises while
         building its criteria, ``OpenScenarioParser.convert_condition_to_atomic``), or None."""

@@ -304,7 +304,8 @@ def _loop(
     recorder: recording.Recorder | None,
     started: float,
 ) -> bool:
-    """Step until the storyboard completes or a limit is hit; True when the wall limit hit."""
+    """Step until the storyboard completes, a limit is hit or a ScenarioRunner criterion ends the
+    run (:attr:`~.evaluation.ScenarioCriteria.ends_run`); True when the wall limit hit."""
     limit = request.criteria.time_limit
     wall_limit = request.wall_clock_limit
     pace = request.simulation.real_time_factor
@@ -317,6 +318,9 @@ def _loop(
             recorder.write(snapshot)
         if simulation.complete or simulation.time >= limit - 1e-9:
             return False
+        checks = evaluator.scenario_criteria
+        if checks is not None and checks.ends_run:
+            return False  # ScenarioRunner's failed EndofRoadTest ends its scenario tree
         steps += 1
         if pace > 0:  # no step before its wall time: simulated t at paced_from + t / pace
             ahead = paced_from + simulation.time / pace - time.perf_counter()
