@@ -78,6 +78,23 @@ def test_velocity_criteria_are_judged_at_the_last_tick() -> None:
     assert outcomes[3].detail == "average 10.00 m/s <= 10 m/s"
 
 
+def test_infinite_and_nan_values_build_as_scenario_runner_reads_them() -> None:
+    # float("inf") and float("nan") are numbers to ScenarioRunner: the tests build (no refusal)
+    # and compare as its code does: distance > inf never holds; speed > nan neither, so
+    # MaxVelocityTest passes and AverageVelocityTest (avg > nan) fails.
+    checks = ScenarioCriteria(
+        [
+            criterion("DrivenDistanceTest", ("distance_success", "inf")),
+            criterion("MaxVelocityTest", ("max_velocity", "nan")),
+            criterion("AverageVelocityTest", ("avg_velocity_success", "nan")),
+        ],
+        roads=None,
+    )
+    assert checks.refusal is None
+    outcomes = drive(checks, 50.0).criterion_outcomes()
+    assert [o.status for o in outcomes] == [Status.FAILED, Status.PASSED, Status.FAILED]
+
+
 def test_a_max_velocity_exceeded_before_the_end_passes() -> None:
     # ScenarioRunner overwrites MaxVelocityTest's status at every tick: only the last one counts.
     checks = ScenarioCriteria([criterion("MaxVelocityTest", ("max_velocity", "5"))], roads=None)
