@@ -113,3 +113,21 @@ def test_scenario_runner_along_route_is_the_way_along_the_lane() -> None:
     # No lane leads back to an entity behind: the straight distance stands in.
     bench.start("Lead", teleport(lane(-1, 5.0)))
     assert arrival(bench, along_route=True) == pytest.approx(arrival(bench), rel=1e-9)
+
+
+def test_along_lanes_follows_the_lanes_onto_the_next_road() -> None:
+    from simtest_operator.opendrive import RoadCoord, RoadNetwork
+    from simtest_operator.sim.measures import along_lanes
+    from tests.evaluation.test_lane_criteria import TWO_ROADS
+
+    roads = RoadNetwork.from_bytes(TWO_ROADS)
+
+    def at(road: str, s: float) -> RoadCoord:
+        return RoadCoord(road_id=road, s=s, t=-1.75, lane_id=-1, heading_of_road=0.0)
+
+    # 20 m to the end of road 1, then 30 m into road 2.
+    assert along_lanes(roads, at("1", 80.0), at("2", 30.0)) == pytest.approx(50.0)
+    assert along_lanes(roads, at("1", 10.0), at("1", 40.0)) == pytest.approx(30.0)
+    # Against the lanes' direction there is no way.
+    assert along_lanes(roads, at("2", 30.0), at("1", 80.0)) is None
+    assert along_lanes(roads, at("1", 40.0), at("1", 10.0)) is None
