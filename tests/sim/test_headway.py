@@ -131,3 +131,23 @@ def test_along_lanes_follows_the_lanes_onto_the_next_road() -> None:
     # Against the lanes' direction there is no way.
     assert along_lanes(roads, at("2", 30.0), at("1", 80.0)) is None
     assert along_lanes(roads, at("1", 40.0), at("1", 10.0)) is None
+
+
+def test_scenario_runner_distance_along_route_is_the_way_along_the_lane() -> None:
+    # InTriggerDistanceToOSCPosition with alongRoute: 62.1 m along lane -1 of the arc to a point
+    # 60 m of reference line ahead, not the 58.4 m chord; esmini's rules keep the chord here.
+    bench = Bench("Car", road="arc.xodr")
+    bench.start("Car", teleport(lane(-1, 10.0)))
+    bench.world.refresh()
+    condition = model.DistanceCondition(
+        position=lane(-1, 70.0),
+        value=60.0,
+        rule=model.Rule.LESS_THAN,
+        freespace=False,
+        along_route=True,
+    )
+    body = model.ByEntity(
+        triggering_entities=("Car",), rule=model.TriggeringEntitiesRule.ANY, condition=condition
+    )
+    assert Conditions(bench.world, lambda *args: False, scenario_runner=True)(body)[0] is False
+    assert Conditions(bench.world, lambda *args: False)(body)[0] is True

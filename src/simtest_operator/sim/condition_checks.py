@@ -191,6 +191,16 @@ class Conditions:
             return math.hypot(target.x - actor.x, target.y - actor.y) <= condition.tolerance
         if isinstance(condition, model.DistanceCondition):
             target = positions.resolve(world, condition.position)
+            if self._scenario_runner and condition.along_route and world.roads is not None:
+                # InTriggerDistanceToOSCPosition with alongRoute: its route planner's way from
+                # the actor's lane waypoint to the position's (straight where none leads there)
+                start = world.roads.to_road(actor.x, actor.y, actor.road_id)
+                goal = world.roads.to_road(target.x, target.y)
+                way = None
+                if start is not None and goal is not None:
+                    way = measures.along_lanes(world.roads, start, goal)
+                if way is not None:
+                    return compare(way, condition.rule, condition.value)
             point = measures.point_state(target.x, target.y, target.heading)
             value = measures.to_point(
                 world.state(name),
