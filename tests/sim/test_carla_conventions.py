@@ -413,3 +413,56 @@ def test_a_failed_end_of_road_test_ends_the_run(tmp_path: Path) -> None:
     failed_at = float(outcome.reason.split(" at t=")[2].split(" s")[0])
     assert outcome.simulated_seconds == pytest.approx(failed_at, abs=1e-6)
     assert outcome.simulated_seconds < 20.0
+
+
+_FREESPACE_EVENT = """
+            <Event name="Near" priority="parallel">
+              <Action name="NearSpeed">
+                <PrivateAction><LongitudinalAction><SpeedAction>
+                  <SpeedActionDynamics dynamicsShape="step" value="0" dynamicsDimension="time"/>
+                  <SpeedActionTarget><AbsoluteTargetSpeed value="5"/></SpeedActionTarget>
+                </SpeedAction></LongitudinalAction></PrivateAction>
+              </Action>
+              <StartTrigger><ConditionGroup>
+                <Condition name="CloseToTheEnd" delay="0" conditionEdge="rising">
+                  <ByEntityCondition>
+                    <TriggeringEntities triggeringEntitiesRule="any">
+                      <EntityRef entityRef="adversary"/></TriggeringEntities>
+                    <EntityCondition><DistanceCondition value="10" freespace="true"
+                        alongRoute="false" rule="lessThan"><Position>
+                      <LanePosition roadId="1" laneId="-1" s="500" offset="0"/>
+                    </Position></DistanceCondition></EntityCondition>
+                  </ByEntityCondition>
+                </Condition>
+              </ConditionGroup></StartTrigger>
+            </Event>"""
+
+
+def test_a_condition_scenario_runner_cannot_build_makes_the_run_invalid(tmp_path: Path) -> None:
+    # OpenScenarioParser raises NotImplementedError for a free-space DistanceCondition while it
+    # builds the event's start trigger: "The scenario cannot be loaded".
+    text = cs.follow_leading(extra_events=_FREESPACE_EVENT)
+    report = run(cs.write(tmp_path, text))
+    assert report.outcome.verdict is Verdict.INVALID
+    assert report.outcome.reason.startswith(
+        "ScenarioRunner cannot load the file: condition 'CloseToTheEnd' (line "
+    )
+    assert report.outcome.reason.endswith(
+        "DistanceCondition: freespace attribute is currently not implemented"
+    )
+    # The storyboard's StopTrigger is built for its criteria only: there the condition is no bar.
+    condition = _FREESPACE_EVENT[
+        _FREESPACE_EVENT.index("<Condition ") : _FREESPACE_EVENT.index("</ConditionGroup>")
+    ]
+    stop = cs.criteria("CollisionTest") + condition
+    report = run(cs.write(tmp_path, cs.follow_leading(stop=stop), name="stop.xosc"))
+    assert report.outcome.verdict is not Verdict.INVALID, report.outcome.reason
+    # Under esmini's rules the same file runs.
+    time_stop = """
+        <Condition name="Late" delay="0" conditionEdge="rising"><ByValueCondition>
+          <SimulationTimeCondition value="5" rule="greaterThan"/></ByValueCondition></Condition>"""
+    esmini = cs.follow_leading(stop=time_stop, extra_events=_FREESPACE_EVENT, description="plain")
+    esmini = esmini.replace("external_control", "some_driver")
+    report = run(cs.write(tmp_path, esmini, name="plain.xosc"))
+    assert report.rules.startswith("OpenSCENARIO"), report.rules
+    assert report.outcome.verdict is not Verdict.INVALID, report.outcome.reason

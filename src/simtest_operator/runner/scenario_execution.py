@@ -23,7 +23,7 @@ from pathlib import Path
 from simtest_operator import evaluation, opendrive, provenance, recording
 from simtest_operator.errors import ScenarioError, SimtestError
 from simtest_operator.evaluation import quality
-from simtest_operator.openscenario import Deviation, LoadOptions
+from simtest_operator.openscenario import Deviation, LoadOptions, model, rulesets
 from simtest_operator.recording import objects
 from simtest_operator.runner import suts
 from simtest_operator.runner.tasks import SUT_LOG
@@ -191,8 +191,9 @@ def run_scenario(
     scratch = None if keep else tempfile.TemporaryDirectory(prefix="simtest-evidence-")
     recording_path = Path(scratch.name if scratch is not None else str(out)) / "recording.mcap"
     try:
-        if checks is not None and checks.refusal is not None:
-            raise ScenarioError(checks.refusal)
+        refusal = _scenario_runner_refusal(simulation, opened.scenario, checks)
+        if refusal is not None:
+            raise ScenarioError(refusal)
         link.attach(
             simulation,
             scenario_id=scenario_id,
@@ -293,6 +294,21 @@ def run_scenario(
     if out is not None:
         _write_outputs(out, report, log)
     return report
+
+
+def _scenario_runner_refusal(
+    simulation: Simulation,
+    scenario: model.Scenario,
+    checks: evaluation.ScenarioCriteria | None,
+) -> str | None:
+    """Why ScenarioRunner would refuse the file (it builds the stories' conditions, then the
+    criteria, and raises on what it cannot build), or None; only under its rules."""
+    if not simulation.rules.scenario_runner:
+        return None
+    refusal = rulesets.scenario_runner_refusal(scenario)
+    if refusal is None and checks is not None:
+        refusal = checks.refusal
+    return refusal
 
 
 def _loop(
