@@ -44,7 +44,8 @@ class SutConfig:
     name: str = "idm-driver"
     version: str = "0.0.0"
     ego: str | None = None
-    """Entity that is the ego; None picks ``Ego``/``ego``/``hero``, else the first vehicle."""
+    """Entity that is the ego; None picks (under ScenarioRunner's rules) the vehicle typed
+    ``ego_vehicle``, else ``Ego``/``ego``/``hero``, else the first vehicle."""
     takeover: Takeover = Takeover.ON_CONTROLLER
     desired_speed: float | None = None
     """Cruise speed (m/s); None keeps the speed the scenario gives the ego."""

@@ -78,6 +78,23 @@ def test_velocity_criteria_are_judged_at_the_last_tick() -> None:
     assert outcomes[3].detail == "average 10.00 m/s <= 10 m/s"
 
 
+def test_infinite_and_nan_values_build_as_scenario_runner_reads_them() -> None:
+    # float("inf") and float("nan") are numbers to ScenarioRunner: the tests build (no refusal)
+    # and compare as its code does: distance > inf never holds; speed > nan neither, so
+    # MaxVelocityTest passes and AverageVelocityTest (avg > nan) fails.
+    checks = ScenarioCriteria(
+        [
+            criterion("DrivenDistanceTest", ("distance_success", "inf")),
+            criterion("MaxVelocityTest", ("max_velocity", "nan")),
+            criterion("AverageVelocityTest", ("avg_velocity_success", "nan")),
+        ],
+        roads=None,
+    )
+    assert checks.refusal is None
+    outcomes = drive(checks, 50.0).criterion_outcomes()
+    assert [o.status for o in outcomes] == [Status.FAILED, Status.PASSED, Status.FAILED]
+
+
 def test_a_max_velocity_exceeded_before_the_end_passes() -> None:
     # ScenarioRunner overwrites MaxVelocityTest's status at every tick: only the last one counts.
     checks = ScenarioCriteria([criterion("MaxVelocityTest", ("max_velocity", "5"))], roads=None)
@@ -110,6 +127,14 @@ def test_criteria_scenario_runner_cannot_build_are_not_evaluated() -> None:
         "ScenarioRunner needs a value (max_velocity)",
         "ScenarioRunner reads a non-zero value as the other actor",
     ]
+    # float('far') and DrivenDistanceTest(ego) raise while ScenarioRunner builds its criteria:
+    # it refuses the file ("The scenario cannot be loaded"); CollisionTest(ego, 3.0) builds.
+    assert checks.refusal == (
+        "ScenarioRunner cannot load the file: criteria_DrivenDistanceTest: "
+        "value 'far' is not a number"
+    )
+    collision_only = ScenarioCriteria([criterion("CollisionTest", ("other", "3"))], roads=None)
+    assert collision_only.refusal is None
 
 
 def test_a_non_zero_value_makes_keep_lane_and_wrong_lane_optional() -> None:
@@ -151,10 +176,14 @@ def test_unusable_or_unknown_criteria_are_not_evaluated() -> None:
         "value 'far' is not a number",
         "no road network",
     ]
+    assert outcomes[-1].describe() == "HoverTest not evaluated (ScenarioRunner has no such test)"
     result = judge(drive(checks, 50.0), facts())
-    assert result.verdict is Verdict.PASSED
     assert not any(key.startswith("criteria.") for key in result.metrics)
-    assert "HoverTest not evaluated (unknown criterion)" in result.reason
+    assert checks.refusal is not None and "criteria_DrivenDistanceTest" in checks.refusal
+    only_unknown = ScenarioCriteria([criterion("HoverTest", known=False)], roads=None)
+    assert only_unknown.refusal == (
+        "ScenarioRunner cannot load the file: criteria_HoverTest: ScenarioRunner has no such test"
+    )
 
 
 def test_failed_criterion_outranks_timeout_and_is_a_metric() -> None:

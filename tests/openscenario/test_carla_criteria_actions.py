@@ -52,7 +52,7 @@ def test_criteria_leave_the_stop_trigger(write_scenario: ScenarioWriter) -> None
         + _criterion("DrivenDistanceTest", "distance_success", "100")
         + "</ConditionGroup><ConditionGroup>"
         + _TIME_STOP
-        + _criterion("OnSideWalkTest")
+        + _criterion("OnSidewalkTest")
         + "</ConditionGroup>"
     )
     scenario = load_scenario(write_scenario(stop=stop), options=STRICT)

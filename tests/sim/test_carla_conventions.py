@@ -155,12 +155,23 @@ def test_collision_and_driven_distance_fail(tmp_path: Path) -> None:
     assert outcome.metrics["criteria.DrivenDistanceTest"] == 0.0
 
 
-def test_unknown_criterion_is_reported_not_judged(tmp_path: Path) -> None:
+def test_a_criterion_scenario_runner_cannot_build_makes_the_run_invalid(tmp_path: Path) -> None:
+    # ScenarioRunner raises while building criteria_HoverTest (no such class in
+    # OpenScenarioParser's globals) and refuses the file: "The scenario cannot be loaded".
     text = cs.follow_leading(stop=cs.criteria("CollisionTest", "HoverTest"))
     report = run(cs.write(tmp_path, text))
-    assert report.outcome.verdict is Verdict.PASSED
-    assert "HoverTest not evaluated (unknown criterion)" in report.outcome.reason
+    assert report.outcome.verdict is Verdict.INVALID
+    assert report.outcome.reason.startswith(
+        "ScenarioRunner cannot load the file: criteria_HoverTest (line "
+    )
+    assert report.outcome.reason.endswith("ScenarioRunner has no such test")
+    assert report.outcome.simulated_seconds == 0.0
     assert [d.code for d in report.deviations] == ["carla-criterion-unknown"]
+    # Its class names are case-sensitive: OnSideWalkTest is no class (OnSidewalkTest is).
+    text = cs.follow_leading(stop=cs.criteria("CollisionTest", "OnSideWalkTest"))
+    report = run(cs.write(tmp_path, text))
+    assert report.outcome.verdict is Verdict.INVALID
+    assert "criteria_OnSideWalkTest" in report.outcome.reason
 
 
 _LATE = cs.vehicle("late", "simulation")
@@ -377,3 +388,81 @@ def test_walkers_have_carla_size(tmp_path: Path) -> None:
     # A file under esmini's rules keeps its pedestrian's box (0.6 x 0.5 m in its catalog).
     esmini = CORPUS / "esmini" / "resources" / "xosc" / "pedestrian.xosc"
     assert walker_box(esmini, "pedestrian_adult") == pytest.approx((0.6, 0.5))
+
+
+def test_a_failed_end_of_road_test_ends_the_run(tmp_path: Path) -> None:
+    # ScenarioRunner's EndofRoadTest returns SUCCESS once it failed, which ends its criteria
+    # group and the scenario: the run stops there, long before the act (1 km) or time limit.
+    from tests.evaluation.test_lane_criteria import TWO_ROADS
+
+    (tmp_path / "two.xodr").write_bytes(TWO_ROADS)
+    adversary = """
+        <Private entityRef="adversary"><PrivateAction><TeleportAction><Position>
+          <LanePosition roadId="2" laneId="-1" s="90" offset="0"/>
+        </Position></TeleportAction></PrivateAction></Private>"""
+    text = cs.follow_leading(
+        stop=cs.criterion("EndofRoadTest", "duration", "1") + cs.criteria(distance=None),
+        hero_position='<LanePosition roadId="1" laneId="-1" s="80" offset="0"/>',
+        adversary_init=adversary,
+        act_distance=1000.0,
+        logic_file="two.xodr",
+    )
+    outcome = run(cs.write(tmp_path, text), time_limit=40.0).outcome
+    assert outcome.verdict is Verdict.FAILED
+    assert outcome.reason.startswith("criteria_EndofRoadTest failed: hero left road 1 at t=")
+    failed_at = float(outcome.reason.split(" at t=")[2].split(" s")[0])
+    assert outcome.simulated_seconds == pytest.approx(failed_at, abs=1e-6)
+    assert outcome.simulated_seconds < 20.0
+
+
+_FREESPACE_EVENT = """
+            <Event name="Near" priority="parallel">
+              <Action name="NearSpeed">
+                <PrivateAction><LongitudinalAction><SpeedAction>
+                  <SpeedActionDynamics dynamicsShape="step" value="0" dynamicsDimension="time"/>
+                  <SpeedActionTarget><AbsoluteTargetSpeed value="5"/></SpeedActionTarget>
+                </SpeedAction></LongitudinalAction></PrivateAction>
+              </Action>
+              <StartTrigger><ConditionGroup>
+                <Condition name="CloseToTheEnd" delay="0" conditionEdge="rising">
+                  <ByEntityCondition>
+                    <TriggeringEntities triggeringEntitiesRule="any">
+                      <EntityRef entityRef="adversary"/></TriggeringEntities>
+                    <EntityCondition><DistanceCondition value="10" freespace="true"
+                        alongRoute="false" rule="lessThan"><Position>
+                      <LanePosition roadId="1" laneId="-1" s="500" offset="0"/>
+                    </Position></DistanceCondition></EntityCondition>
+                  </ByEntityCondition>
+                </Condition>
+              </ConditionGroup></StartTrigger>
+            </Event>"""
+
+
+def test_a_condition_scenario_runner_cannot_build_makes_the_run_invalid(tmp_path: Path) -> None:
+    # OpenScenarioParser raises NotImplementedError for a free-space DistanceCondition while it
+    # builds the event's start trigger: "The scenario cannot be loaded".
+    text = cs.follow_leading(extra_events=_FREESPACE_EVENT)
+    report = run(cs.write(tmp_path, text))
+    assert report.outcome.verdict is Verdict.INVALID
+    assert report.outcome.reason.startswith(
+        "ScenarioRunner cannot load the file: condition 'CloseToTheEnd' (line "
+    )
+    assert report.outcome.reason.endswith(
+        "DistanceCondition: freespace attribute is currently not implemented"
+    )
+    # The storyboard's StopTrigger is built for its criteria only: there the condition is no bar.
+    condition = _FREESPACE_EVENT[
+        _FREESPACE_EVENT.index("<Condition ") : _FREESPACE_EVENT.index("</ConditionGroup>")
+    ]
+    stop = cs.criteria("CollisionTest") + condition
+    report = run(cs.write(tmp_path, cs.follow_leading(stop=stop), name="stop.xosc"))
+    assert report.outcome.verdict is not Verdict.INVALID, report.outcome.reason
+    # Under esmini's rules the same file runs.
+    time_stop = """
+        <Condition name="Late" delay="0" conditionEdge="rising"><ByValueCondition>
+          <SimulationTimeCondition value="5" rule="greaterThan"/></ByValueCondition></Condition>"""
+    esmini = cs.follow_leading(stop=time_stop, extra_events=_FREESPACE_EVENT, description="plain")
+    esmini = esmini.replace("external_control", "some_driver")
+    report = run(cs.write(tmp_path, esmini, name="plain.xosc"))
+    assert report.rules.startswith("OpenSCENARIO"), report.rules
+    assert report.outcome.verdict is not Verdict.INVALID, report.outcome.reason

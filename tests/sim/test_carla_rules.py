@@ -208,3 +208,24 @@ def test_the_storyboard_stop_trigger_stops_nothing(tmp_path: Path) -> None:
     report = run(cs.write(tmp_path, cs.follow_leading(stop=stop)), sut=sut, time_limit=40.0)
     assert report.outcome.verdict is Verdict.PASSED, report.outcome.reason
     assert report.outcome.metrics["simulatedSeconds"] > 5.0  # not 3 s
+
+
+def test_the_ego_is_the_vehicle_typed_ego_vehicle(tmp_path: Path) -> None:
+    # ScenarioRunner's ego vehicles are the vehicles with the property type=ego_vehicle
+    # (OpenScenarioConfiguration._extract_vehicle_information), whatever their names; its
+    # criteria judge them. Here the first vehicle is not the ego, the second is.
+    from simtest_operator.openscenario import load_scenario
+    from simtest_operator.sim.engine import pick_ego
+
+    text = (
+        cs.follow_leading()
+        .replace('"hero"', '"first"')
+        .replace('value="ego_vehicle"', 'value="was-ego"')
+        .replace('value="simulation"', 'value="ego_vehicle"')
+        .replace('value="was-ego"', 'value="simulation"')
+    )
+    scenario = load_scenario(cs.write(tmp_path, text))
+    assert [obj.name for obj in scenario.entities][:2] == ["first", "adversary"]
+    assert pick_ego(scenario, None, scenario_runner=True) == "adversary"
+    assert pick_ego(scenario, None) == "first"  # esmini's rules: the first vehicle
+    assert pick_ego(scenario, "first", scenario_runner=True) == "first"  # configured wins

@@ -29,8 +29,10 @@ ScenarioRunner criterion      Judged here as
                               the stop's reach (see :mod:`.signal_criteria`)
 ============================  ====================================================================
 
-A criterion ScenarioRunner cannot build from that call (an unknown name, a test that needs more
-arguments, a non-numeric value) is listed as not evaluated.
+A criterion ScenarioRunner cannot build from that call (an unknown or differently spelled name, a
+test that needs more arguments, a missing or non-numeric value) makes ScenarioRunner refuse the
+whole file ("The scenario cannot be loaded", ``scenario_runner.py``):
+:attr:`ScenarioCriteria.refusal` says why, and the runner reports the run ``Invalid`` unrun.
 """
 
 from __future__ import annotations
@@ -105,10 +107,13 @@ class Outcome:
 
 @dataclasses.dataclass(frozen=True, slots=True)
 class _Built:
-    """A criterion as ScenarioRunner builds it: its value, or why it cannot be built."""
+    """A criterion as ScenarioRunner builds it: its value, or why it cannot be judged."""
 
     value: float | None
     problem: str = ""
+    refused: bool = True
+    """With a problem: ScenarioRunner raises while building it (it refuses the file); else it
+    builds a test the stand-in cannot judge."""
 
 
 def _build(criterion: model.Criterion) -> _Built:
@@ -116,7 +121,7 @@ def _build(criterion: model.Criterion) -> _Built:
     only), or the reason the call fails."""
     name = criterion.test
     if not criterion.known:
-        return _Built(None, "unknown criterion")
+        return _Built(None, "ScenarioRunner has no such test")
     if not criterion.arguments:
         if name in _REQUIRED:
             return _Built(None, f"ScenarioRunner needs a value ({_SECOND_ARGUMENT[name]})")
@@ -125,13 +130,13 @@ def _build(criterion: model.Criterion) -> _Built:
     if not text:
         return _Built(0.0)
     try:
-        value = float(text)
+        value = float(text)  # as ScenarioRunner reads it: "inf" and "nan" build too
     except ValueError:
         return _Built(None, f"value {text!r} is not a number")
-    if not math.isfinite(value):
-        return _Built(None, f"value {text!r} is not a number")
     if name == "CollisionTest" and value != 0.0:
-        return _Built(None, "ScenarioRunner reads a non-zero value as the other actor")
+        return _Built(
+            None, "ScenarioRunner reads a non-zero value as the other actor", refused=False
+        )
     return _Built(value)
 
 
@@ -184,6 +189,32 @@ class ScenarioCriteria:
     @property
     def names(self) -> tuple[str, ...]:
         return tuple(c.test for c in self._criteria)
+
+    @property
+    def ends_run(self) -> bool:
+        """Whether ScenarioRunner would stop the run now: a failed EndofRoadTest. Its ``update``
+        returns ``SUCCESS`` on failure (every other criterion it builds for a file returns
+        ``RUNNING``: ``terminate_on_failure`` stays off), which ends its criteria group
+        (``OpenScenario._create_test_criteria``: a ``SUCCESS_ON_ONE`` parallel) and with it the
+        scenario tree (``SUCCESS_ON_ONE`` over behaviour, timeout and criteria)."""
+        return (
+            self._lanes is not None
+            and "EndofRoadTest" in self.names
+            and self._lanes.failure("EndofRoadTest") is not None
+        )
+
+    @property
+    def refusal(self) -> str | None:
+        """Why ScenarioRunner refuses to load the file (a test it cannot build: it raises while
+        building its criteria, ``OpenScenarioParser.convert_condition_to_atomic``), or None."""
+        for criterion, built in zip(self._criteria, self._built, strict=True):
+            if built.problem and built.refused:
+                where = f" (line {criterion.line})" if criterion.line is not None else ""
+                return (
+                    f"ScenarioRunner cannot load the file: criteria_{criterion.test}{where}: "
+                    f"{built.problem}"
+                )
+        return None
 
     @property
     def driven_distance(self) -> float:
@@ -274,7 +305,7 @@ class ScenarioCriteria:
         """The tests ScenarioRunner decides at the last tick: its comparisons are strict."""
         if name == "MaxVelocityTest":
             speed = self._speed or 0.0
-            passed = speed <= value
+            passed = not speed > value  # ScenarioRunner fails only on ``>`` (a NaN passes)
             detail = f"{speed:.2f} m/s at the end {'<=' if passed else '>'} {value:g} m/s"
         elif name == "AverageVelocityTest":
             speed = self._distance / self._time if self._time > 0.0 else 0.0

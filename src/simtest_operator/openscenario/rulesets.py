@@ -23,6 +23,7 @@ import enum
 import re
 from collections.abc import Iterator
 
+from simtest_operator.openscenario import model as m
 from simtest_operator.openscenario.model.actions import AnyAction
 from simtest_operator.openscenario.model.controls import AssignControllerAction
 from simtest_operator.openscenario.model.entities import Controller
@@ -117,3 +118,65 @@ def _controllers(scenario: Scenario) -> Iterator[Controller]:
     for body in bodies:
         if isinstance(body, AssignControllerAction) and isinstance(body.controller, Controller):
             yield body.controller
+
+
+_NOT_BUILT: dict[type, str] = {
+    m.UserDefinedValueCondition: "ByValue UserDefinedValue conditions are not yet supported",
+    m.TrafficSignalControllerCondition: (
+        "ByValue TrafficSignalController conditions are not yet supported"
+    ),
+    m.VariableCondition: "Unknown ByValue condition",
+    m.RelativeClearanceCondition: "it builds no atomic for a RelativeClearanceCondition",
+    m.AngleCondition: "it builds no atomic for an AngleCondition",
+    m.RelativeAngleCondition: "it builds no atomic for a RelativeAngleCondition",
+}
+"""Conditions ScenarioRunner's ``OpenScenarioParser.convert_condition_to_atomic`` raises on (its
+messages), or builds nothing for (which its behaviour tree cannot take either)."""
+_BUILT_STATES = frozenset(
+    {
+        m.StoryboardElementState.START_TRANSITION,
+        m.StoryboardElementState.STOP_TRANSITION,
+        m.StoryboardElementState.END_TRANSITION,
+        m.StoryboardElementState.COMPLETE_STATE,
+    }
+)
+
+
+def _not_built(condition: m.Condition) -> str | None:
+    inner = condition.body.condition
+    if isinstance(inner, m.DistanceCondition) and inner.freespace:
+        return "DistanceCondition: freespace attribute is currently not implemented"
+    if isinstance(inner, m.StoryboardElementStateCondition) and inner.state not in _BUILT_STATES:
+        return "Only start, stop, endTransitions and completeState are currently supported"
+    for kind, why in _NOT_BUILT.items():
+        if isinstance(inner, kind):
+            return why
+    return None
+
+
+def scenario_runner_refusal(scenario: Scenario) -> str | None:
+    """Why ScenarioRunner refuses to load ``scenario`` for a condition it builds its behaviour
+    from (the acts' start and stop triggers and the events' start triggers: it raises while
+    building them and ``scenario_runner.py`` prints "The scenario cannot be loaded"), or None.
+    The storyboard's StopTrigger is not built beyond its ``criteria_*`` conditions."""
+    triggers: list[m.Trigger | None] = []
+    for story in scenario.storyboard.stories:
+        for act in story.acts:
+            triggers += [act.start_trigger, act.stop_trigger]
+            triggers += [
+                event.start_trigger
+                for group in act.maneuver_groups
+                for maneuver in group.maneuvers
+                for event in maneuver.events
+            ]
+    for trigger in triggers:
+        for group in trigger.condition_groups if trigger is not None else ():
+            for condition in group.conditions:
+                why = _not_built(condition)
+                if why is not None:
+                    where = f" (line {condition.line})" if condition.line is not None else ""
+                    return (
+                        f"ScenarioRunner cannot load the file: condition {condition.name!r}"
+                        f"{where}: {why}"
+                    )
+    return None

@@ -23,7 +23,7 @@ from pathlib import Path
 from simtest_operator import evaluation, opendrive, provenance, recording
 from simtest_operator.errors import ScenarioError, SimtestError
 from simtest_operator.evaluation import quality
-from simtest_operator.openscenario import Deviation, LoadOptions
+from simtest_operator.openscenario import Deviation, LoadOptions, model, rulesets
 from simtest_operator.recording import objects
 from simtest_operator.runner import suts
 from simtest_operator.runner.tasks import SUT_LOG
@@ -168,14 +168,13 @@ def run_scenario(
         f"{opened.net_seconds:.2f} s); ego {simulation.ego}"
     )
     log.append(f"rules: {simulation.rules.describe()}")
+    checks = evaluation.ScenarioCriteria.of(opened.scenario, roads=simulation.world.roads)
     evaluator = evaluation.OnlineEvaluator(
         request.criteria,
         ego=simulation.ego,
         off_road=simulation.off_road,
         coupled=simulation.coupled,
-        scenario_criteria=evaluation.ScenarioCriteria.of(
-            opened.scenario, roads=simulation.world.roads
-        ),
+        scenario_criteria=checks,
     )
     roads = simulation.world.roads
     samples = _Samples(roads.document.offset if roads is not None else None)
@@ -192,6 +191,9 @@ def run_scenario(
     scratch = None if keep else tempfile.TemporaryDirectory(prefix="simtest-evidence-")
     recording_path = Path(scratch.name if scratch is not None else str(out)) / "recording.mcap"
     try:
+        refusal = _scenario_runner_refusal(simulation, opened.scenario, checks)
+        if refusal is not None:
+            raise ScenarioError(refusal)
         link.attach(
             simulation,
             scenario_id=scenario_id,
@@ -294,6 +296,21 @@ def run_scenario(
     return report
 
 
+def _scenario_runner_refusal(
+    simulation: Simulation,
+    scenario: model.Scenario,
+    checks: evaluation.ScenarioCriteria | None,
+) -> str | None:
+    """Why ScenarioRunner would refuse the file (it builds the stories' conditions, then the
+    criteria, and raises on what it cannot build), or None; only under its rules."""
+    if not simulation.rules.scenario_runner:
+        return None
+    refusal = rulesets.scenario_runner_refusal(scenario)
+    if refusal is None and checks is not None:
+        refusal = checks.refusal
+    return refusal
+
+
 def _loop(
     request: RunRequest,
     simulation: Simulation,
@@ -303,7 +320,8 @@ def _loop(
     recorder: recording.Recorder | None,
     started: float,
 ) -> bool:
-    """Step until the storyboard completes or a limit is hit; True when the wall limit hit."""
+    """Step until the storyboard completes, a limit is hit or a ScenarioRunner criterion ends the
+    run (:attr:`~.evaluation.ScenarioCriteria.ends_run`); True when the wall limit hit."""
     limit = request.criteria.time_limit
     wall_limit = request.wall_clock_limit
     pace = request.simulation.real_time_factor
@@ -316,6 +334,9 @@ def _loop(
             recorder.write(snapshot)
         if simulation.complete or simulation.time >= limit - 1e-9:
             return False
+        checks = evaluator.scenario_criteria
+        if checks is not None and checks.ends_run:
+            return False  # ScenarioRunner's failed EndofRoadTest ends its scenario tree
         steps += 1
         if pace > 0:  # no step before its wall time: simulated t at paced_from + t / pace
             ahead = paced_from + simulation.time / pace - time.perf_counter()

@@ -200,6 +200,16 @@ class Conditions:
             )
         if isinstance(condition, model.DistanceCondition):
             target = positions.resolve(world, condition.position)
+            if self._scenario_runner and condition.along_route and world.roads is not None:
+                # InTriggerDistanceToOSCPosition with alongRoute: its route planner's way from
+                # the actor's lane waypoint to the position's (straight where none leads there)
+                start = world.roads.to_road(actor.x, actor.y, actor.road_id)
+                goal = world.roads.to_road(target.x, target.y)
+                way = None
+                if start is not None and goal is not None:
+                    way = measures.along_lanes(world.roads, start, goal)
+                if way is not None:
+                    return compare(way, condition.rule, condition.value)
             point = measures.point_state(target.x, target.y, target.heading)
             value = measures.to_point(
                 world.state(name),
@@ -228,14 +238,14 @@ class Conditions:
             return compare(abs(value), condition.rule, condition.value)
         if isinstance(condition, model.TimeHeadwayCondition):
             if self._scenario_runner:
-                arrival = self._arrival(actor, condition.entity_ref, condition.freespace)
+                arrival = self._arrival(actor, condition.entity_ref, condition)
                 return compare(arrival, condition.rule, condition.value)
             return compare(self._headway(actor, condition), condition.rule, condition.value)
         if isinstance(condition, model.RelativeClearanceCondition):
             return clearance.is_clear(self._world, actor, condition)
         if isinstance(condition, model.TimeToCollisionCondition):
             if self._scenario_runner and condition.entity_ref is not None:
-                arrival = self._arrival(actor, condition.entity_ref, condition.freespace)
+                arrival = self._arrival(actor, condition.entity_ref, condition)
                 return compare(arrival, condition.rule, condition.value)
             return compare(self._ttc(actor, condition), condition.rule, condition.value)
         if isinstance(condition, model.AngleCondition | model.RelativeAngleCondition):
@@ -291,18 +301,32 @@ class Conditions:
                 return True
         return False
 
-    def _arrival(self, actor: Actor, entity_ref: str, freespace: bool) -> float:
+    def _arrival(
+        self,
+        actor: Actor,
+        entity_ref: str,
+        condition: model.TimeHeadwayCondition | model.TimeToCollisionCondition,
+    ) -> float:
         """ScenarioRunner's time to arrival at another entity, which it reads for both
-        TimeHeadway and TimeToCollision to an entity (``InTimeToArrivalToVehicle``): the straight
-        distance between the two actors' locations (box centres in CARLA; minus both half
-        lengths with ``freespace``) over the difference of their speeds, infinite unless the
-        entity is the faster -- whoever is ahead, whatever the directions."""
+        TimeHeadway and TimeToCollision to an entity (``InTimeToArrivalToVehicle``): the distance
+        between the two actors' locations (box centres in CARLA; minus both half lengths with
+        ``freespace``) over the difference of their speeds, infinite unless the entity is the
+        faster -- whoever is ahead, whatever the directions. The distance is straight, or with
+        ``alongRoute="true"`` the way along the lanes (:func:`measures.along_lanes`; straight
+        when no lane leads there)."""
         world = self._world
         other = world.actor(entity_ref)
         me, them = world.state(actor.name), world.state(other.name)
         (ax, ay, _), (bx, by, _) = me.box_center(), them.box_center()
         distance = math.hypot(bx - ax, by - ay)
-        if freespace:
+        roads = world.roads
+        if condition.along_route and roads is not None:
+            start = roads.to_road(ax, ay, actor.road_id, heading=me.heading)
+            goal = roads.to_road(bx, by, other.road_id, heading=them.heading)
+            if start is not None and goal is not None:
+                way = measures.along_lanes(roads, start, goal)
+                distance = distance if way is None else way
+        if condition.freespace:
             distance -= (me.box.length + them.box.length) / 2.0
         closing = actor.speed - other.speed
         return distance / closing if closing > 0.0 else math.inf

@@ -45,13 +45,23 @@ from simtest_operator.snapshots import (
 EGO_NAMES = ("Ego", "ego", "hero", "Hero", "EGO")
 
 
-def pick_ego(scenario: model.Scenario, configured: str | None) -> str | None:
-    """The ego entity: configured name, else a conventional name, else the first vehicle."""
+def pick_ego(
+    scenario: model.Scenario, configured: str | None, *, scenario_runner: bool = False
+) -> str | None:
+    """The ego entity: configured name, else (under ScenarioRunner's rules) the first vehicle
+    with the property ``type`` = ``ego_vehicle``, which is what makes a vehicle an ego vehicle
+    for ScenarioRunner (``OpenScenarioConfiguration._extract_vehicle_information``: its
+    criteria judge that vehicle whatever its name), else a conventional name, else the first
+    vehicle."""
     names = [obj.name for obj in scenario.entities]
     if configured is not None:
         if configured not in names:
             raise ScenarioError(f"ego entity {configured!r} is not in the scenario")
         return configured
+    if scenario_runner:
+        for obj in scenario.entities:
+            if obj.kind is EntityKind.VEHICLE and obj.property("type") == "ego_vehicle":
+                return obj.name
     for name in EGO_NAMES:
         if name in names:
             return name
@@ -96,7 +106,6 @@ class Simulation:
         self._backend = backend
         self._backend_config = backend_config
         self._sut = sut
-        self.ego = pick_ego(scenario, sut.ego)
         actors = [Actor(obj, index) for index, obj in enumerate(scenario.entities)]
         self.world = World(
             roads=roads,
@@ -112,6 +121,7 @@ class Simulation:
         header = scenario.header
         self.rules = rulesets.rules_of(scenario)
         """The reference player whose rules this run follows (docs/simulator.md, "Rule sets")."""
+        self.ego = pick_ego(scenario, sut.ego, scenario_runner=self.rules.scenario_runner)
         scenario_runner = self.rules.scenario_runner
         self._dispatcher = Dispatcher(
             self.world,

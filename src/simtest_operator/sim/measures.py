@@ -11,7 +11,10 @@ from __future__ import annotations
 import math
 
 from simtest_operator import geometry
+from simtest_operator.errors import ScenarioError
+from simtest_operator.opendrive import RoadCoord, RoadNetwork
 from simtest_operator.openscenario import model
+from simtest_operator.sim import route_planning
 from simtest_operator.sim.actors import Actor, Mode
 from simtest_operator.sim.world import World
 from simtest_operator.snapshots import BoundingBox, EntityKind, EntityState
@@ -130,3 +133,45 @@ def closing_speed(a: EntityState, b: EntityState, kind: model.RelativeDistanceTy
     if norm < 1e-9:
         return 0.0
     return -(dx * rvx + dy * rvy) / norm
+
+
+_STRIDE = 1.0
+"""m of s between the samples that measure a lane's length."""
+
+
+def _lane_length(roads: RoadNetwork, road_id: str, lane_id: int, s0: float, s1: float) -> float:
+    """Length of the lane's centre line between ``s0`` and ``s1`` (the reference line's where the
+    lane is missing), sampled every :data:`_STRIDE` m of s."""
+    low, high = min(s0, s1), max(s0, s1)
+    steps = max(1, math.ceil((high - low) / _STRIDE))
+    ds = (high - low) / steps
+    total = 0.0
+    for k in range(steps):
+        s = low + (k + 0.5) * ds
+        try:
+            total += roads.lane_stretch(road_id, s, lane_id) * ds
+        except ScenarioError:
+            total += ds
+    return total
+
+
+def along_lanes(roads: RoadNetwork, start: RoadCoord, goal: RoadCoord) -> float | None:
+    """ScenarioRunner's ``alongRoute`` distance from ``start`` to ``goal``: the way along the
+    lanes in their driving direction (its GlobalRoutePlanner's route between the two points'
+    lane waypoints), lane centre lines on the two end roads and reference lines on the roads
+    between. None when no such way leads to ``goal`` (a goal behind on the same road)."""
+    lane = start.lane_id
+    direction = roads.driving_direction(start.road_id, lane) if lane != 0 else 1
+    if start.road_id == goal.road_id:
+        if (goal.s - start.s) * direction < 0.0:
+            return None
+        return _lane_length(roads, start.road_id, lane, start.s, goal.s)
+    path = route_planning.plan(roads, (start.road_id, direction), goal.road_id)
+    if path is None:
+        return None
+    end = roads.road_length(start.road_id) if direction > 0 else 0.0
+    total = _lane_length(roads, start.road_id, lane, start.s, end)
+    total += sum(roads.road_length(road_id) for road_id, _ in path[1:-1])
+    last_road, last_direction = path[-1]
+    entry = 0.0 if last_direction > 0 else roads.road_length(last_road)
+    return total + _lane_length(roads, last_road, goal.lane_id, entry, goal.s)

@@ -396,10 +396,10 @@ class Criterion:
     """
 
     test: str
-    """The name after ``criteria_``, normalised to ScenarioRunner's spelling when known
-    (``CollisionTest``, ``DrivenDistanceTest``, ...)."""
+    """The name after ``criteria_`` as written (``CollisionTest``, ``DrivenDistanceTest``, ...)."""
     known: bool
-    """False for a name ScenarioRunner's documentation does not list (reported, not judged)."""
+    """False for a name that is not one of ScenarioRunner's tests the stand-in judges, spelled
+    as ScenarioRunner spells it: ScenarioRunner cannot build it (the run is Invalid)."""
     arguments: tuple[tuple[str, str], ...] = ()
     """(parameterRef, value) of the inner ParameterCondition when parameterRef is not empty."""
     line: int | None = None

@@ -48,8 +48,9 @@ KNOWN_CRITERIA = {
         "EndofRoadTest",
     )
 }
-"""ScenarioRunner's test criteria by lower-case name (its documentation writes both
-``OnSideWalkTest`` and ``OnSidewalkTest``)."""
+"""ScenarioRunner's test criteria by lower-case name, to name the right spelling of a wrong one
+(ScenarioRunner looks ``<Test>`` up case-sensitively: ``OnSideWalkTest``, which its
+documentation also writes, is no class)."""
 
 
 def stop_trigger(el: Element | None, ctx: reading.Context) -> c.Trigger | None:
@@ -80,8 +81,15 @@ def _criterion(el: Element, test: str, ctx: reading.Context) -> c.Criterion:
         ctx.deviation(
             el,
             "carla-criterion-unknown",
-            f"ScenarioRunner criterion {test!r} is not one the stand-in knows; it is listed as "
-            "not evaluated",
+            f"ScenarioRunner criterion {test!r} is not one the stand-in knows; ScenarioRunner "
+            "cannot build it as a test of the ego alone, so the run is Invalid",
+        )
+    elif canonical != test:
+        ctx.deviation(
+            el,
+            "carla-criterion-unknown",
+            f"ScenarioRunner criterion {test!r} is spelled {canonical!r} there (it looks the "
+            "name up case-sensitively), so the run is Invalid",
         )
     arguments: list[tuple[str, str]] = []
     holder = reading.child(el, "ByValueCondition")
@@ -91,8 +99,8 @@ def _criterion(el: Element, test: str, ctx: reading.Context) -> c.Criterion:
         if ref:
             arguments.append((ref, ctx.opt_string(inner, "value") or ""))
     return c.Criterion(
-        test=canonical or test,
-        known=canonical is not None,
+        test=test,
+        known=canonical == test,
         arguments=tuple(arguments),
         line=el.sourceline,
     )
