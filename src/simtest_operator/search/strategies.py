@@ -228,7 +228,8 @@ class ActiveBoundary:
         return self.refine(scene)
 
     def refine(self, scene: _Scene, target: float = 0.5) -> Point:
-        """The candidate nearest the boundary where the model is least sure, spread out."""
+        """The candidate whose failure probability is nearest ``target`` (the boundary at 0.5),
+        spread out."""
         assert scene.model is not None
         probability = scene.model.failure_probability(scene.candidates)
         uncertainty = 1.0 - np.abs(probability - target) / max(target, 1.0 - target)
@@ -338,11 +339,12 @@ class Hybrid:
 
     After the boundary strategy's Sobol design every proposal has a :func:`role`: *seek* takes
     the candidate the margin model gives the highest failure probability, discounted close to
-    known points (``SEEK_SPREAD``); *refine* is the boundary strategy's proposal; *explore*
-    takes the point of a Sobol pool farthest from every told and pending point (maximin), so a
-    small failure region apart from the first one gets hit, after which seeking and refining
-    work on it too. Seeking dominates early (failures for the budget), refining later (the
-    boundary's accuracy). All roles share one model and see every told and pending point.
+    known points (``SEEK_SPREAD``); *refine* is the boundary strategy's proposal aimed at
+    ``REFINE_TARGET`` (just inside the failing side); *explore* takes the point of a Sobol pool
+    farthest from every told and pending point (maximin), so a small failure region apart from
+    the first one gets hit, after which seeking and refining work on it too. Seeking dominates,
+    most early (failures for the budget); refining's share grows later (the boundary's
+    accuracy). All roles share one model and see every told and pending point.
     """
 
     def __init__(self, space: SearchSpace, seed: int) -> None:
