@@ -227,11 +227,12 @@ class ActiveBoundary:
             return scene.pick(scene.distance)
         return self.refine(scene)
 
-    def refine(self, scene: _Scene) -> Point:
-        """The candidate nearest the boundary where the model is least sure, spread out."""
+    def refine(self, scene: _Scene, target: float = 0.5) -> Point:
+        """The candidate whose failure probability is nearest ``target`` (the boundary at 0.5),
+        spread out."""
         assert scene.model is not None
         probability = scene.model.failure_probability(scene.candidates)
-        uncertainty = 1.0 - np.abs(2.0 * probability - 1.0)
+        uncertainty = 1.0 - np.abs(probability - target) / max(target, 1.0 - target)
         return scene.pick(uncertainty + EXPLORATION * np.minimum(scene.distance, 1.0))
 
     def scene(self, history: History, candidates: Points | None = None) -> _Scene:
@@ -302,14 +303,20 @@ class Role(enum.Enum):
 
 EXPLORE_SHARE = 0.15
 """Share of the hybrid's proposals after the design that explore, throughout."""
-SEEK_SHARE = (0.65, 0.35)
+SEEK_SHARE = (0.9, 0.65)
 """Share that seeks failures: at the first proposal after the design, and from
 ``SCHEDULE_RUNS`` proposals on (linearly in between); the rest refine the boundary."""
 SCHEDULE_RUNS = 150
 """Proposals after the design over which the hybrid moves from seeking failures to refining."""
-SEEK_SPREAD = 0.5
-"""Relative distance to the nearest known point from which a seeking candidate counts fully:
-closer ones are discounted, so a batch does not pile onto the likeliest failure."""
+SEEK_SPREAD = 1.0
+"""Relative distance to the nearest known point from which a seeking candidate counts fully
+(one spacing of the points so far on a grid): closer ones are discounted, so seeking covers
+the failing side evenly instead of creeping from the first failure; on a thin failure band that
+coverage is what the boundary classifier's recall needs."""
+REFINE_TARGET = 0.7
+"""Failure probability a refining proposal aims at: just inside the failing side of the
+boundary, where a run pins the boundary as well as one just outside does and fails more often
+(0.5 is the boundary strategy's own symmetric target)."""
 
 
 def role(k: int) -> Role:
@@ -332,11 +339,12 @@ class Hybrid:
 
     After the boundary strategy's Sobol design every proposal has a :func:`role`: *seek* takes
     the candidate the margin model gives the highest failure probability, discounted close to
-    known points (``SEEK_SPREAD``); *refine* is the boundary strategy's proposal; *explore*
-    takes the point of a Sobol pool farthest from every told and pending point (maximin), so a
-    small failure region apart from the first one gets hit, after which seeking and refining
-    work on it too. Seeking dominates early (failures for the budget), refining later (the
-    boundary's accuracy). All roles share one model and see every told and pending point.
+    known points (``SEEK_SPREAD``); *refine* is the boundary strategy's proposal aimed at
+    ``REFINE_TARGET`` (just inside the failing side); *explore* takes the point of a Sobol pool
+    farthest from every told and pending point (maximin), so a small failure region apart from
+    the first one gets hit, after which seeking and refining work on it too. Seeking dominates,
+    most early (failures for the budget); refining's share grows later (the boundary's
+    accuracy). All roles share one model and see every told and pending point.
     """
 
     def __init__(self, space: SearchSpace, seed: int) -> None:
@@ -363,7 +371,10 @@ class Hybrid:
                 scene = self._boundary.scene(history, pool)
                 return scene.pick(scene.distance)
             case Role.REFINE:
-                return self._boundary.propose(history)
+                scene = self._boundary.scene(history)
+                if scene.model is None:
+                    return scene.pick(scene.distance)
+                return self._boundary.refine(scene, REFINE_TARGET)
             case Role.SEEK:
                 scene = self._boundary.scene(history)
                 if scene.model is None:
