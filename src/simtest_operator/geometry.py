@@ -2,14 +2,19 @@
 
 The simulator's conditions (Collision, Distance, TimeHeadway, TimeToCollision) and the online
 evaluation (collision, min TTC, min THW, min distance) must agree on what "touching" and "gap"
-mean, so both call these functions. Everything is 2-D (x, y, heading) on the ground plane and
-works on :class:`~simtest_operator.snapshots.EntityState` values; pure functions, no state.
+mean, so both call these functions; likewise the evidence check and the simulation's declared
+traffic jumps agree on which displacement velocities explain (:func:`unexplained_displacement`).
+Everything is 2-D (x, y, heading) on the ground plane and works on
+:class:`~simtest_operator.snapshots.EntityState` values; pure functions, no state.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+
+import numpy as np
+import numpy.typing as npt
 
 from simtest_operator.snapshots import EntityState
 
@@ -172,3 +177,23 @@ def time_headway(ego: EntityState, other: EntityState) -> float:
     if gap is None or ego.speed <= 0.0:
         return INFINITE
     return gap / ego.speed
+
+
+def unexplained_displacement(
+    dt: npt.NDArray[np.float64],
+    dx: npt.NDArray[np.float64],
+    dy: npt.NDArray[np.float64],
+    vx: npt.NDArray[np.float64],
+    vy: npt.NDArray[np.float64],
+) -> npt.NDArray[np.float64]:
+    """Per frame interval, how far (m) the displacement lies from every one the recorded
+    velocities explain: a mean velocity between the two frames' (the segment from ``v0 dt`` to
+    ``v1 dt``; the trapezoid rule is its midpoint). A speed that steps within a frame interval
+    (a ``step`` SpeedAction, a start from rest) is explained; a teleport or a box swinging round
+    its reference point is not."""
+    ex, ey = dx - vx[:-1] * dt, dy - vy[:-1] * dt
+    wx, wy = (vx[1:] - vx[:-1]) * dt, (vy[1:] - vy[:-1]) * dt
+    span = wx * wx + wy * wy
+    share = np.divide(ex * wx + ey * wy, span, out=np.zeros_like(span), where=span > 0.0)
+    share = np.clip(share, 0.0, 1.0)
+    return np.asarray(np.hypot(ex - share * wx, ey - share * wy), dtype=np.float64)

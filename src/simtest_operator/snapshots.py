@@ -211,6 +211,10 @@ class JumpCause(enum.StrEnum):
     HITCHED = "hitched"
     """A ConnectTrailerAction hitched it (a parked trailer) to its tow vehicle, which pulls it
     onto the hitch at once (as esmini does)."""
+    TRAFFIC_MODEL = "trafficModel"
+    """The backend's own traffic model (SUMO) moved a vehicle it drives farther in one step than
+    its speeds explain: a junction's internal lane that does not meet its approach, a turn about
+    a radius shorter than the car. Not the engine's doing, so not its evidence to fault."""
 
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)

@@ -6,6 +6,7 @@ on SUMO with its recording read back (our reader and omega-prime with validation
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import io
 import math
 import warnings
@@ -15,12 +16,13 @@ from typing import Any
 import pytest
 
 from simtest_operator.errors import SimulationError
-from simtest_operator.recording import read_trajectories
+from simtest_operator.evaluation import quality
+from simtest_operator.recording import objects, read_trajectories
 from simtest_operator.runner import scenario_execution
 from simtest_operator.sim import SutConfig, Takeover, netcache
 from simtest_operator.sim.backends import ActorSpec, BackendConfig
 from simtest_operator.sim.sumo import SumoBackend, odr_heading, sumo_angle
-from simtest_operator.snapshots import EntityKind
+from simtest_operator.snapshots import EntityKind, JumpCause
 from simtest_operator.verdicts import Verdict
 
 CORPUS = Path(__file__).resolve().parents[3] / "shared" / "scenarios-dev" / "esmini" / "resources"
@@ -128,3 +130,30 @@ def test_scenario_on_sumo_with_recording(tmp_path: Path) -> None:
         )
     assert loaded.host_vehicle_idx == 0
     assert loaded.df["idx"].n_unique() == 2
+
+
+@pytest.mark.slow
+def test_jumps_of_sumo_driven_traffic_are_declared_as_the_traffic_models(tmp_path: Path) -> None:
+    # esmini's cut-in_sumo: SUMO drives vehicles from its own route file over a hand-made net
+    # whose turnaround lanes (radius 1.9 m, shorter than a car) do not meet their approaches,
+    # so SUMO moves them metres in one step. Those steps are declared SUMO's (the run is judged,
+    # not faulted for incomplete evidence), the scenario's own entities declare nothing, and the
+    # recording carries the declarations that make it complete evidence when judged again.
+    report = scenario_execution.run_scenario(
+        scenario_execution.RunRequest(
+            scenario=CORPUS / "xosc" / "cut-in_sumo.xosc",
+            nets_dir=tmp_path / "nets",
+            output_dir=tmp_path / "out",
+            sut=SutConfig(takeover=Takeover.NEVER),
+        )
+    )
+    assert report.outcome.verdict is Verdict.PASSED, report.outcome.reason
+    decoded = objects.read_objects(Path(report.outcome.artifacts["recording"]))
+    jumps = decoded.discontinuities
+    assert jumps and {j.cause for j in jumps} == {JumpCause.TRAFFIC_MODEL}
+    assert min(j.entity for j in jumps) >= 2  # Ego and OverTaker are 0 and 1
+    seconds = report.outcome.simulated_seconds
+    assert quality.assess(decoded, simulated_seconds=seconds).complete
+    blind = dataclasses.replace(decoded, discontinuities=())
+    issues = quality.assess(blind, simulated_seconds=seconds).issues
+    assert any("against its velocity" in issue for issue in issues), issues

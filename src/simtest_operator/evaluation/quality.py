@@ -28,6 +28,7 @@ import numpy as np
 import numpy.typing as npt
 
 from simtest_operator.evaluation.scenes import ObjectColumns, RecordedColumns, host_id, median
+from simtest_operator.geometry import unexplained_displacement
 from simtest_operator.snapshots import Discontinuity, JumpCause
 
 _RANGES = {
@@ -102,26 +103,6 @@ def _format_consistency(objects: Mapping[int, ObjectColumns]) -> tuple[float, in
     return (100.0 if total == 0 else 100.0 * (total - invalid) / total), invalid
 
 
-def _unexplained(
-    dt: npt.NDArray[np.float64],
-    dx: npt.NDArray[np.float64],
-    dy: npt.NDArray[np.float64],
-    vx: npt.NDArray[np.float64],
-    vy: npt.NDArray[np.float64],
-) -> npt.NDArray[np.float64]:
-    """Per frame interval, how far (m) the displacement lies from every one the recorded
-    velocities explain: a mean velocity between the two frames' (the segment from ``v0 dt`` to
-    ``v1 dt``; the trapezoid rule is its midpoint). A speed that steps within a frame interval
-    (a ``step`` SpeedAction, a start from rest) is explained; a teleport or a box swinging round
-    its reference point is not."""
-    ex, ey = dx - vx[:-1] * dt, dy - vy[:-1] * dt
-    wx, wy = (vx[1:] - vx[:-1]) * dt, (vy[1:] - vy[:-1]) * dt
-    span = wx * wx + wy * wy
-    share = np.divide(ex * wx + ey * wy, span, out=np.zeros_like(span), where=span > 0.0)
-    share = np.clip(share, 0.0, 1.0)
-    return np.asarray(np.hypot(ex - share * wx, ey - share * wy), dtype=np.float64)
-
-
 def _declared_intervals(
     t: npt.NDArray[np.float64], times: Sequence[float]
 ) -> npt.NDArray[np.bool_]:
@@ -154,7 +135,7 @@ def _consistency_issues(
         if not (np.all(np.isfinite(x)) and np.all(np.isfinite(y))):
             issues.append(f"object {object_id} has non-finite positions")
             continue
-        error = _unexplained(np.diff(t), np.diff(x), np.diff(y), vx, vy)
+        error = unexplained_displacement(np.diff(t), np.diff(x), np.diff(y), vx, vy)
         excused = _declared_intervals(t, declared.get(object_id, ()))
         wrong = np.nonzero((error > max_error) & ~excused)[0]
         if len(wrong):

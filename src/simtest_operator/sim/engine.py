@@ -19,8 +19,11 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 
+import numpy as np
+
 from simtest_operator.drivermodel import DriverModel, SutConfig, Takeover, signal_horizon
 from simtest_operator.errors import ScenarioError
+from simtest_operator.geometry import unexplained_displacement
 from simtest_operator.opendrive import RoadNetwork
 from simtest_operator.openscenario import model, rulesets
 from simtest_operator.sim import carla, motion, perception, trailers
@@ -39,6 +42,7 @@ from simtest_operator.snapshots import (
     Discontinuity,
     EntityKind,
     EntityState,
+    JumpCause,
     WorldSnapshot,
 )
 
@@ -433,6 +437,7 @@ class Simulation:
             self._traffic.update(self.world, host, entities, backend.states())
         backend.step()
         traffic: list[EntityState] = []
+        previous = {state.name: state for state in self.world.traffic}
         for other in backend.states().values():
             if not other.external:
                 continue
@@ -458,6 +463,11 @@ class Simulation:
                     ),
                 )
             )
+            before = previous.get(other.name)
+            if before is not None and _unexplained(before, traffic[-1], self.world.dt):
+                self.world.discontinuities.append(
+                    Discontinuity(time=self.world.time, entity=ident, cause=JumpCause.TRAFFIC_MODEL)
+                )
         self.world.traffic = tuple(traffic)
         self._snapshot = WorldSnapshot(
             time=self.world.time,
@@ -465,6 +475,22 @@ class Simulation:
             signals=tuple(self.world.signals.items()),
         )
         return self._snapshot
+
+
+TRAFFIC_JUMP = 0.25
+"""Metres of displacement a backend-driven vehicle's speeds leave unexplained in one step before
+the step is declared a :attr:`JumpCause.TRAFFIC_MODEL` jump: half the evidence check's default
+tolerance, well above rounding."""
+
+
+def _unexplained(before: EntityState, after: EntityState, dt: float) -> bool:
+    """Whether ``after`` lies farther from ``before`` than their velocities explain."""
+    vx = np.array([before.speed * math.cos(before.heading), after.speed * math.cos(after.heading)])
+    vy = np.array([before.speed * math.sin(before.heading), after.speed * math.sin(after.heading)])
+    error = unexplained_displacement(
+        np.array([dt]), np.array([after.x - before.x]), np.array([after.y - before.y]), vx, vy
+    )
+    return bool(error[0] > TRAFFIC_JUMP)
 
 
 __all__ = ["Simulation", "pick_ego"]
