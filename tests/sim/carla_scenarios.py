@@ -273,11 +273,15 @@ def run(
     )
 
 
-def event(name: str, action: str, start: str, *, priority: str = "parallel") -> str:
-    """An event with one action (``action``: the PrivateAction's body) and a start condition."""
+def event(
+    name: str, action: str, start: str, *, priority: str = "parallel", private: bool = True
+) -> str:
+    """An event with one action (``action``: the PrivateAction's body, or with ``private``
+    false the whole Action body) and a start condition."""
+    body = f"<PrivateAction>{action}</PrivateAction>" if private else action
     return f"""
             <Event name="{name}" priority="{priority}">
-              <Action name="{name}"><PrivateAction>{action}</PrivateAction></Action>
+              <Action name="{name}">{body}</Action>
               <StartTrigger><ConditionGroup>
                 <Condition name="{name}Start" delay="0" conditionEdge="rising">{start}</Condition>
               </ConditionGroup></StartTrigger>

@@ -154,29 +154,102 @@ def _not_built(condition: m.Condition) -> str | None:
     return None
 
 
+_ACTION_NOT_BUILT: dict[type, str] = {
+    m.SpeedProfileAction: "Unknown longitudinal action",
+    m.LateralDistanceAction: "Unknown lateral action",
+    m.FollowTrajectoryAction: "Private FollowTrajectory actions are not yet supported",
+    m.RandomRouteAction: "Unknown private routing action",
+    m.TrailerAction: "Unknown private action",
+    m.TrafficSignalControllerAction: (
+        "TrafficLights can only be influenced via TrafficSignalStateAction"
+    ),
+    m.AddEntityAction: "Global actions are not yet supported",
+    m.DeleteEntityAction: "Global actions are not yet supported",
+    m.SetMonitorAction: "Global actions are not yet supported",
+    m.TrafficSwarmAction: "Global actions are not yet supported",
+    m.TrafficSourceAction: "Global actions are not yet supported",
+    m.TrafficSinkAction: "Global actions are not yet supported",
+    m.TrafficStopAction: "Global actions are not yet supported",
+}
+"""Story actions ScenarioRunner's ``OpenScenarioParser.convert_maneuver_to_atomic`` raises on, by
+kind (its messages)."""
+_IGNORED_NOT_BUILT = {
+    "VisibilityAction": "Visibility actions are not yet supported",
+    "LightStateAction": "Unknown private action",
+    "AnimationAction": "Unknown private action",
+    "OverrideControllerValueAction": (
+        "a ControllerAction without an AssignControllerAction (get_controller: StopIteration)"
+    ),
+}
+"""Actions the stand-in accepts without simulating them that ScenarioRunner cannot build."""
+_SIGNAL_STATES = frozenset({"GREEN", "RED", "YELLOW", "OFF"})
+"""``OpenScenarioParser.tl_states``: the light states CARLA has (compared upper-cased)."""
+
+
+def _action_not_built(body: AnyAction) -> str | None:
+    if isinstance(body, m.LongitudinalDistanceAction):
+        if body.time_gap is not None and body.distance is None:
+            return "LongitudinalDistanceAction: timeGap is not implemented"
+        if (body.time_gap is None) == (body.distance is None):
+            return (
+                "LongitudinalDistanceAction: Please specify any one attribute of "
+                "[distance, timeGap]"
+            )
+    if isinstance(body, m.LaneChangeAction) and isinstance(body.target, m.AbsoluteTargetLane):
+        return "it reads a RelativeTargetLane only ('NoneType' object has no attribute 'attrib')"
+    if isinstance(body, m.SynchronizeAction) and body.final_speed is None:
+        return (
+            "it reads the FinalSpeed, which is missing ('NoneType' object has no attribute 'find')"
+        )
+    if isinstance(body, m.TrafficSignalStateAction) and body.state.upper() not in _SIGNAL_STATES:
+        return "CARLA only supports Green, Red, Yellow or Off"
+    if isinstance(body, m.SetValueAction | m.ModifyValueAction):
+        # a ParameterAction is built (ChangeParameter, in current releases), a VariableAction not
+        variable = body.scope is m.ValueScope.VARIABLE
+        return "Global actions are not yet supported" if variable else None
+    if isinstance(body, m.IgnoredAction):
+        return _IGNORED_NOT_BUILT.get(body.kind)
+    for kind, why in _ACTION_NOT_BUILT.items():
+        if isinstance(body, kind):
+            return why
+    return None
+
+
+def _where(line: int | None) -> str:
+    return f" (line {line})" if line is not None else ""
+
+
 def scenario_runner_refusal(scenario: Scenario) -> str | None:
-    """Why ScenarioRunner refuses to load ``scenario`` for a condition it builds its behaviour
-    from (the acts' start and stop triggers and the events' start triggers: it raises while
-    building them and ``scenario_runner.py`` prints "The scenario cannot be loaded"), or None.
-    The storyboard's StopTrigger is not built beyond its ``criteria_*`` conditions."""
+    """Why ScenarioRunner refuses to load ``scenario`` for a condition or an action it builds its
+    behaviour from (the acts' start and stop triggers, the events' start triggers and actions: it
+    raises while building them and ``scenario_runner.py`` prints "The scenario cannot be
+    loaded"), or None. It builds the first Story only (``OpenScenarioConfiguration.story``); the
+    storyboard's StopTrigger not beyond its ``criteria_*`` conditions; Init actions are read for
+    positions, speeds and controllers, never built."""
     triggers: list[m.Trigger | None] = []
-    for story in scenario.storyboard.stories:
+    actions: list[m.Action] = []
+    for story in scenario.storyboard.stories[:1]:
         for act in story.acts:
             triggers += [act.start_trigger, act.stop_trigger]
-            triggers += [
-                event.start_trigger
-                for group in act.maneuver_groups
-                for maneuver in group.maneuvers
-                for event in maneuver.events
-            ]
+            for maneuver_group in act.maneuver_groups:
+                for maneuver in maneuver_group.maneuvers:
+                    for event in maneuver.events:
+                        triggers.append(event.start_trigger)
+                        actions += event.actions
     for trigger in triggers:
         for group in trigger.condition_groups if trigger is not None else ():
             for condition in group.conditions:
                 why = _not_built(condition)
                 if why is not None:
-                    where = f" (line {condition.line})" if condition.line is not None else ""
                     return (
                         f"ScenarioRunner cannot load the file: condition {condition.name!r}"
-                        f"{where}: {why}"
+                        f"{_where(condition.line)}: {why}"
                     )
+    for action in actions:
+        why = _action_not_built(action.body)
+        if why is not None:
+            return (
+                f"ScenarioRunner cannot load the file: action {action.name!r}"
+                f"{_where(action.line)}: {why}"
+            )
     return None

@@ -174,7 +174,11 @@ class Simulation:
     @property
     def ignored(self) -> tuple[str, ...]:
         """Elements accepted but not simulated, from the file and met during the run."""
-        return tuple(dict.fromkeys((*self._scenario.ignored_kinds, *self.world.ignored)))
+        unbuilt = (
+            f"Story {name!r} (ScenarioRunner builds the first Story only)"
+            for name in self._storyboard.unbuilt
+        )
+        return tuple(dict.fromkeys((*self._scenario.ignored_kinds, *self.world.ignored, *unbuilt)))
 
     @property
     def monitors(self) -> Mapping[str, bool]:

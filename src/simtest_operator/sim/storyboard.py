@@ -185,6 +185,7 @@ class Storyboard:
         "_stop_defined",
         "_stories",
         "_visible",
+        "unbuilt",
     )
 
     def __init__(
@@ -198,7 +199,12 @@ class Storyboard:
         self._raw = raw
         self._start_action = start_action
         self._scenario_runner = scenario_runner
-        self._stories = tuple(_build_story(story, scenario_runner) for story in storyboard.stories)
+        built = tuple(_build_story(story, scenario_runner) for story in storyboard.stories)
+        # ScenarioRunner builds the first Story only (OpenScenarioConfiguration.story): later
+        # ones never start, but conditions may still name their elements (and never fire).
+        self._stories = built[:1] if scenario_runner else built
+        self.unbuilt = tuple(story.name for story in built[len(self._stories) :])
+        """Stories that never run: under ScenarioRunner's rules, all but the first."""
         stop = storyboard.stop_trigger
         self._stop = TriggerState(stop, level=scenario_runner)
         # A stop trigger that held only ScenarioRunner criteria is no stop trigger; under
@@ -218,8 +224,9 @@ class Storyboard:
         self._visible: set[tuple[Node, Transition]] = set()
         self._pending: set[tuple[Node, Transition]] = set()
         self._by_name: dict[tuple[Kind, str], list[Node]] = {}
-        for story in self._stories:
+        for story in built:
             self._index(story, ())
+        for story in self._stories:
             story.phase = Phase.RUNNING
             self._pending.add((story, Transition.START_TRANSITION))
 
