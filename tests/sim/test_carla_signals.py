@@ -7,8 +7,8 @@ green (esmini's lamp list), crosses it with no state set (not evaluated), runs t
 stops before it and goes on (passes), and stops too far before it (fails). On the shipped Town01
 it runs a red light at a junction, the light named by its position in CARLA's frame; on Town07 it
 runs a stop sign whose lines are CARLA references in two junction roads, or stops and goes on.
-A RoadNetwork TrafficSignalController sets the light red when the hero crosses (fails), unless a
-TrafficSignalControllerAction switched it back to green (passes).
+A RoadNetwork TrafficSignalController sets the light red when the hero crosses (fails); a
+TrafficSignalControllerAction in the story makes the file Invalid (ScenarioRunner cannot build it).
 """
 
 from __future__ import annotations
@@ -153,7 +153,7 @@ def test_running_a_red_light_fails(tmp_path: Path, name: str) -> None:
 @pytest.mark.parametrize(
     ("name", "state", "status", "detail"),
     [
-        ("10", "off;off;on", "passed", "passed traffic lights 1 time, never on red"),
+        ("10", "GREEN", "passed", "passed traffic lights 1 time, never on red"),
         (
             "pos=500,500",
             "red",
@@ -264,7 +264,13 @@ SWITCH_TO_GO = f"""
     ("events", "verdict", "expected"),
     [
         ("", Verdict.FAILED, "RunningRedLightTest failed (hero crossed red light 10 at t=7.95 s)"),
-        (SWITCH_TO_GO, Verdict.PASSED, "RunningRedLightTest passed (passed traffic lights 1 time"),
+        # ScenarioRunner builds no TrafficSignalControllerAction: it cannot load the file.
+        (
+            SWITCH_TO_GO,
+            Verdict.INVALID,
+            "ScenarioRunner cannot load the file: action 'BackToGo' (line 47): TrafficLights can "
+            "only be influenced via TrafficSignalStateAction",
+        ),
     ],
 )
 def test_light_controlled_by_a_signal_controller(
