@@ -7,8 +7,10 @@ domain; a new run in an occupied domain cancels the old one (the standard's conf
 The system under test: while the driver model drives the ego, a SpeedAction on the ego becomes the
 driver's new set speed (a request to the driver, like a driver turning the cruise-control knob),
 and other longitudinal actions on the ego are not executed and are listed as ignored. Lateral
-actions still run (the model only keeps its lane). Controllers of other entities are not
-simulated: those entities keep following the storyboard, and the controller is listed as ignored.
+actions still run (the model only keeps its lane). esmini's interactive and external (no ghost)
+controllers are imitated (:mod:`~simtest_operator.sim.esmini_controllers`) on other entities, and
+on the ego when the SUT does not take it; other controllers of other entities are not simulated:
+those entities keep following the storyboard, and the controller is listed as ignored.
 
 Under ScenarioRunner's rules (``scenario_runner``) speed and routing actions last as long as
 ScenarioRunner lets them (:mod:`~simtest_operator.sim.lifetimes`), and lateral actions aimed at an

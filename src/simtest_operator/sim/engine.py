@@ -239,6 +239,11 @@ class Simulation:
         for global_action in init.global_actions:
             self._dispatcher.start_global(global_action)
         self._initial_takeover()
+        for name, override in self._dispatcher.overrides.items():
+            # the Init's SpeedActions after the activation do not reach the controller's speed
+            actor = world.actor(name)
+            if override.longitudinal and actor.driver is None:
+                actor.speed = override.speed
         self._pull_trailers(0.0)
         for actor in world.actors.values():
             actor.measure_motion((actor.x, actor.y, actor.heading), 0.0, teleported=True)
