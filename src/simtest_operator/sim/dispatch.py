@@ -7,8 +7,10 @@ domain; a new run in an occupied domain cancels the old one (the standard's conf
 The system under test: while the driver model drives the ego, a SpeedAction on the ego becomes the
 driver's new set speed (a request to the driver, like a driver turning the cruise-control knob),
 and other longitudinal actions on the ego are not executed and are listed as ignored. Lateral
-actions still run (the model only keeps its lane). Controllers of other entities are not
-simulated: those entities keep following the storyboard, and the controller is listed as ignored.
+actions still run (the model only keeps its lane). esmini's interactive and external (no ghost)
+controllers are imitated (:mod:`~simtest_operator.sim.esmini_controllers`) on other entities, and
+on the ego when the SUT does not take it; other controllers of other entities are not simulated:
+those entities keep following the storyboard, and the controller is listed as ignored.
 
 Under ScenarioRunner's rules (``scenario_runner``) speed and routing actions last as long as
 ScenarioRunner lets them (:mod:`~simtest_operator.sim.lifetimes`), and lateral actions aimed at an
@@ -23,6 +25,7 @@ from simtest_operator.errors import ScenarioError
 from simtest_operator.openscenario import model
 from simtest_operator.sim import (
     carla,
+    esmini_controllers,
     placements,
     positions,
     random_routes,
@@ -58,6 +61,7 @@ class Dispatcher:
 
     __slots__ = (
         "_active",
+        "_controllers",
         "_ego",
         "_external",
         "_host",
@@ -67,6 +71,7 @@ class Dispatcher:
         "_watched",
         "_world",
         "assigned",
+        "overrides",
         "teleported",
     )
 
@@ -99,9 +104,18 @@ class Dispatcher:
         """Entities an ``external_control`` controller drives (ScenarioRunner's rules only)."""
         self.assigned: dict[tuple[str, str], None] = {}
         """(entity, controller) pairs assigned during the run, in order (an ordered set)."""
+        self._controllers: dict[str, model.Controller] = {}
+        """Controllers an AssignControllerAction gave entities (replacing the declared one)."""
+        self.overrides: dict[str, esmini_controllers.Override] = {}
+        """Imitated esmini controllers activated on entities (see :mod:`esmini_controllers`)."""
         self.teleported: set[str] = set()
         """Entities a TeleportAction moved since the engine last cleared it (it holds them there
         for that step; an entity an AddEntityAction puts in the world moves at once)."""
+
+    def imitates(self, entity: str, controller: str) -> bool:
+        """Whether the controller ``entity`` was assigned under that name is imitated."""
+        assigned = self._controllers.get(entity)
+        return assigned is not None and assigned.name == controller
 
     def runs(self, actor: Actor) -> dict[Domain, Run]:
         """The actor's active runs by domain (finished ones pruned)."""
@@ -260,7 +274,12 @@ class Dispatcher:
                     world.declare(trailer, JumpCause.HITCHED)
             return Done(actor)
         if isinstance(body, model.ActivateControllerAction):
-            self._activate(actor, body.longitudinal, body.lateral, autopilot=self._scenario_runner)
+            switched = self._controller_of(actor, body)
+            imitated = self._imitate(actor, switched, body.longitudinal, body.lateral)
+            if not imitated or actor.name == self._ego:
+                self._activate(
+                    actor, body.longitudinal, body.lateral, autopilot=self._scenario_runner
+                )
             return Done(actor)
         if isinstance(body, model.AssignControllerAction):
             controller = body.controller
@@ -419,6 +438,15 @@ class Dispatcher:
             carla.autopilot(self._world, actor, on=body.activate_longitudinal is not False)
             return
         self.assigned.setdefault((actor.name, controller.name), None)
+        if not self._scenario_runner and esmini_controllers.kind_of(controller) is not None:
+            self._controllers[actor.name] = controller
+            self.overrides.pop(actor.name, None)
+            longitudinal, lateral = body.activate_longitudinal, body.activate_lateral
+            if longitudinal is None and lateral is None:
+                return  # assigned, not yet active
+            self._imitate(actor, controller, longitudinal, lateral)
+            if actor.name != self._ego:
+                return
         if module is carla.Module.EXTERNAL:
             self._external.add(actor.name)
         self._activate(
@@ -429,6 +457,50 @@ class Dispatcher:
         )
         if module is carla.Module.EXTERNAL and actor.driver is not None:
             carla.start_moving(actor.driver)
+
+    def _controller_of(
+        self, actor: Actor, body: model.ActivateControllerAction
+    ) -> model.Controller | None:
+        """The controller an ActivateControllerAction switches: the named ObjectController,
+        else the one assigned last, else the declared one."""
+        name = body.object_controller_ref or body.controller_ref
+        if name is not None:
+            for entry in actor.obj.object_controllers:
+                if entry.name == name and isinstance(entry.controller, model.Controller):
+                    return entry.controller
+        assigned = self._controllers.get(actor.name)
+        if assigned is not None:
+            return assigned
+        controller = actor.obj.controller
+        return controller if isinstance(controller, model.Controller) else None
+
+    def _imitate(
+        self,
+        actor: Actor,
+        controller: model.Controller | None,
+        longitudinal: bool | None,
+        lateral: bool | None,
+    ) -> bool:
+        """Activate an imitated esmini controller (not under ScenarioRunner's rules); False
+        when ``controller`` is none of them (it then takes over the domains it activates)."""
+        if self._scenario_runner or controller is None:
+            return False
+        override = esmini_controllers.activate(
+            self.overrides.get(actor.name),
+            controller,
+            actor,
+            longitudinal=longitudinal,
+            lateral=lateral,
+        )
+        if override is None:
+            current = self.overrides.get(actor.name)
+            if current is not None:  # the other controller takes the domains it activates
+                both = longitudinal is None and lateral is None
+                current.longitudinal = current.longitudinal and not (both or longitudinal is True)
+                current.lateral = current.lateral and not (both or lateral is True)
+            return False
+        self.overrides[actor.name] = override
+        return True
 
     def _activate(
         self, actor: Actor, longitudinal: bool | None, lateral: bool | None, *, autopilot: bool

@@ -26,7 +26,7 @@ from simtest_operator.errors import ScenarioError
 from simtest_operator.geometry import unexplained_displacement
 from simtest_operator.opendrive import RoadNetwork
 from simtest_operator.openscenario import model, rulesets
-from simtest_operator.sim import carla, motion, perception, trailers
+from simtest_operator.sim import carla, esmini_controllers, motion, perception, trailers
 from simtest_operator.sim.actors import Actor, Domain, Mode
 from simtest_operator.sim.backends import ActorSpec, Backend, BackendConfig
 from simtest_operator.sim.condition_checks import Conditions
@@ -191,15 +191,23 @@ class Simulation:
         labels = []
         if self._sut_engaged:
             labels.append(f"{self.ego} driven by the SUT model")
+        imitates = not self.rules.scenario_runner
         for obj in self._scenario.entities:
-            controller = obj.controller
             replaced = obj.name == self.ego and self._sut_engaged
-            if isinstance(controller, model.Controller) and not replaced:
-                labels.append(f"controller {controller.name} of {obj.name} not imitated")
+            declared = [entry.controller for entry in obj.object_controllers]
+            declared = declared or [obj.controller] if obj.controller is not None else declared
+            for controller in declared:
+                if not isinstance(controller, model.Controller) or replaced:
+                    continue
+                if imitates and esmini_controllers.kind_of(controller) is not None:
+                    continue
+                label = f"controller {controller.name} of {obj.name} not imitated"
+                if label not in labels:
+                    labels.append(label)
         for entity, name in self._dispatcher.assigned:
             label = f"controller {name} of {entity} not imitated"
             replaced = entity == self.ego and self._sut_engaged
-            if not replaced and label not in labels:
+            if not replaced and not self._dispatcher.imitates(entity, name) and label not in labels:
                 labels.append(label)
         if self._backend_config.sumo_config is not None:
             labels.append("SUMO background traffic")
@@ -239,6 +247,11 @@ class Simulation:
         for global_action in init.global_actions:
             self._dispatcher.start_global(global_action)
         self._initial_takeover()
+        for name, override in self._dispatcher.overrides.items():
+            # the Init's SpeedActions after the activation do not reach the controller's speed
+            actor = world.actor(name)
+            if override.longitudinal and actor.driver is None:
+                actor.speed = override.speed
         self._pull_trailers(0.0)
         for actor in world.actors.values():
             actor.measure_motion((actor.x, actor.y, actor.heading), 0.0, teleported=True)
@@ -416,6 +429,12 @@ class Simulation:
         )
         if actor.mode is Mode.PATH and Domain.LATERAL not in self._dispatcher.runs(actor):
             world.attach(actor)
+        override = self._dispatcher.overrides.get(actor.name)
+        if override is not None and driver is None:
+            # an imitated esmini controller overrides the storyboard in its domains
+            esmini_controllers.drive_speed(world, actor, override)
+            if esmini_controllers.steer(world, actor, override, dt):
+                placed = True
         motion.move(world, actor, dt, before=before, start=start[:2], placed=placed)
         actor.acceleration = (actor.speed - speed_before) / dt if dt > 0 else 0.0
         actor.measure_motion(start, dt, teleported=actor.name in self._dispatcher.teleported)
