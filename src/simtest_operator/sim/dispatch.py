@@ -23,6 +23,7 @@ from simtest_operator.errors import ScenarioError
 from simtest_operator.openscenario import model
 from simtest_operator.sim import (
     carla,
+    esmini_route,
     placements,
     positions,
     random_routes,
@@ -67,6 +68,7 @@ class Dispatcher:
         "_watched",
         "_world",
         "assigned",
+        "routers",
         "teleported",
     )
 
@@ -99,6 +101,13 @@ class Dispatcher:
         """Entities an ``external_control`` controller drives (ScenarioRunner's rules only)."""
         self.assigned: dict[tuple[str, str], None] = {}
         """(entity, controller) pairs assigned during the run, in order (an ordered set)."""
+        self.routers: dict[str, esmini_route.FollowRoute] = {}
+        """esmini FollowRoute controllers imitated, by entity (never under ScenarioRunner's
+        rules)."""
+        for actor in world.actors.values():
+            controller = actor.obj.controller
+            if isinstance(controller, model.Controller) and not scenario_runner:
+                self._adopt(actor, controller)
         self.teleported: set[str] = set()
         """Entities a TeleportAction moved since the engine last cleared it (it holds them there
         for that step; an entity an AddEntityAction puts in the world moves at once)."""
@@ -281,6 +290,9 @@ class Dispatcher:
                     approach.pop()
                 actor.route = tuple(approach + leg_roads)
                 actor.route_index = 0
+            router = self.routers.get(actor.name)
+            if router is not None:
+                router.assign(self._route_waypoints(route))
             return self._routed(actor, route.waypoints[-1].position)
         if isinstance(body, model.RandomRouteAction):
             if world.roads is None or actor.mode is not Mode.ROAD or actor.road_id is None:
@@ -413,6 +425,9 @@ class Dispatcher:
     ) -> None:
         """Assign a controller; ScenarioRunner's controller modules map to built-in drivers."""
         module = carla.module_of(controller)
+        if not self._scenario_runner:
+            self.routers.pop(actor.name, None)
+            self._adopt(actor, controller)
         if module is carla.Module.NPC and actor.name != self._ego:
             return  # lane following at the SpeedActions' speed: what the engine does anyway
         if module is carla.Module.AUTOPILOT and actor.name != self._ego:
@@ -438,6 +453,15 @@ class Dispatcher:
         if actor.name != self._ego and self._scenario_runner:
             carla.autopilot(self._world, actor, on=longitudinal is not False or lateral is True)
             return
+        router = self.routers.get(actor.name)
+        if router is not None:
+            # esmini's FollowRoute works in the lateral domain (lane changes), whatever else
+            if lateral is False:
+                router.active = False
+            elif lateral is True or (lateral is None and longitudinal is None):
+                router.activate()
+            if actor.name != self._ego:
+                return
         if actor.name != self._ego:
             controller = actor.obj.controller
             name = controller.name if isinstance(controller, model.Controller) else "controller"
@@ -472,6 +496,41 @@ class Dispatcher:
             roads_on_route = goals
         actor.route = tuple(roads_on_route)
         actor.route_index = 0
+
+    def _adopt(self, actor: Actor, controller: model.Controller) -> None:
+        """Imitate ``controller`` on ``actor`` if the engine knows its kind."""
+        if esmini_route.is_follow_route(controller):
+            self.routers[actor.name] = esmini_route.FollowRoute(controller)
+
+    def _route_waypoints(self, route: model.Route) -> list[esmini_route.Waypoint]:
+        found: list[esmini_route.Waypoint] = []
+        for waypoint in route.waypoints:
+            lane = positions.resolve(self._world, waypoint.position).lane
+            if lane is not None:
+                found.append(esmini_route.Waypoint(lane.road_id, lane.lane_id, lane.s))
+        return found
+
+    def drive_controllers(self) -> None:
+        """Step the imitated controllers of the actors no driver model drives (before motion)."""
+        world = self._world
+        for name, router in self.routers.items():
+            actor = world.actors.get(name)
+            if actor is None or not actor.placed or actor.driver is not None:
+                continue
+            lateral = self.runs(actor).get(Domain.LATERAL)
+            changing = isinstance(lateral, LaneChangeRun) and lateral is router.change
+            lane = router.step(world, actor, changing=changing)
+            if lane is not None:
+                action = model.LaneChangeAction(
+                    dynamics=model.TransitionDynamics(
+                        shape=model.DynamicsShape.SINUSOIDAL,
+                        dimension=model.DynamicsDimension.TIME,
+                        value=router.lane_change_time,
+                    ),
+                    target=model.AbsoluteTargetLane(lane_id=lane),
+                )
+                run = self._register(actor, LaneChangeRun(world, actor, action))
+                router.change = run
 
     def _ignore(self, what: str) -> None:
         if what not in self._world.ignored:

@@ -186,11 +186,15 @@ class Simulation:
         for obj in self._scenario.entities:
             controller = obj.controller
             replaced = obj.name == self.ego and self._sut_engaged
-            if isinstance(controller, model.Controller) and not replaced:
+            imitated = obj.name in self._dispatcher.routers
+            if isinstance(controller, model.Controller) and not replaced and not imitated:
                 labels.append(f"controller {controller.name} of {obj.name} not imitated")
         for entity, name in self._dispatcher.assigned:
             label = f"controller {name} of {entity} not imitated"
             replaced = entity == self.ego and self._sut_engaged
+            router = self._dispatcher.routers.get(entity)
+            if router is not None and router.name == name:
+                continue
             if not replaced and label not in labels:
                 labels.append(label)
         if self._backend_config.sumo_config is not None:
@@ -260,6 +264,7 @@ class Simulation:
         # Every action measures the others at time t, whichever of them moved first this step
         # (the reference player moves entities only after all actions stepped).
         world.freeze()
+        self._dispatcher.drive_controllers()
         for actor in world.actors.values():
             if actor.placed and not world.hitches.towed(actor.name):
                 self._advance(actor, dt)
