@@ -71,6 +71,7 @@ class FollowRoute:
 
     __slots__ = (
         "_current",
+        "_fresh",
         "_last_lane",
         "_leg_target",
         "_planned",
@@ -99,6 +100,8 @@ class FollowRoute:
         """The current leg's waypoints: one per road, the last is the scenario waypoint."""
         self._current = 0
         self._planned = False
+        self._fresh = False
+        """A route came this step: esmini's controller sees it after this step's motion."""
         self._last_lane: tuple[str, int] | None = None
         """(road, lane) the actor was in at the previous step (to judge a passed waypoint)."""
 
@@ -111,6 +114,7 @@ class FollowRoute:
         self._waypoints = []
 
     def assign(self, targets: list[Waypoint]) -> None:
+        self._fresh = True
         self._targets = targets
         self._leg_target = 0
         self._current = 0
@@ -121,6 +125,9 @@ class FollowRoute:
         """Advance the controller; returns a lane to change to now, if one is due."""
         roads = world.roads
         if not self.active or not self._targets or roads is None:
+            return None
+        if self._fresh:
+            self._fresh = False
             return None
         if actor.mode is not Mode.ROAD or actor.road_id is None:
             return None
@@ -221,7 +228,9 @@ def plan_leg(
     assert actor.road_id is not None
     if actor.road_id == target.road_id and lane == target.lane_id:
         return None
-    path = route_planning.plan(roads, (actor.road_id, actor.direction), target.road_id)
+    # The target lane must be reached driving its way (a lane of the other carriageway is not).
+    arrive = roads.driving_direction(target.road_id, target.lane_id)
+    path = route_planning.plan(roads, (actor.road_id, actor.direction), target.road_id, arrive)
     if path is None or len(path) < 2:
         return None
     # Backwards from the target lane: on each road, a lane that enters the next road in the lane
