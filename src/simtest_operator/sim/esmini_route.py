@@ -174,6 +174,9 @@ class FollowRoute:
         self._waypoints = waypoints
         self._current = 0
         self._planned = True
+        # The actor takes the planned roads at forks (esmini resets the entity's route too).
+        actor.route = tuple(w.road_id for w in waypoints)
+        actor.route_index = 0
 
     def _update(self, world: World, actor: Actor, lane: int, waypoint: Waypoint) -> None:
         status = self._status(actor, lane, waypoint)
