@@ -167,7 +167,8 @@ class FollowRoute:
                 self._deactivate(actor)
                 return
             target = self._targets[self._leg_target]
-        waypoints = plan_leg(roads, actor, world.current_lane(actor), target)
+        here = Waypoint(actor.road_id, world.current_lane(actor), actor.s)
+        waypoints = plan_leg(roads, here, actor.direction, target)
         if waypoints is None:
             self._deactivate(actor)
             return
@@ -224,16 +225,17 @@ class FollowRoute:
 
 
 def plan_leg(
-    roads: RoadNetwork, actor: Actor, lane: int, target: Waypoint
+    roads: RoadNetwork, start: Waypoint, direction: int, target: Waypoint
 ) -> list[Waypoint] | None:
-    """The waypoints from the actor's place to ``target``: per road before the target's, the
-    lane to leave it in and where; then ``target``. None when no road path leads there."""
-    assert actor.road_id is not None
-    if actor.road_id == target.road_id and lane == target.lane_id:
+    """The waypoints from ``start`` (travelling ``direction``) to ``target``: per road before
+    the target's, the lane to leave it in and where; then ``target``. None when no road path
+    leads there."""
+    lane = start.lane_id
+    if start.road_id == target.road_id and lane == target.lane_id:
         return None
     # The target lane must be reached driving its way (a lane of the other carriageway is not).
     arrive = roads.driving_direction(target.road_id, target.lane_id)
-    path = route_planning.plan(roads, (actor.road_id, actor.direction), target.road_id, arrive)
+    path = route_planning.plan(roads, (start.road_id, direction), target.road_id, arrive)
     if path is None or len(path) < 2:
         return None
     # Backwards from the target lane: on each road, a lane that enters the next road in the lane
@@ -262,8 +264,8 @@ def plan_leg(
         stretch = _exit_stretch(roads, road_id, direction, best)
         length = roads.road_length(road_id)
         s = length - stretch / 2.0 if direction > 0 else stretch / 2.0
-        if index == 0 and (actor.s > length - stretch if direction > 0 else actor.s < stretch):
-            s = actor.s  # already in the stretch: the waypoint is where the actor is
+        if index == 0 and (start.s > length - stretch if direction > 0 else start.s < stretch):
+            s = start.s  # already in the stretch: the waypoint is where the actor is
         result.append(Waypoint(road_id, best, s))
     result.append(target)
     return result
