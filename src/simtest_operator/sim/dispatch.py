@@ -8,7 +8,9 @@ The system under test: while the driver model drives the ego, a SpeedAction on t
 driver's new set speed (a request to the driver, like a driver turning the cruise-control knob),
 and other longitudinal actions on the ego are not executed and are listed as ignored. Lateral
 actions still run (the model only keeps its lane). Controllers of other entities are not
-simulated: those entities keep following the storyboard, and the controller is listed as ignored.
+simulated: those entities keep following the storyboard, and the controller is listed as ignored;
+except esmini's FollowRouteController (:mod:`~simtest_operator.sim.esmini_route`), imitated on
+every entity no driver model drives.
 
 Under ScenarioRunner's rules (``scenario_runner``) speed and routing actions last as long as
 ScenarioRunner lets them (:mod:`~simtest_operator.sim.lifetimes`), and lateral actions aimed at an
