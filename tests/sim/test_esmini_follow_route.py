@@ -19,7 +19,13 @@ UNITTEST = CORPUS / "EnvironmentSimulator" / "Unittest"
 LOADING = LoadOptions(source_root=CORPUS)
 
 
-def _drive(name: str, takeover: Takeover, tmp_path: Path, until: float) -> list[tuple]:
+State = tuple[float, str | None, int | None, float, float, float]
+"""(time, road, lane, speed, x, y) of the ego after a step."""
+
+
+def _drive(
+    name: str, takeover: Takeover, tmp_path: Path, until: float
+) -> tuple[list[State], tuple[str, ...]]:
     opened = open_simulation(
         UNITTEST / "xosc" / name,
         sut=SutConfig(takeover=takeover),
@@ -30,19 +36,19 @@ def _drive(name: str, takeover: Takeover, tmp_path: Path, until: float) -> list[
     )
     simulation = opened.simulation
     simulation.start()
-    states = []
+    states: list[State] = []
     while not simulation.complete and simulation.time < until:
         (ego,) = (e for e in simulation.step().entities if e.name == "Ego")
         states.append((simulation.time, ego.road_id, ego.lane_id, ego.speed, ego.x, ego.y))
     labels = simulation.intended_differences
     simulation.close()
-    return [*states, labels]
+    return states, labels
 
 
 def test_the_ego_changes_to_the_route_lane_and_stops_at_its_end(tmp_path: Path) -> None:
     # Road 0 lane -1 to road 3 lane -2: esmini changes lanes on road 0 (lane -2 runs straight
     # on into road 3's lane -2), then stops (test mode) just past the target at s = 20.
-    *states, labels = _drive("perform_single_lane_change.xosc", Takeover.NEVER, tmp_path, 10.0)
+    states, labels = _drive("perform_single_lane_change.xosc", Takeover.NEVER, tmp_path, 10.0)
     assert not any("followRoute" in label for label in labels)
     on_road_0 = [lane for _, road, lane, *_ in states if road == "0"]
     assert on_road_0[0] == -1 and on_road_0[-1] == -2
@@ -54,13 +60,13 @@ def test_the_ego_changes_to_the_route_lane_and_stops_at_its_end(tmp_path: Path) 
 
 def test_a_route_without_path_stops_the_ego_in_test_mode(tmp_path: Path) -> None:
     # The target is a lane of the other carriageway, never reached driving its way.
-    *states, _ = _drive("follow_route_no_path.xosc", Takeover.NEVER, tmp_path, 3.0)
+    states, _ = _drive("follow_route_no_path.xosc", Takeover.NEVER, tmp_path, 3.0)
     assert states[-1][3] == 0.0
     assert abs(states[-1][4] - 22.9) < 0.5  # esmini stops one step after the route came
 
 
 def test_under_a_takeover_the_sut_model_drives(tmp_path: Path) -> None:
-    *states, labels = _drive("follow_route_no_path.xosc", Takeover.ON_CONTROLLER, tmp_path, 3.0)
+    states, labels = _drive("follow_route_no_path.xosc", Takeover.ON_CONTROLLER, tmp_path, 3.0)
     assert states[-1][3] > 20.0
     assert "Ego driven by the SUT model" in labels
 

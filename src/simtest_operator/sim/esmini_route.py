@@ -131,10 +131,8 @@ class FollowRoute:
             return None
         if actor.mode is not Mode.ROAD or actor.road_id is None:
             return None
-        if not self._planned:
-            self._plan(world, actor)
-            if not self.active:
-                return None
+        if not self._planned and not self._plan(world, actor):
+            return None
         if self._current >= len(self._waypoints):
             self._deactivate(actor)
             return None
@@ -157,7 +155,8 @@ class FollowRoute:
         if self.test_mode:
             actor.speed = 0.0
 
-    def _plan(self, world: World, actor: Actor) -> None:
+    def _plan(self, world: World, actor: Actor) -> bool:
+        """Plan the next leg; False when there is none (the controller deactivated)."""
         roads = world.roads
         assert roads is not None and actor.road_id is not None
         target = self._targets[self._leg_target]
@@ -165,19 +164,20 @@ class FollowRoute:
             self._leg_target += 1
             if self._leg_target >= len(self._targets):
                 self._deactivate(actor)
-                return
+                return False
             target = self._targets[self._leg_target]
         here = Waypoint(actor.road_id, world.current_lane(actor), actor.s)
         waypoints = plan_leg(roads, here, actor.direction, target)
         if waypoints is None:
             self._deactivate(actor)
-            return
+            return False
         self._waypoints = waypoints
         self._current = 0
         self._planned = True
         # The actor takes the planned roads at forks (esmini resets the entity's route too).
         actor.route = tuple(w.road_id for w in waypoints)
         actor.route_index = 0
+        return True
 
     def _update(self, world: World, actor: Actor, lane: int, waypoint: Waypoint) -> None:
         status = self._status(actor, lane, waypoint)
