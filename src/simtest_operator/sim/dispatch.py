@@ -8,9 +8,10 @@ The system under test: while the driver model drives the ego, a SpeedAction on t
 driver's new set speed (a request to the driver, like a driver turning the cruise-control knob),
 and other longitudinal actions on the ego are not executed and are listed as ignored. Lateral
 actions still run (the model only keeps its lane). esmini's interactive and external (no ghost)
-controllers are imitated (:mod:`~simtest_operator.sim.esmini_controllers`) on other entities, and
-on the ego when the SUT does not take it; other controllers of other entities are not simulated:
-those entities keep following the storyboard, and the controller is listed as ignored.
+controllers (:mod:`~simtest_operator.sim.esmini_controllers`) and its FollowRouteController
+(:mod:`~simtest_operator.sim.esmini_route`) are imitated on other entities, and on the ego when
+the SUT does not take it; other controllers of other entities are not simulated: those entities
+keep following the storyboard, and the controller is listed as ignored.
 
 Under ScenarioRunner's rules (``scenario_runner``) speed and routing actions last as long as
 ScenarioRunner lets them (:mod:`~simtest_operator.sim.lifetimes`), and lateral actions aimed at an
@@ -26,6 +27,7 @@ from simtest_operator.openscenario import model
 from simtest_operator.sim import (
     carla,
     esmini_controllers,
+    esmini_route,
     placements,
     positions,
     random_routes,
@@ -72,6 +74,7 @@ class Dispatcher:
         "_world",
         "assigned",
         "overrides",
+        "routers",
         "teleported",
     )
 
@@ -108,14 +111,25 @@ class Dispatcher:
         """Controllers an AssignControllerAction gave entities (replacing the declared one)."""
         self.overrides: dict[str, esmini_controllers.Override] = {}
         """Imitated esmini controllers activated on entities (see :mod:`esmini_controllers`)."""
+        self.routers: dict[str, esmini_route.FollowRoute] = {}
+        """esmini FollowRoute controllers imitated, by entity (never under ScenarioRunner's
+        rules)."""
+        for actor in world.actors.values():
+            controller = actor.obj.controller
+            if isinstance(controller, model.Controller) and not scenario_runner:
+                self._adopt(actor, controller)
         self.teleported: set[str] = set()
         """Entities a TeleportAction moved since the engine last cleared it (it holds them there
         for that step; an entity an AddEntityAction puts in the world moves at once)."""
 
     def imitates(self, entity: str, controller: str) -> bool:
-        """Whether the controller ``entity`` was assigned under that name is imitated."""
+        """Whether ``entity``'s controller of that name is imitated: an interactive or external
+        one it was assigned, or a FollowRouteController."""
         assigned = self._controllers.get(entity)
-        return assigned is not None and assigned.name == controller
+        router = self.routers.get(entity)
+        return (assigned is not None and assigned.name == controller) or (
+            router is not None and router.name == controller
+        )
 
     def runs(self, actor: Actor) -> dict[Domain, Run]:
         """The actor's active runs by domain (finished ones pruned)."""
@@ -300,6 +314,9 @@ class Dispatcher:
                     approach.pop()
                 actor.route = tuple(approach + leg_roads)
                 actor.route_index = 0
+            router = self.routers.get(actor.name)
+            if router is not None:
+                router.assign(self._route_waypoints(route))
             return self._routed(actor, route.waypoints[-1].position)
         if isinstance(body, model.RandomRouteAction):
             if world.roads is None or actor.mode is not Mode.ROAD or actor.road_id is None:
@@ -432,6 +449,9 @@ class Dispatcher:
     ) -> None:
         """Assign a controller; ScenarioRunner's controller modules map to built-in drivers."""
         module = carla.module_of(controller)
+        if not self._scenario_runner:
+            self.routers.pop(actor.name, None)
+            self._adopt(actor, controller)
         if module is carla.Module.NPC and actor.name != self._ego:
             return  # lane following at the SpeedActions' speed: what the engine does anyway
         if module is carla.Module.AUTOPILOT and actor.name != self._ego:
@@ -510,6 +530,15 @@ class Dispatcher:
         if actor.name != self._ego and self._scenario_runner:
             carla.autopilot(self._world, actor, on=longitudinal is not False or lateral is True)
             return
+        router = self.routers.get(actor.name)
+        if router is not None:
+            # esmini's FollowRoute works in the lateral domain (lane changes), whatever else
+            if lateral is False:
+                router.active = False
+            elif lateral is True or (lateral is None and longitudinal is None):
+                router.activate()
+            if actor.name != self._ego:
+                return
         if actor.name != self._ego:
             controller = actor.obj.controller
             name = controller.name if isinstance(controller, model.Controller) else "controller"
@@ -544,6 +573,41 @@ class Dispatcher:
             roads_on_route = goals
         actor.route = tuple(roads_on_route)
         actor.route_index = 0
+
+    def _adopt(self, actor: Actor, controller: model.Controller) -> None:
+        """Imitate ``controller`` on ``actor`` if the engine knows its kind."""
+        if esmini_route.is_follow_route(controller):
+            self.routers[actor.name] = esmini_route.FollowRoute(controller)
+
+    def _route_waypoints(self, route: model.Route) -> list[esmini_route.Waypoint]:
+        found: list[esmini_route.Waypoint] = []
+        for waypoint in route.waypoints:
+            lane = positions.resolve(self._world, waypoint.position).lane
+            if lane is not None:
+                found.append(esmini_route.Waypoint(lane.road_id, lane.lane_id, lane.s))
+        return found
+
+    def drive_controllers(self) -> None:
+        """Step the imitated controllers of the actors no driver model drives (before motion)."""
+        world = self._world
+        for name, router in self.routers.items():
+            actor = world.actors.get(name)
+            if actor is None or not actor.placed or actor.driver is not None:
+                continue
+            lateral = self.runs(actor).get(Domain.LATERAL)
+            changing = isinstance(lateral, LaneChangeRun) and lateral is router.change
+            lane = router.step(world, actor, changing=changing)
+            if lane is not None:
+                action = model.LaneChangeAction(
+                    dynamics=model.TransitionDynamics(
+                        shape=model.DynamicsShape.SINUSOIDAL,
+                        dimension=model.DynamicsDimension.TIME,
+                        value=router.lane_change_time,
+                    ),
+                    target=model.AbsoluteTargetLane(lane_id=lane),
+                )
+                run = self._register(actor, LaneChangeRun(world, actor, action))
+                router.change = run
 
     def _ignore(self, what: str) -> None:
         if what not in self._world.ignored:

@@ -201,6 +201,8 @@ class Simulation:
                     continue
                 if imitates and esmini_controllers.kind_of(controller) is not None:
                     continue
+                if self._dispatcher.imitates(obj.name, controller.name):
+                    continue
                 label = f"controller {controller.name} of {obj.name} not imitated"
                 if label not in labels:
                     labels.append(label)
@@ -281,6 +283,7 @@ class Simulation:
         # Every action measures the others at time t, whichever of them moved first this step
         # (the reference player moves entities only after all actions stepped).
         world.freeze()
+        self._dispatcher.drive_controllers()
         for actor in world.actors.values():
             if actor.placed and not world.hitches.towed(actor.name):
                 self._advance(actor, dt)
