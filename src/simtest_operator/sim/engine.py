@@ -194,8 +194,8 @@ class Simulation:
         imitates = not self.rules.scenario_runner
         for obj in self._scenario.entities:
             replaced = obj.name == self.ego and self._sut_engaged
-            declared = [entry.controller for entry in obj.object_controllers]
-            declared = declared or [obj.controller] if obj.controller is not None else declared
+            declared: list[object] = [e.controller for e in obj.object_controllers]
+            declared = declared or [obj.controller]
             for controller in declared:
                 if not isinstance(controller, model.Controller) or replaced:
                     continue
@@ -489,11 +489,11 @@ class Simulation:
                     ),
                 )
             )
-            before = previous.get(other.name)
-            if before is not None and _unexplained(before, traffic[-1], self.world.dt):
-                self.world.discontinuities.append(
-                    Discontinuity(time=self.world.time, entity=ident, cause=JumpCause.TRAFFIC_MODEL)
-                )
+        moved = [(previous[s.name], s) for s in traffic if s.name in previous]
+        self.world.discontinuities.extend(
+            Discontinuity(time=self.world.time, entity=after.id, cause=JumpCause.TRAFFIC_MODEL)
+            for after in _jumped(moved, self.world.dt)
+        )
         self.world.traffic = tuple(traffic)
         self._snapshot = WorldSnapshot(
             time=self.world.time,
@@ -509,14 +509,25 @@ the step is declared a :attr:`JumpCause.TRAFFIC_MODEL` jump: half the evidence c
 tolerance, well above rounding."""
 
 
-def _unexplained(before: EntityState, after: EntityState, dt: float) -> bool:
-    """Whether ``after`` lies farther from ``before`` than their velocities explain."""
-    vx = np.array([before.speed * math.cos(before.heading), after.speed * math.cos(after.heading)])
-    vy = np.array([before.speed * math.sin(before.heading), after.speed * math.sin(after.heading)])
-    error = unexplained_displacement(
-        np.array([dt]), np.array([after.x - before.x]), np.array([after.y - before.y]), vx, vy
+def _jumped(moved: list[tuple[EntityState, EntityState]], dt: float) -> list[EntityState]:
+    """The states (after) of the (before, after) pairs whose displacement their velocities
+    leave more than :data:`TRAFFIC_JUMP` unexplained; one vectorised check per step."""
+    if not moved:
+        return []
+    pairs = np.array(
+        [(b.x, b.y, b.speed, b.heading, a.x, a.y, a.speed, a.heading) for b, a in moved]
     )
-    return bool(error[0] > TRAFFIC_JUMP)
+    bx, by, bv, bh, ax, ay, av, ah = pairs.T
+    # each pair is a two-frame track; rows 0 and 1 of the velocities are its two frames
+    error = unexplained_displacement(
+        np.full(len(moved), dt),
+        ax - bx,
+        ay - by,
+        np.stack([bv * np.cos(bh), av * np.cos(ah)]),
+        np.stack([bv * np.sin(bh), av * np.sin(ah)]),
+    )
+    wrong = error.reshape(-1) > TRAFFIC_JUMP
+    return [after for (_, after), jumped in zip(moved, wrong, strict=True) if jumped]
 
 
 __all__ = ["Simulation", "pick_ego"]
