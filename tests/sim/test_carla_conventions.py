@@ -533,34 +533,46 @@ def test_an_action_scenario_runner_cannot_build_makes_the_run_invalid(
     assert report.outcome.verdict is not Verdict.INVALID, report.outcome.reason
 
 
-def test_scenario_runner_builds_the_first_story_only(tmp_path: Path) -> None:
-    # OpenScenarioConfiguration keeps storyboard.find("Story"): a second story never runs, so
-    # an action there that it could not build is no bar either, and its brake never happens.
+def test_scenario_runner_builds_every_story(tmp_path: Path) -> None:
+    # ScenarioRunner builds every Story since 0.9.12 (OpenScenarioConfiguration.stories,
+    # "Added support for storyboards with multiple stories"): a second story's brake happens,
+    # and an action there that it cannot build bars the file like one in the first story.
     brake = """<PrivateAction><LongitudinalAction><SpeedAction>
         <SpeedActionDynamics dynamicsShape="step" value="0" dynamicsDimension="time"/>
         <SpeedActionTarget><AbsoluteTargetSpeed value="0"/></SpeedActionTarget>
       </SpeedAction></LongitudinalAction></PrivateAction>"""
-    unbuilt = _UNBUILT_ACTIONS["VisibilityAction"][0]
-    second = f"""
+
+    def second(events: str) -> str:
+        return f"""
     <Story name="Second">
       <Act name="SecondAct">
         <ManeuverGroup name="SecondGroup" maximumExecutionCount="1">
           <Actors selectTriggeringEntities="false"><EntityRef entityRef="adversary"/></Actors>
-          <Maneuver name="SecondManeuver">{_event("Halt", brake)}{_event("Hide", unbuilt)}
-          </Maneuver>
+          <Maneuver name="SecondManeuver">{events}</Maneuver>
         </ManeuverGroup>
         <StartTrigger><ConditionGroup>
           <Condition name="SecondStart" delay="0" conditionEdge="rising">
-            <ByValueCondition><SimulationTimeCondition value="0" rule="greaterThan"/>
+            <ByValueCondition><SimulationTimeCondition value="4" rule="greaterThan"/>
             </ByValueCondition></Condition>
         </ConditionGroup></StartTrigger>
       </Act>
     </Story>"""
-    text = cs.follow_leading().replace("</Story>", "</Story>" + second, 1)
-    with_second = run(cs.write(tmp_path, text, name="two.xosc"))
+
+    def with_story(events: str) -> str:
+        return cs.follow_leading().replace("</Story>", "</Story>" + second(events), 1)
+
     alone = run(cs.write(tmp_path, cs.follow_leading(), name="one.xosc"))
-    assert with_second.outcome.verdict is alone.outcome.verdict is not Verdict.INVALID
-    assert with_second.outcome.reason == alone.outcome.reason
-    assert with_second.samples == alone.samples
-    ignored = with_second.outcome.ignored_elements
-    assert "Story 'Second' (ScenarioRunner builds the first Story only)" in ignored
+    halted = run(cs.write(tmp_path, with_story(_event("Halt", brake)), name="two.xosc"))
+    assert alone.outcome.verdict is not Verdict.INVALID, alone.outcome.reason
+    assert halted.outcome.verdict is not Verdict.INVALID, halted.outcome.reason
+    assert halted.samples != alone.samples
+    assert not [e for e in halted.outcome.ignored_elements if e.startswith("Story")]
+    # the adversary drives at 6 m/s from t = 2 s; the second story halts it after 4 s
+    assert [s[4] for s in alone.samples["adversary"] if s[0] == 5.0] == [6.0]
+    assert [s[4] for s in halted.samples["adversary"] if s[0] == 5.0] == [0.0]
+    unbuilt = _UNBUILT_ACTIONS["VisibilityAction"][0]
+    refused = run(cs.write(tmp_path, with_story(_event("Hide", unbuilt)), name="three.xosc"))
+    assert refused.outcome.verdict is Verdict.INVALID
+    assert refused.outcome.reason.startswith(
+        "ScenarioRunner cannot load the file: action 'Hide' (line "
+    ), refused.outcome.reason

@@ -223,12 +223,12 @@ def scenario_runner_refusal(scenario: Scenario) -> str | None:
     """Why ScenarioRunner refuses to load ``scenario`` for a condition or an action it builds its
     behaviour from (the acts' start and stop triggers, the events' start triggers and actions: it
     raises while building them and ``scenario_runner.py`` prints "The scenario cannot be
-    loaded"), or None. It builds the first Story only (``OpenScenarioConfiguration.story``); the
-    storyboard's StopTrigger not beyond its ``criteria_*`` conditions; Init actions are read for
-    positions, speeds and controllers, never built."""
+    loaded"), or None. It builds every Story (since 0.9.12: ``OpenScenarioConfiguration.stories``);
+    the storyboard's StopTrigger not beyond its ``criteria_*`` conditions; Init actions are read
+    for positions, speeds and controllers, never built."""
     triggers: list[m.Trigger | None] = []
     actions: list[m.Action] = []
-    for story in scenario.storyboard.stories[:1]:
+    for story in scenario.storyboard.stories:
         for act in story.acts:
             triggers += [act.start_trigger, act.stop_trigger]
             for maneuver_group in act.maneuver_groups:

@@ -174,11 +174,7 @@ class Simulation:
     @property
     def ignored(self) -> tuple[str, ...]:
         """Elements accepted but not simulated, from the file and met during the run."""
-        unbuilt = (
-            f"Story {name!r} (ScenarioRunner builds the first Story only)"
-            for name in self._storyboard.unbuilt
-        )
-        return tuple(dict.fromkeys((*self._scenario.ignored_kinds, *self.world.ignored, *unbuilt)))
+        return tuple(dict.fromkeys((*self._scenario.ignored_kinds, *self.world.ignored)))
 
     @property
     def monitors(self) -> Mapping[str, bool]:

@@ -185,7 +185,6 @@ class Storyboard:
         "_stop_defined",
         "_stories",
         "_visible",
-        "unbuilt",
     )
 
     def __init__(
@@ -199,12 +198,7 @@ class Storyboard:
         self._raw = raw
         self._start_action = start_action
         self._scenario_runner = scenario_runner
-        built = tuple(_build_story(story, scenario_runner) for story in storyboard.stories)
-        # ScenarioRunner builds the first Story only (OpenScenarioConfiguration.story): later
-        # ones never start, but conditions may still name their elements (and never fire).
-        self._stories = built[:1] if scenario_runner else built
-        self.unbuilt = tuple(story.name for story in built[len(self._stories) :])
-        """Stories that never run: under ScenarioRunner's rules, all but the first."""
+        self._stories = tuple(_build_story(story, scenario_runner) for story in storyboard.stories)
         stop = storyboard.stop_trigger
         self._stop = TriggerState(stop, level=scenario_runner)
         # A stop trigger that held only ScenarioRunner criteria is no stop trigger; under
@@ -224,7 +218,7 @@ class Storyboard:
         self._visible: set[tuple[Node, Transition]] = set()
         self._pending: set[tuple[Node, Transition]] = set()
         self._by_name: dict[tuple[Kind, str], list[Node]] = {}
-        for story in built:
+        for story in self._stories:
             self._index(story, ())
         for story in self._stories:
             story.phase = Phase.RUNNING
