@@ -229,3 +229,45 @@ def test_the_ego_is_the_vehicle_typed_ego_vehicle(tmp_path: Path) -> None:
     assert pick_ego(scenario, None, scenario_runner=True) == "adversary"
     assert pick_ego(scenario, None) == "first"  # esmini's rules: the first vehicle
     assert pick_ego(scenario, "first", scenario_runner=True) == "first"  # configured wins
+
+
+def test_scenario_runner_reads_only_position_speed_and_controller_from_init(
+    tmp_path: Path,
+) -> None:
+    # OpenScenarioConfiguration takes the start pose from the last Position below the entity's
+    # Privates (here the AcquirePositionAction's) and the speed from the last
+    # AbsoluteTargetSpeed, set at once; the Init's lane offset is never built.
+    adversary_init = f"""
+        <Private entityRef="adversary">
+          <PrivateAction>
+            <TeleportAction><Position>
+              <RelativeLanePosition entityRef="hero" dLane="0" ds="50" offset="0"/>
+            </Position></TeleportAction>
+          </PrivateAction>
+          <PrivateAction>{cs.speed(8, shape="linear", over=4)}</PrivateAction>
+          <PrivateAction>{cs.lane_offset(1)}</PrivateAction>
+          <PrivateAction><RoutingAction><AcquirePositionAction><Position>
+            <LanePosition roadId="1" laneId="-1" s="120" offset="0"/>
+          </Position></AcquirePositionAction></RoutingAction></PrivateAction>
+        </Private>"""
+    time_stop = """
+        <Condition name="Late" delay="0" conditionEdge="rising"><ByValueCondition>
+          <SimulationTimeCondition value="5" rule="greaterThan"/></ByValueCondition></Condition>"""
+    carla = run(cs.write(tmp_path, cs.follow_leading(adversary_init=adversary_init)))
+    assert carla.rules.startswith("ScenarioRunner"), carla.rules
+    plain = cs.follow_leading(
+        adversary_init=adversary_init, stop=time_stop, description="plain"
+    ).replace("external_control", "some_driver")
+    esmini = run(cs.write(tmp_path, plain, name="plain.xosc"))
+    assert esmini.rules.startswith("OpenSCENARIO"), esmini.rules
+
+    _, x, y, _, speed = at(carla.samples["adversary"], 0.0)
+    assert (x, y, speed) == pytest.approx((120.0, -1.75, 8.0), abs=0.01)
+    assert all(s[2] == pytest.approx(-1.75, abs=0.01) for s in carla.samples["adversary"])
+    ignored = carla.outcome.ignored_elements
+    assert any(e.startswith("Init LaneOffsetAction of 'adversary'") for e in ignored), ignored
+    assert any(e.startswith("Init AcquirePositionAction of 'adversary'") for e in ignored)
+
+    _, x, _, _, speed = at(esmini.samples["adversary"], 0.0)
+    assert (x, speed) == pytest.approx((70.0, 0.0), abs=0.01)
+    assert any(abs(s[2] + 1.75) > 0.3 for s in esmini.samples["adversary"])

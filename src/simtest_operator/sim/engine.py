@@ -26,7 +26,14 @@ from simtest_operator.errors import ScenarioError
 from simtest_operator.geometry import unexplained_displacement
 from simtest_operator.opendrive import RoadNetwork
 from simtest_operator.openscenario import model, rulesets
-from simtest_operator.sim import carla, esmini_controllers, motion, perception, trailers
+from simtest_operator.sim import (
+    carla,
+    carla_init,
+    esmini_controllers,
+    motion,
+    perception,
+    trailers,
+)
 from simtest_operator.sim.actors import Actor, Domain, Mode
 from simtest_operator.sim.backends import ActorSpec, Backend, BackendConfig
 from simtest_operator.sim.condition_checks import Conditions
@@ -238,6 +245,9 @@ class Simulation:
         world = self.world
         world.signal_controllers.update(world.time)
         init = self._scenario.storyboard.init
+        if self.rules.scenario_runner:
+            init, unread = carla_init.scenario_runner_init(init)
+            world.ignored.extend(u for u in unread if u not in world.ignored)
         for private in init.private:
             actor = world.actor(private.entity_ref)
             for body in private.actions:
