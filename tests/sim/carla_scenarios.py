@@ -109,6 +109,15 @@ def vehicle(name: str, kind: str) -> str:
     </ScenarioObject>"""  # noqa: E501
 
 
+ADVERSARY_AHEAD = """
+          <PrivateAction>
+            <TeleportAction><Position>
+              <RelativeLanePosition entityRef="hero" dLane="0" ds="50" offset="0"/>
+            </Position></TeleportAction>
+          </PrivateAction>"""
+"""The adversary's default start: 50 m ahead of the hero in its lane."""
+
+
 def follow_leading(
     *,
     stop: str | None = None,
@@ -127,13 +136,8 @@ def follow_leading(
     adversary = (
         adversary_init
         if adversary_init is not None
-        else """
-        <Private entityRef="adversary">
-          <PrivateAction>
-            <TeleportAction><Position>
-              <RelativeLanePosition entityRef="hero" dLane="0" ds="50" offset="0"/>
-            </Position></TeleportAction>
-          </PrivateAction>
+        else f"""
+        <Private entityRef="adversary">{ADVERSARY_AHEAD}
         </Private>"""
     )
     return f"""<?xml version="1.0" encoding="UTF-8"?>

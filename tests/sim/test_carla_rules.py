@@ -238,12 +238,7 @@ def test_scenario_runner_reads_only_position_speed_and_controller_from_init(
     # Privates (here the AcquirePositionAction's) and the speed from the last
     # AbsoluteTargetSpeed, set at once; the Init's lane offset is never built.
     adversary_init = f"""
-        <Private entityRef="adversary">
-          <PrivateAction>
-            <TeleportAction><Position>
-              <RelativeLanePosition entityRef="hero" dLane="0" ds="50" offset="0"/>
-            </Position></TeleportAction>
-          </PrivateAction>
+        <Private entityRef="adversary">{cs.ADVERSARY_AHEAD}
           <PrivateAction>{cs.speed(8, shape="linear", over=4)}</PrivateAction>
           <PrivateAction>{cs.lane_offset(1)}</PrivateAction>
           <PrivateAction><RoutingAction><AcquirePositionAction><Position>
