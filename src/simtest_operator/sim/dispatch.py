@@ -20,13 +20,14 @@ ScenarioRunner lets them (:mod:`~simtest_operator.sim.lifetimes`), and lateral a
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 
 from simtest_operator.errors import ScenarioError
 from simtest_operator.openscenario import model
 from simtest_operator.sim import (
     carla,
     esmini_controllers,
+    esmini_ghost,
     esmini_route,
     placements,
     positions,
@@ -73,6 +74,7 @@ class Dispatcher:
         "_watched",
         "_world",
         "assigned",
+        "followers",
         "overrides",
         "routers",
         "teleported",
@@ -87,6 +89,7 @@ class Dispatcher:
         traffic: Traffic | None = None,
         host: TrafficHost | None = None,
         scenario_runner: bool = False,
+        ghosts: Mapping[str, esmini_ghost.Ghost] | None = None,
     ) -> None:
         self._world = world
         self._scenario_runner = scenario_runner
@@ -114,6 +117,10 @@ class Dispatcher:
         self.routers: dict[str, esmini_route.FollowRoute] = {}
         """esmini FollowRoute controllers imitated, by entity (never under ScenarioRunner's
         rules)."""
+        self.followers = {
+            entity: esmini_ghost.Follower(ghost) for entity, ghost in (ghosts or {}).items()
+        }
+        """esmini ghost-following controllers by entity (:mod:`esmini_ghost`)."""
         for actor in world.actors.values():
             controller = actor.obj.controller
             if isinstance(controller, model.Controller) and not scenario_runner:
@@ -127,8 +134,15 @@ class Dispatcher:
         one it was assigned, or a FollowRouteController."""
         assigned = self._controllers.get(entity)
         router = self.routers.get(entity)
-        return (assigned is not None and assigned.name == controller) or (
-            router is not None and router.name == controller
+        follower = self.followers.get(entity)
+        return (
+            (assigned is not None and assigned.name == controller)
+            or (router is not None and router.name == controller)
+            or (
+                follower is not None
+                and follower.ghost.controller.name == controller
+                and not follower.ghost.restarts
+            )
         )
 
     def runs(self, actor: Actor) -> dict[Domain, Run]:
@@ -165,7 +179,16 @@ class Dispatcher:
             raise ScenarioError(
                 f"private action {action.name!r} has no actors", element="Action", line=action.line
             )
-        return [self.start_private(self._world.actor(name), body) for name in actors]
+        return [
+            self.start_private(self._world.actor(self._handed(name, body)), body) for name in actors
+        ]
+
+    def _handed(self, entity: str, body: model.AnyAction) -> str:
+        """The entity a storyboard action moves: its ghost for the actions esmini hands it."""
+        follower = self.followers.get(entity)
+        if follower is not None and isinstance(body, esmini_ghost.HANDED_ACTIONS):
+            return follower.ghost.name
+        return entity
 
     def start_global(self, body: model.AnyAction) -> Run:
         world = self._world
@@ -505,6 +528,10 @@ class Dispatcher:
         when ``controller`` is none of them (it then takes over the domains it activates)."""
         if self._scenario_runner or controller is None:
             return False
+        follower = self.followers.get(actor.name)
+        if follower is not None and esmini_ghost.uses_ghost(controller):
+            follower.activate(actor, longitudinal, lateral)
+            return True
         override = esmini_controllers.activate(
             self.overrides.get(actor.name),
             controller,

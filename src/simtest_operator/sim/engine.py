@@ -26,7 +26,14 @@ from simtest_operator.errors import ScenarioError
 from simtest_operator.geometry import unexplained_displacement
 from simtest_operator.opendrive import RoadNetwork
 from simtest_operator.openscenario import model, rulesets
-from simtest_operator.sim import carla, esmini_controllers, motion, perception, trailers
+from simtest_operator.sim import (
+    carla,
+    esmini_controllers,
+    esmini_ghost,
+    motion,
+    perception,
+    trailers,
+)
 from simtest_operator.sim.actors import Actor, Domain, Mode
 from simtest_operator.sim.backends import ActorSpec, Backend, BackendConfig
 from simtest_operator.sim.condition_checks import Conditions
@@ -82,6 +89,7 @@ class Simulation:
         "_conditions",
         "_dispatcher",
         "_external_ids",
+        "_ghosts",
         "_init_runs",
         "_pilot",
         "_scenario",
@@ -105,11 +113,20 @@ class Simulation:
         backend_config: BackendConfig,
         sut: SutConfig,
     ) -> None:
-        self._scenario = scenario
         self._pilot: Pilot | None = None
         self._backend = backend
         self._backend_config = backend_config
         self._sut = sut
+        self.rules = rulesets.rules_of(scenario)
+        """The reference player whose rules this run follows (docs/simulator.md, "Rule sets")."""
+        self._ghosts: dict[str, esmini_ghost.Ghost] = {}
+        if not self.rules.scenario_runner:
+            # esmini's ghosts (on the ego only when the SUT never takes it over)
+            ego = pick_ego(scenario, sut.ego)
+            sut_ego = sut.takeover is not Takeover.NEVER and ego is not None
+            skip = frozenset({ego} if sut_ego and ego is not None else ())
+            scenario, self._ghosts = esmini_ghost.setup(scenario, skip=skip)
+        self._scenario = scenario
         actors = [Actor(obj, index) for index, obj in enumerate(scenario.entities)]
         self.world = World(
             roads=roads,
@@ -123,8 +140,6 @@ class Simulation:
         self.world.monitors.update((m.name, m.value) for m in scenario.monitors)
         self._traffic = Traffic(seed=backend_config.seed)
         header = scenario.header
-        self.rules = rulesets.rules_of(scenario)
-        """The reference player whose rules this run follows (docs/simulator.md, "Rule sets")."""
         self.ego = pick_ego(scenario, sut.ego, scenario_runner=self.rules.scenario_runner)
         scenario_runner = self.rules.scenario_runner
         self._dispatcher = Dispatcher(
@@ -134,6 +149,7 @@ class Simulation:
             traffic=self._traffic,
             host=backend.traffic(),
             scenario_runner=scenario_runner,
+            ghosts=self._ghosts,
         )
         if scenario_runner:
             carla.spawn_walkers(actors)
@@ -235,7 +251,8 @@ class Simulation:
     def coupled(self, first: str, second: str) -> bool:
         """Whether two entities are hitched together (a trailer's box may overlap its tow
         vehicle's: that is no collision)."""
-        return self.world.hitches.coupled(first, second)
+        ghosts = {g.name for g in self._ghosts.values()}
+        return first in ghosts or second in ghosts or self.world.hitches.coupled(first, second)
 
     def start(self) -> WorldSnapshot:
         """Run the Init actions, start the backend and return the snapshot at t = 0."""
@@ -257,6 +274,7 @@ class Simulation:
         self._pull_trailers(0.0)
         for actor in world.actors.values():
             actor.measure_motion((actor.x, actor.y, actor.heading), 0.0, teleported=True)
+        self._head_start()
         self._backend.start(self._backend_config)
         for actor in world.actors.values():
             self._backend.add(
@@ -293,6 +311,7 @@ class Simulation:
             run.after_motion(world)
         self._steps += 1
         world.time = round(self._steps * dt, 9)
+        self._record_ghosts()
         world.signal_controllers.update(world.time)
         world.refresh()
         self._storyboard.settle(world.time)
@@ -438,9 +457,46 @@ class Simulation:
             esmini_controllers.drive_speed(world, actor, override)
             if esmini_controllers.steer(world, actor, override, dt):
                 placed = True
+        follower = self._dispatcher.followers.get(actor.name)
+        if follower is not None and driver is None and follower.drive(world, actor, dt):
+            placed = True  # an esmini ghost-following controller overrides the storyboard
         motion.move(world, actor, dt, before=before, start=start[:2], placed=placed)
         actor.acceleration = (actor.speed - speed_before) / dt if dt > 0 else 0.0
         actor.measure_motion(start, dt, teleported=actor.name in self._dispatcher.teleported)
+
+    def _head_start(self) -> None:
+        """esmini's negative time before 0 (the longest ghost head start): the storyboard runs
+        and only the ghosts move, each from its own head start on, leaving their trails."""
+        if not self._ghosts:
+            return
+        world = self.world
+        dt = world.dt
+        lead = max(ghost.headstart for ghost in self._ghosts.values())
+        steps = round(lead / dt)
+        world.time = round(-steps * dt, 9)
+        self._record_ghosts()
+        for step in range(steps):
+            world.refresh()
+            self._dispatcher.teleported.clear()
+            self._storyboard.update(world.time)
+            world.freeze()
+            for ghost in self._ghosts.values():
+                actor = world.actors[ghost.name]
+                if actor.placed and world.time >= -ghost.headstart - dt / 2:
+                    self._advance(actor, dt)
+            world.refresh()
+            for run in self._dispatcher.active():
+                run.after_motion(world)
+            world.time = round((step + 1 - steps) * dt, 9)
+            self._storyboard.settle(world.time)
+            self._record_ghosts()
+        world.refresh()
+
+    def _record_ghosts(self) -> None:
+        for entity, follower in self._dispatcher.followers.items():
+            ghost = self.world.actors.get(self._ghosts[entity].name)
+            if ghost is not None and ghost.placed:
+                follower.record(ghost, self.world.time)
 
     def _init_index(self, run: Run) -> int:
         """Where ``run`` is in the Init actions (after all of them if a story started it)."""
