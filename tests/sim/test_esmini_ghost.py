@@ -28,7 +28,7 @@ _ACTIVATE = (
 )
 _LANE_CHANGE = """
         <ManeuverGroup maximumExecutionCount="1" name="LeadSteers">
-          <Actors selectTriggeringEntities="false"><EntityRef entityRef="Lead"/></Actors>
+          <Actors selectTriggeringEntities="false">{actors}</Actors>
           <Maneuver name="LeadChangesLane">
             <Event name="LaneChangeEvent" priority="override">
               <Action name="LaneChange">
@@ -54,6 +54,7 @@ def _run(
     *,
     entity: str = "Lead",
     lane_change: str | None = None,
+    actors: tuple[str, ...] = ("Lead",),
     takeover: Takeover = Takeover.NEVER,
 ) -> scenario_execution.RunReport:
     # hard_braking_lead: Ego at s = 20 and Lead at s = 60 of a straight road (lanes -1, -2), both
@@ -75,7 +76,8 @@ def _run(
         text = text[:position] + _ACTIVATE + text[position:]
     if lane_change is not None:
         end = text.index("</ManeuverGroup>") + len("</ManeuverGroup>")
-        text = text[:end] + _LANE_CHANGE.format(trigger=lane_change) + text[end:]
+        refs = "".join(f'<EntityRef entityRef="{name}"/>' for name in actors)
+        text = text[:end] + _LANE_CHANGE.format(trigger=lane_change, actors=refs) + text[end:]
     path = tmp_path / "ghost.xosc"
     path.write_text(text, encoding="utf-8")
     return scenario_execution.run_scenario(
@@ -123,14 +125,28 @@ def test_follower_steers_after_the_ghost_into_its_lane(tmp_path: Path) -> None:
     assert _at(lead, 4)[2] == pytest.approx(-5.25, abs=0.3)
 
 
-def test_ghost_restart_keeps_the_controller_labelled(tmp_path: Path) -> None:
-    # a lane change triggered by a storyboard state: esmini restarts the ghost from the entity
-    # then, which is not imitated
-    trigger = (
-        '<StoryboardElementStateCondition storyboardElementType="event" '
-        'storyboardElementRef="BrakeEvent" state="startTransition"/>'
-    )
-    report = _run(tmp_path, _FOLLOW, lane_change=trigger)
+_BRAKE_STARTS = (
+    '<StoryboardElementStateCondition storyboardElementType="event" '
+    'storyboardElementRef="BrakeEvent" state="startTransition"/>'
+)
+
+
+def test_ghost_restart_replays_the_head_start_from_the_entity(tmp_path: Path) -> None:
+    # the lane change waits for a storyboard state, which esmini does not hand to the ghost: when
+    # it fires (t = 0.05 s, the ghost's braking moved to t > 0) the ghost is put back onto the
+    # entity with its speed and replays its 2 s head start (braking, changing lanes) at once
+    report = _run(tmp_path, _FOLLOW, lane_change=_BRAKE_STARTS)
+    lead, ghost = report.samples["Lead"], report.samples["Lead_ghost"]
+    assert _at(ghost, 0)[1] == pytest.approx(_at(lead, 0)[1] + 50.0, abs=0.5)
+    # from the entity at 61.25 m: 2 s braking from 25 m/s at 8 m/s^2 is 34 m
+    assert _at(ghost, 1)[1] == pytest.approx(61.25 + 34.0, abs=3.0)
+    assert _at(ghost, 1)[2] == pytest.approx(-5.25, abs=0.01)
+    assert _at(lead, 4)[2] == pytest.approx(-5.25, abs=0.1)
+    assert not report.intended
+
+
+def test_ghost_restart_for_several_actors_is_not_imitated(tmp_path: Path) -> None:
+    report = _run(tmp_path, _FOLLOW, lane_change=_BRAKE_STARTS, actors=("Lead", "Ego"))
     assert "Lead_ghost" in report.samples
     assert report.intended == ("controller ctrl of Lead not imitated",)
 

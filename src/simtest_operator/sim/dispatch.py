@@ -179,9 +179,17 @@ class Dispatcher:
             raise ScenarioError(
                 f"private action {action.name!r} has no actors", element="Action", line=action.line
             )
-        return [
+        runs = [
             self.start_private(self._world.actor(self._handed(name, body)), body) for name in actors
         ]
+        if action.name == esmini_ghost.RESTART:
+            world = self._world
+            for name in actors:
+                follower = self.followers.get(name)
+                if follower is not None:
+                    ghost = world.actor(follower.ghost.name)
+                    follower.restart(ghost, world.actor(name), world.time)
+        return runs
 
     def _handed(self, entity: str, body: model.AnyAction) -> str:
         """The entity a storyboard action moves: its ghost for the actions esmini hands it."""

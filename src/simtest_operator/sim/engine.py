@@ -312,6 +312,7 @@ class Simulation:
         self._steps += 1
         world.time = round(self._steps * dt, 9)
         self._record_ghosts()
+        self._restart_ghosts()
         world.signal_controllers.update(world.time)
         world.refresh()
         self._storyboard.settle(world.time)
@@ -467,27 +468,49 @@ class Simulation:
     def _head_start(self) -> None:
         """esmini's negative time before 0 (the longest ghost head start): the storyboard runs
         and only the ghosts move, each from its own head start on, leaving their trails."""
-        if not self._ghosts:
+        if self._ghosts:
+            lead = max(ghost.headstart for ghost in self._ghosts.values())
+            self._ghosts_alone(list(self._ghosts.values()), lead)
+
+    def _restart_ghosts(self) -> None:
+        """Ghosts restarted this step replay their head start from the entity (esmini sets its
+        clock back by it; everything else waits), and the events that teleported them may fire
+        again."""
+        restarted = []
+        for entity, follower in self._dispatcher.followers.items():
+            if follower.restarting:
+                follower.replay()
+                restarted.append(self._ghosts[entity])
+        if not restarted:
             return
+        for ghost in restarted:
+            self._storyboard.rearm(ghost.rearm)
+        now = self.world.time
+        self._ghosts_alone(restarted, max(ghost.headstart for ghost in restarted))
+        self.world.time = now
+
+    def _ghosts_alone(self, ghosts: list[esmini_ghost.Ghost], lead: float) -> None:
+        """Run the storyboard from ``lead`` seconds before now to now moving only ``ghosts``
+        (each from its own head start on), recording their trails."""
         world = self.world
         dt = world.dt
-        lead = max(ghost.headstart for ghost in self._ghosts.values())
+        now = world.time
         steps = round(lead / dt)
-        world.time = round(-steps * dt, 9)
+        world.time = round(now - steps * dt, 9)
         self._record_ghosts()
         for step in range(steps):
             world.refresh()
             self._dispatcher.teleported.clear()
             self._storyboard.update(world.time)
             world.freeze()
-            for ghost in self._ghosts.values():
+            for ghost in ghosts:
                 actor = world.actors[ghost.name]
-                if actor.placed and world.time >= -ghost.headstart - dt / 2:
+                if actor.placed and world.time >= now - ghost.headstart - dt / 2:
                     self._advance(actor, dt)
             world.refresh()
             for run in self._dispatcher.active():
                 run.after_motion(world)
-            world.time = round((step + 1 - steps) * dt, 9)
+            world.time = round(now + (step + 1 - steps) * dt, 9)
             self._storyboard.settle(world.time)
             self._record_ghosts()
         world.refresh()

@@ -39,6 +39,8 @@ from simtest_operator.sim.world import World
 from simtest_operator.snapshots import EntityKind
 
 SUFFIX = "_ghost"
+RESTART = "AddedGhostTeleport"
+"""esmini's name for the teleport it puts first in an event that restarts the ghost."""
 """esmini names the ghost of ``X`` ``X_ghost``."""
 DEFAULT_HEADSTART = 3.0
 """Seconds the ghost starts before the entity, unless ``headstartTime`` says otherwise."""
@@ -111,7 +113,10 @@ class Ghost:
     controller: model.Controller
     headstart: float
     restarts: tuple[str, ...]
-    """Events whose triggers need a ghost restart (not imitated)."""
+    """Events whose triggers need a ghost restart that is not imitated (the event has other
+    actors than the entity)."""
+    rearm: tuple[str, ...]
+    """Events a ghost restart sets back to standby: those that teleport the ghost."""
 
 
 def setup(
@@ -136,13 +141,15 @@ def setup(
             )
         )
         restarts: list[str] = []
-        storyboard = _rewire(storyboard, obj.name, name, headstart, restarts)
+        rearm: list[str] = []
+        storyboard = _rewire(storyboard, obj.name, name, headstart, restarts, rearm)
         ghosts[obj.name] = Ghost(
             entity=obj.name,
             name=name,
             controller=controller,
             headstart=headstart,
             restarts=tuple(restarts),
+            rearm=tuple(rearm),
         )
     if not ghosts:
         return scenario, ghosts
@@ -150,7 +157,12 @@ def setup(
 
 
 def _rewire(
-    storyboard: model.Storyboard, entity: str, ghost: str, headstart: float, restarts: list[str]
+    storyboard: model.Storyboard,
+    entity: str,
+    ghost: str,
+    headstart: float,
+    restarts: list[str],
+    rearm: list[str],
 ) -> model.Storyboard:
     copies = tuple(
         action
@@ -182,10 +194,21 @@ def _rewire(
                             for a in event.actions
                         )
                         if handed:
+                            needs: list[str] = []
                             trigger = _retarget(
-                                event.start_trigger, entity, ghost, headstart, restarts, event.name
+                                event.start_trigger, entity, ghost, headstart, needs, event.name
                             )
-                            event = dataclasses.replace(event, start_trigger=trigger)
+                            actions = event.actions
+                            alone = group.actors.entity_refs == (entity,)
+                            if needs and alone and not group.actors.select_triggering_entities:
+                                actions = (_restart_teleport(entity), *actions)
+                            elif needs:
+                                restarts.extend(needs)
+                            if any(isinstance(a.body, model.TeleportAction) for a in actions):
+                                rearm.append(event.name)
+                            event = dataclasses.replace(
+                                event, start_trigger=trigger, actions=actions
+                            )
                         events.append(event)
                     maneuvers.append(dataclasses.replace(maneuver, events=tuple(events)))
                 groups.append(dataclasses.replace(group, maneuvers=tuple(maneuvers)))
@@ -194,6 +217,17 @@ def _rewire(
             )
         stories.append(dataclasses.replace(story, acts=tuple(acts)))
     return dataclasses.replace(storyboard, init=init, stories=tuple(stories))
+
+
+def _restart_teleport(entity: str) -> model.Action:
+    """The teleport esmini puts first in an event that restarts the ghost: onto the entity."""
+    here = model.RelativeObjectPosition(
+        entity_ref=entity,
+        dx=0.0,
+        dy=0.0,
+        orientation=model.Orientation(type=model.ReferenceContext.RELATIVE),
+    )
+    return model.Action(name=RESTART, body=model.TeleportAction(position=here), is_private=True)
 
 
 def _retarget(
@@ -265,6 +299,7 @@ class Follower:
         "min_lookahead_speed",
         "min_lookahead_steering",
         "position_mode",
+        "restarting",
         "speed",
         "x",
         "y",
@@ -286,6 +321,8 @@ class Follower:
         self._trail: list[_Point] = []
         self._times: list[float] = []
         self._index = 0
+        self.restarting = False
+        """A ghost restart happened this step: the ghost replays its head start next."""
 
     @property
     def active(self) -> bool:
@@ -298,6 +335,22 @@ class Follower:
         self.longitudinal = both or (self.longitudinal if longitudinal is None else longitudinal)
         self.lateral = both or (self.lateral if lateral is None else lateral)
         self.x, self.y, self.heading, self.speed = actor.x, actor.y, actor.heading, actor.speed
+
+    def restart(self, ghost: Actor, entity: Actor, time: float) -> None:
+        """The ghost was put onto the entity by a restarting event: after 0 it takes the
+        entity's speed, drops its trail and replays its head start (before 0 it only moved)."""
+        if time <= 1e-9:
+            return
+        ghost.speed = entity.speed
+        self.restarting = True
+
+    def replay(self) -> None:
+        """Drop the trail before the ghost replays its head start (the entity followed the old
+        one up to now)."""
+        self.restarting = False
+        self._trail.clear()
+        self._times.clear()
+        self._index = 0
 
     def record(self, ghost: Actor, time: float) -> None:
         """Add the ghost's pose at ``time`` to its trail."""
