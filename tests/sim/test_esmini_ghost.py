@@ -55,6 +55,7 @@ def _run(
     entity: str = "Lead",
     lane_change: str | None = None,
     actors: tuple[str, ...] = ("Lead",),
+    activate: bool = True,
     takeover: Takeover = Takeover.NEVER,
 ) -> scenario_execution.RunReport:
     # hard_braking_lead: Ego at s = 20 and Lead at s = 60 of a straight road (lanes -1, -2), both
@@ -70,7 +71,7 @@ def _run(
     head, tail = text.split(marker)
     vehicle_end = tail.index("</Vehicle>") + len("</Vehicle>")
     text = head + marker + tail[:vehicle_end] + object_controller + tail[vehicle_end:]
-    if entity == "Lead":
+    if entity == "Lead" and activate:
         # after its Init's SpeedAction: the vehicle model starts at 25 m/s
         position = text.index("</Private>", text.index('<Private entityRef="Lead">'))
         text = text[:position] + _ACTIVATE + text[position:]
@@ -164,3 +165,16 @@ def test_no_ghost_for_an_ego_the_sut_drives(tmp_path: Path) -> None:
     report = _run(tmp_path, _FOLLOW, entity="Ego", takeover=Takeover.ON_CONTROLLER)
     assert "Ego_ghost" not in report.samples
     assert report.intended == ("Ego driven by the SUT model",)
+
+
+def test_the_sut_model_does_not_see_ghosts(tmp_path: Path) -> None:
+    # the Lead's controller is never activated: it drives on at 25 m/s (its braking went to the
+    # ghost, which stops ~150 m down the road); the SUT-driven Ego behind it drives through the
+    # standing ghost after the Lead did
+    report = _run(tmp_path, _FOLLOW, activate=False, takeover=Takeover.AFTER_INIT)
+    ghost = report.samples["Lead_ghost"]
+    assert ghost[-1][4] == 0.0
+    ego = report.samples["Ego"]
+    assert ego[-1][1] > ghost[-1][1]
+    # it keeps its gap to the Lead (about 22.6 m/s) and never brakes for the ghost
+    assert min(sample[4] for sample in ego) > 22.0

@@ -138,6 +138,7 @@ class Simulation:
             controllers=scenario.road_network.controllers,
         )
         self.world.monitors.update((m.name, m.value) for m in scenario.monitors)
+        self.world.ghosts = frozenset(ghost.name for ghost in self._ghosts.values())
         self._traffic = Traffic(seed=backend_config.seed)
         header = scenario.header
         self.ego = pick_ego(scenario, sut.ego, scenario_runner=self.rules.scenario_runner)
@@ -249,9 +250,9 @@ class Simulation:
         return actor.offroad_time > 0.0
 
     def coupled(self, first: str, second: str) -> bool:
-        """Whether two entities are hitched together (a trailer's box may overlap its tow
-        vehicle's: that is no collision)."""
-        ghosts = {g.name for g in self._ghosts.values()}
+        """Whether two entities may overlap without colliding: hitched together (a trailer's box
+        may overlap its tow vehicle's), or one is an esmini ghost (a phantom)."""
+        ghosts = self.world.ghosts
         return first in ghosts or second in ghosts or self.world.hitches.coupled(first, second)
 
     def start(self) -> WorldSnapshot:
