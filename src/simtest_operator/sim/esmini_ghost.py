@@ -32,6 +32,7 @@ import bisect
 import dataclasses
 import math
 from collections.abc import Iterable
+from typing import TypeVar
 
 from simtest_operator.openscenario import model
 from simtest_operator.sim.actors import Actor
@@ -50,6 +51,8 @@ MAX_SPEED = 100.0
 MAX_WHEEL_ANGLE = math.radians(60.0)
 PIVOT = 0.15
 """Share of its length from the rear where the vehicle model turns."""
+
+_T = TypeVar("_T")
 
 HANDED_ACTIONS = (
     model.SpeedAction,
@@ -198,7 +201,12 @@ def _rewire(
                             trigger = _retarget(
                                 event.start_trigger, entity, ghost, headstart, needs, event.name
                             )
-                            actions = event.actions
+                            actions = tuple(
+                                dataclasses.replace(a, body=_swap_refs(a.body, entity, ghost))
+                                if a.is_private and isinstance(a.body, HANDED_ACTIONS)
+                                else a
+                                for a in event.actions
+                            )
                             alone = group.actors.entity_refs == (entity,)
                             if needs and alone and not group.actors.select_triggering_entities:
                                 actions = (_restart_teleport(entity), *actions)
@@ -217,6 +225,29 @@ def _rewire(
             )
         stories.append(dataclasses.replace(story, acts=tuple(acts)))
     return dataclasses.replace(storyboard, init=init, stories=tuple(stories))
+
+
+def _swap_refs(value: _T, entity: str, ghost: str) -> _T:
+    """``value`` with every ``*entity_ref`` naming the entity naming the ghost instead (esmini's
+    ``ReplaceObjectRefs`` on the actions it hands over: targets relative to the entity become
+    relative to the ghost)."""
+    if isinstance(value, tuple):
+        items = tuple(_swap_refs(item, entity, ghost) for item in value)
+        same = all(new is old for new, old in zip(items, value, strict=True))
+        return value if same else items  # type: ignore[return-value]
+    if not dataclasses.is_dataclass(value) or isinstance(value, type):
+        return value
+    changes: dict[str, object] = {}
+    for field in dataclasses.fields(value):
+        item = getattr(value, field.name)
+        if isinstance(item, str):
+            if field.name.endswith("entity_ref") and item == entity:
+                changes[field.name] = ghost
+        elif isinstance(item, tuple) or dataclasses.is_dataclass(item):
+            swapped = _swap_refs(item, entity, ghost)
+            if swapped is not item:
+                changes[field.name] = swapped
+    return dataclasses.replace(value, **changes) if changes else value
 
 
 def _restart_teleport(entity: str) -> model.Action:
