@@ -8,8 +8,10 @@ The system under test: while the driver model drives the ego, a SpeedAction on t
 driver's new set speed (a request to the driver, like a driver turning the cruise-control knob),
 and other longitudinal actions on the ego are not executed and are listed as ignored. Lateral
 actions still run (the model only keeps its lane). esmini's interactive and external (no ghost)
-controllers (:mod:`~simtest_operator.sim.esmini_controllers`) and its FollowRouteController
-(:mod:`~simtest_operator.sim.esmini_route`) are imitated on other entities, and on the ego when
+controllers (:mod:`~simtest_operator.sim.esmini_controllers`), its FollowRouteController
+(:mod:`~simtest_operator.sim.esmini_route`) and its ghost followers
+(:mod:`~simtest_operator.sim.esmini_ghost`: the actions esmini hands to the ghost go to it) are
+imitated on other entities, and on the ego when
 the SUT does not take it; other controllers of other entities are not simulated: those entities
 keep following the storyboard, and the controller is listed as ignored.
 

@@ -6,14 +6,16 @@ What esmini does (``ScenarioEngine::SetupGhost``, ``ControllerFollowGhost``, ``v
   controller drives. It gets a copy of each of the entity's Init actions except
   ActivateControllerAction (after all other Init actions), and the storyboard's speed, speed
   profile, lane change, lane offset, synchronize, trajectory, route and teleport actions on the
-  entity are handed to it.
+  entity are handed to it (their references to the entity then name the ghost).
 - The simulation starts ``headstartTime`` seconds (default 3) before 0: during that time only
   ghosts move. Act start triggers, and the triggers of events handed to a ghost, have their
   SimulationTime values moved earlier by the head start; in those events' triggers the entity's
   collision, reach-position, traveled-distance, speed, acceleration, end-of-road, off-road and
-  stand-still conditions watch the ghost instead. Any other condition there makes esmini teleport
-  the ghost back onto the entity when the event starts (a "ghost restart"): that is not
-  imitated, and an entity that needs it keeps its controller labelled as not imitated.
+  stand-still conditions watch the ghost instead. Any other condition there makes the event
+  teleport the ghost onto the entity first (:data:`RESTART`); after 0 that is a "ghost restart":
+  the ghost takes the entity's speed, drops its trail and replays its head start while
+  everything else waits, and the events that teleported the ghost may fire again. A restart in
+  an event with other actors than the entity is not imitated (the controller stays labelled).
 - FollowGhostController (from its activation, at t >= 0) drives the entity along the ghost's
   trail with its own vehicle model: in ``followMode`` ``time`` the speed of the trail point
   ``lookaheadSpeed`` seconds after ``t - headstartTime`` and a steering target
@@ -24,6 +26,8 @@ What esmini does (``ScenarioEngine::SetupGhost``, ``ControllerFollowGhost``, ``v
   kinematic bicycle whose pivot is 15 % of its length from the rear.
 - ExternalController with ``useGhost``: nobody reports a state, so the entity stands still in
   the domains it controls (like without ghost); the ghost drives ahead.
+
+Ghosts are phantoms: no collisions, not seen by the SUT model (``World.ghosts``).
 """
 
 from __future__ import annotations
