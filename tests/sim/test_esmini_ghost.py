@@ -11,6 +11,7 @@ import pytest
 
 from simtest_operator.runner import scenario_execution
 from simtest_operator.sim import BackendChoice, SutConfig, Takeover
+from tests.sim.test_reference_match import compare
 
 DATA = Path(__file__).parent / "data"
 
@@ -178,3 +179,17 @@ def test_the_sut_model_does_not_see_ghosts(tmp_path: Path) -> None:
     assert ego[-1][1] > ghost[-1][1]
     # it keeps its gap to the Lead (about 22.6 m/s) and never brakes for the ghost
     assert min(sample[4] for sample in ego) > 22.0
+
+
+@pytest.mark.parametrize(
+    "relative",
+    [
+        "trail_test.xosc",  # position mode along a clothoid lane change
+        "init_test.xosc",  # time mode
+        "ghost_restart2.xosc",  # restarts re-arming the teleporting events
+        "timing_scenario_with_restarts.xosc",  # external controller with ghost, restarts
+    ],
+)
+def test_matches_the_reference_player(relative: str, tmp_path: Path) -> None:
+    comparison = compare(relative, tmp_path)
+    assert comparison.match, comparison
