@@ -102,13 +102,6 @@ def test_external_controller_without_reports_stands(tmp_path: Path) -> None:
     assert not report.intended
 
 
-def test_external_controller_with_ghost_is_not_imitated(tmp_path: Path) -> None:
-    ghost = '<Property name="useGhost" value="true"/>'
-    report = _run(tmp_path, _EXTERNAL + ghost, entity="Lead")
-    assert report.samples["Lead"][1][1] > report.samples["Lead"][0][1] + 20.0
-    assert report.intended == ("controller ctrl of Lead not imitated",)
-
-
 def test_sut_takeover_drives_the_ego_instead(tmp_path: Path) -> None:
     report = _run(tmp_path, _EXTERNAL, takeover=Takeover.ON_CONTROLLER)
     ego = report.samples["Ego"]

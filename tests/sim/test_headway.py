@@ -151,3 +151,32 @@ def test_scenario_runner_distance_along_route_is_the_way_along_the_lane() -> Non
     )
     assert Conditions(bench.world, lambda *args: False, scenario_runner=True)(body)[0] is False
     assert Conditions(bench.world, lambda *args: False)(body)[0] is True
+
+
+def test_lateral_distance_to_a_position_in_road_coordinates_is_across_the_road() -> None:
+    # esmini measures it as the difference of t, wherever along the road the position is: 3.5 m
+    # between the centres of lanes -1 and 1 (in the car's own axes, a point 60 m further round
+    # the arc is tens of metres to its side)
+    bench = Bench("Car", road="arc.xodr")
+    bench.start("Car", teleport(lane(-1, 10.0)))
+    bench.world.refresh()
+
+    def within(system: model.CoordinateSystem) -> bool | None:
+        condition = model.DistanceCondition(
+            position=lane(1, 70.0),
+            value=3.6,
+            rule=model.Rule.LESS_THAN,
+            freespace=False,
+            coordinate_system=system,
+            relative_distance_type=model.RelativeDistanceType.LATERAL,
+        )
+        body = model.ByEntity(
+            triggering_entities=("Car",),
+            rule=model.TriggeringEntitiesRule.ANY,
+            condition=condition,
+        )
+        return Conditions(bench.world, lambda *args: False)(body)[0]
+
+    assert within(model.CoordinateSystem.ROAD) is True
+    assert within(model.CoordinateSystem.LANE) is True
+    assert within(model.CoordinateSystem.ENTITY) is False

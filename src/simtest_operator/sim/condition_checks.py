@@ -22,7 +22,7 @@ from simtest_operator.sim import (
     positions,
     time_of_day,
 )
-from simtest_operator.sim.actors import Actor
+from simtest_operator.sim.actors import Actor, Mode
 from simtest_operator.sim.triggers import Truth
 from simtest_operator.sim.world import World
 from simtest_operator.snapshots import EntityKind
@@ -210,6 +210,9 @@ class Conditions:
                     way = measures.along_lanes(world.roads, start, goal)
                 if way is not None:
                     return compare(way, condition.rule, condition.value)
+            across = _across_road(world, actor, target, condition)
+            if across is not None:
+                return compare(across, condition.rule, condition.value)
             point = measures.point_state(target.x, target.y, target.heading)
             value = measures.to_point(
                 world.state(name),
@@ -419,6 +422,27 @@ def _relative_speed(
     if direction is model.DirectionalDimension.LATERAL:
         return -dvx * sin_h + dvy * cos_h
     return 0.0
+
+
+def _across_road(
+    world: World, actor: Actor, target: placements.Placement, condition: model.DistanceCondition
+) -> float | None:
+    """A lateral distance in road or lane coordinates to a position on the actor's road: the
+    difference of their t (esmini), wherever along the road the position is; None otherwise."""
+    lane = target.lane
+    if (
+        condition.relative_distance_type is not model.RelativeDistanceType.LATERAL
+        or condition.coordinate_system
+        not in (model.CoordinateSystem.ROAD, model.CoordinateSystem.LANE)
+        or condition.freespace
+        or lane is None
+        or actor.mode is not Mode.ROAD
+        or actor.road_id != lane.road_id
+    ):
+        return None
+    there = world.lane_t(lane.road_id, lane.s, lane.lane_id) + lane.offset
+    here = world.lane_t(actor.road_id, actor.s, actor.lane_id) + actor.offset
+    return abs(there - here)
 
 
 def _lateral(direction: model.DirectionalDimension | None) -> bool:

@@ -8,8 +8,10 @@ The system under test: while the driver model drives the ego, a SpeedAction on t
 driver's new set speed (a request to the driver, like a driver turning the cruise-control knob),
 and other longitudinal actions on the ego are not executed and are listed as ignored. Lateral
 actions still run (the model only keeps its lane). esmini's interactive and external (no ghost)
-controllers (:mod:`~simtest_operator.sim.esmini_controllers`) and its FollowRouteController
-(:mod:`~simtest_operator.sim.esmini_route`) are imitated on other entities, and on the ego when
+controllers (:mod:`~simtest_operator.sim.esmini_controllers`), its FollowRouteController
+(:mod:`~simtest_operator.sim.esmini_route`) and its ghost followers
+(:mod:`~simtest_operator.sim.esmini_ghost`: the actions esmini hands to the ghost go to it) are
+imitated on other entities, and on the ego when
 the SUT does not take it; other controllers of other entities are not simulated: those entities
 keep following the storyboard, and the controller is listed as ignored.
 
@@ -20,13 +22,14 @@ ScenarioRunner lets them (:mod:`~simtest_operator.sim.lifetimes`), and lateral a
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 
 from simtest_operator.errors import ScenarioError
 from simtest_operator.openscenario import model
 from simtest_operator.sim import (
     carla,
     esmini_controllers,
+    esmini_ghost,
     esmini_route,
     placements,
     positions,
@@ -73,6 +76,7 @@ class Dispatcher:
         "_watched",
         "_world",
         "assigned",
+        "followers",
         "overrides",
         "routers",
         "teleported",
@@ -87,6 +91,7 @@ class Dispatcher:
         traffic: Traffic | None = None,
         host: TrafficHost | None = None,
         scenario_runner: bool = False,
+        ghosts: Mapping[str, esmini_ghost.Ghost] | None = None,
     ) -> None:
         self._world = world
         self._scenario_runner = scenario_runner
@@ -114,6 +119,10 @@ class Dispatcher:
         self.routers: dict[str, esmini_route.FollowRoute] = {}
         """esmini FollowRoute controllers imitated, by entity (never under ScenarioRunner's
         rules)."""
+        self.followers = {
+            entity: esmini_ghost.Follower(ghost) for entity, ghost in (ghosts or {}).items()
+        }
+        """esmini ghost-following controllers by entity (:mod:`esmini_ghost`)."""
         for actor in world.actors.values():
             controller = actor.obj.controller
             if isinstance(controller, model.Controller) and not scenario_runner:
@@ -127,8 +136,15 @@ class Dispatcher:
         one it was assigned, or a FollowRouteController."""
         assigned = self._controllers.get(entity)
         router = self.routers.get(entity)
-        return (assigned is not None and assigned.name == controller) or (
-            router is not None and router.name == controller
+        follower = self.followers.get(entity)
+        return (
+            (assigned is not None and assigned.name == controller)
+            or (router is not None and router.name == controller)
+            or (
+                follower is not None
+                and follower.ghost.controller.name == controller
+                and not follower.ghost.restarts
+            )
         )
 
     def runs(self, actor: Actor) -> dict[Domain, Run]:
@@ -165,7 +181,24 @@ class Dispatcher:
             raise ScenarioError(
                 f"private action {action.name!r} has no actors", element="Action", line=action.line
             )
-        return [self.start_private(self._world.actor(name), body) for name in actors]
+        runs = [
+            self.start_private(self._world.actor(self._handed(name, body)), body) for name in actors
+        ]
+        if action.name == esmini_ghost.RESTART:
+            world = self._world
+            for name in actors:
+                follower = self.followers.get(name)
+                if follower is not None:
+                    ghost = world.actor(follower.ghost.name)
+                    follower.restart(ghost, world.actor(name), world.time)
+        return runs
+
+    def _handed(self, entity: str, body: model.AnyAction) -> str:
+        """The entity a storyboard action moves: its ghost for the actions esmini hands it."""
+        follower = self.followers.get(entity)
+        if follower is not None and isinstance(body, esmini_ghost.HANDED_ACTIONS):
+            return follower.ghost.name
+        return entity
 
     def start_global(self, body: model.AnyAction) -> Run:
         world = self._world
@@ -505,6 +538,10 @@ class Dispatcher:
         when ``controller`` is none of them (it then takes over the domains it activates)."""
         if self._scenario_runner or controller is None:
             return False
+        follower = self.followers.get(actor.name)
+        if follower is not None and esmini_ghost.uses_ghost(controller):
+            follower.activate(actor, longitudinal, lateral)
+            return True
         override = esmini_controllers.activate(
             self.overrides.get(actor.name),
             controller,

@@ -30,6 +30,7 @@ from simtest_operator.sim import (
     carla,
     carla_init,
     esmini_controllers,
+    esmini_ghost,
     motion,
     perception,
     trailers,
@@ -89,6 +90,7 @@ class Simulation:
         "_conditions",
         "_dispatcher",
         "_external_ids",
+        "_ghosts",
         "_init_runs",
         "_pilot",
         "_scenario",
@@ -112,11 +114,20 @@ class Simulation:
         backend_config: BackendConfig,
         sut: SutConfig,
     ) -> None:
-        self._scenario = scenario
         self._pilot: Pilot | None = None
         self._backend = backend
         self._backend_config = backend_config
         self._sut = sut
+        self.rules = rulesets.rules_of(scenario)
+        """The reference player whose rules this run follows (docs/simulator.md, "Rule sets")."""
+        self._ghosts: dict[str, esmini_ghost.Ghost] = {}
+        if not self.rules.scenario_runner:
+            # esmini's ghosts (on the ego only when the SUT never takes it over)
+            ego = pick_ego(scenario, sut.ego)
+            sut_ego = sut.takeover is not Takeover.NEVER and ego is not None
+            skip = frozenset({ego} if sut_ego and ego is not None else ())
+            scenario, self._ghosts = esmini_ghost.setup(scenario, skip=skip)
+        self._scenario = scenario
         actors = [Actor(obj, index) for index, obj in enumerate(scenario.entities)]
         self.world = World(
             roads=roads,
@@ -128,10 +139,9 @@ class Simulation:
             controllers=scenario.road_network.controllers,
         )
         self.world.monitors.update((m.name, m.value) for m in scenario.monitors)
+        self.world.ghosts = frozenset(ghost.name for ghost in self._ghosts.values())
         self._traffic = Traffic(seed=backend_config.seed)
         header = scenario.header
-        self.rules = rulesets.rules_of(scenario)
-        """The reference player whose rules this run follows (docs/simulator.md, "Rule sets")."""
         self.ego = pick_ego(scenario, sut.ego, scenario_runner=self.rules.scenario_runner)
         scenario_runner = self.rules.scenario_runner
         self._dispatcher = Dispatcher(
@@ -141,6 +151,7 @@ class Simulation:
             traffic=self._traffic,
             host=backend.traffic(),
             scenario_runner=scenario_runner,
+            ghosts=self._ghosts,
         )
         if scenario_runner:
             carla.spawn_walkers(actors)
@@ -236,9 +247,10 @@ class Simulation:
         return actor.offroad_time > 0.0
 
     def coupled(self, first: str, second: str) -> bool:
-        """Whether two entities are hitched together (a trailer's box may overlap its tow
-        vehicle's: that is no collision)."""
-        return self.world.hitches.coupled(first, second)
+        """Whether two entities may overlap without colliding: hitched together (a trailer's box
+        may overlap its tow vehicle's), or one is an esmini ghost (a phantom)."""
+        ghosts = self.world.ghosts
+        return first in ghosts or second in ghosts or self.world.hitches.coupled(first, second)
 
     def start(self) -> WorldSnapshot:
         """Run the Init actions, start the backend and return the snapshot at t = 0."""
@@ -263,6 +275,7 @@ class Simulation:
         self._pull_trailers(0.0)
         for actor in world.actors.values():
             actor.measure_motion((actor.x, actor.y, actor.heading), 0.0, teleported=True)
+        self._head_start()
         self._backend.start(self._backend_config)
         for actor in world.actors.values():
             self._backend.add(
@@ -299,6 +312,8 @@ class Simulation:
             run.after_motion(world)
         self._steps += 1
         world.time = round(self._steps * dt, 9)
+        self._record_ghosts()
+        self._restart_ghosts()
         world.signal_controllers.update(world.time)
         world.refresh()
         self._storyboard.settle(world.time)
@@ -444,9 +459,68 @@ class Simulation:
             esmini_controllers.drive_speed(world, actor, override)
             if esmini_controllers.steer(world, actor, override, dt):
                 placed = True
+        follower = self._dispatcher.followers.get(actor.name)
+        if follower is not None and driver is None and follower.drive(world, actor, dt):
+            placed = True  # an esmini ghost-following controller overrides the storyboard
         motion.move(world, actor, dt, before=before, start=start[:2], placed=placed)
         actor.acceleration = (actor.speed - speed_before) / dt if dt > 0 else 0.0
         actor.measure_motion(start, dt, teleported=actor.name in self._dispatcher.teleported)
+
+    def _head_start(self) -> None:
+        """esmini's negative time before 0 (the longest ghost head start): the storyboard runs
+        and only the ghosts move, each from its own head start on, leaving their trails."""
+        if self._ghosts:
+            lead = max(ghost.headstart for ghost in self._ghosts.values())
+            self._ghosts_alone(list(self._ghosts.values()), lead)
+
+    def _restart_ghosts(self) -> None:
+        """Ghosts restarted this step replay their head start from the entity (esmini sets its
+        clock back by it; everything else waits), and the events that teleported them may fire
+        again."""
+        restarted = []
+        for entity, follower in self._dispatcher.followers.items():
+            if follower.restarting:
+                follower.replay()
+                restarted.append(self._ghosts[entity])
+        if not restarted:
+            return
+        for ghost in restarted:
+            self._storyboard.rearm(ghost.rearm)
+        now = self.world.time
+        self._ghosts_alone(restarted, max(ghost.headstart for ghost in restarted))
+        self.world.time = now
+
+    def _ghosts_alone(self, ghosts: list[esmini_ghost.Ghost], lead: float) -> None:
+        """Run the storyboard from ``lead`` seconds before now to now moving only ``ghosts``
+        (each from its own head start on), recording their trails."""
+        world = self.world
+        dt = world.dt
+        now = world.time
+        steps = round(lead / dt)
+        world.time = round(now - steps * dt, 9)
+        self._record_ghosts()
+        for step in range(steps):
+            world.refresh()
+            self._dispatcher.teleported.clear()
+            self._storyboard.update(world.time)
+            world.freeze()
+            for ghost in ghosts:
+                actor = world.actors[ghost.name]
+                if actor.placed and world.time >= now - ghost.headstart - dt / 2:
+                    self._advance(actor, dt)
+            world.refresh()
+            for run in self._dispatcher.active():
+                run.after_motion(world)
+            world.time = round(now + (step + 1 - steps) * dt, 9)
+            self._storyboard.settle(world.time)
+            self._record_ghosts()
+        world.refresh()
+
+    def _record_ghosts(self) -> None:
+        for entity, follower in self._dispatcher.followers.items():
+            ghost = self.world.actors.get(self._ghosts[entity].name)
+            if ghost is not None and ghost.placed:
+                follower.record(ghost, self.world.time)
 
     def _init_index(self, run: Run) -> int:
         """Where ``run`` is in the Init actions (after all of them if a story started it)."""

@@ -14,8 +14,8 @@ active on (the storyboard's actions run, their output is not used):
 - ``ExternalController`` without ``useGhost`` does nothing: nobody reports, so the entity stands
   where it was (speed 0) in the domains it controls.
 
-Controllers that need a ghost (FollowGhost, ExternalController with ``useGhost``) are not
-imitated here.
+Controllers that need a ghost (FollowGhost, ExternalController with ``useGhost``) are imitated
+in :mod:`~simtest_operator.sim.esmini_ghost`.
 """
 
 from __future__ import annotations

@@ -35,7 +35,7 @@ def leader(world: World, ego: Actor, sensor_range: float) -> Leader | None:
     # (gap, or None when not ahead in the path; speed; heading) of every other road user
     candidates: list[tuple[float | None, float, float]] = []
     for other in world.actors.values():
-        if other is ego or not other.placed:
+        if other is ego or not other.placed or other.name in world.ghosts:
             continue
         if same_road and other.mode is Mode.ROAD and other.road_id == ego.road_id:
             assert ego.road_id is not None

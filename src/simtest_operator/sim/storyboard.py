@@ -29,7 +29,7 @@ restarts at once) until ``maximumExecutionCount`` is used up.
 from __future__ import annotations
 
 import enum
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Collection, Iterator, Sequence
 from typing import Protocol
 
 from simtest_operator.openscenario import model
@@ -274,6 +274,15 @@ class Storyboard:
             for act in story.children:
                 self._update_act(now, act)
         self._start_fired()
+
+    def rearm(self, events: Collection[str]) -> None:
+        """Set the completed events of these names back to standby with no executions (esmini
+        does so when its ghost restarts, for the events that teleported the ghost)."""
+        for node in self.nodes():
+            if node.kind is Kind.EVENT and node.name in events and node.phase is Phase.COMPLETE:
+                node.phase = Phase.STANDBY
+                node.executions = 0
+                node.start.reset()
 
     def _update_act(self, now: float, act: Node) -> None:
         if act.phase is Phase.STANDBY:

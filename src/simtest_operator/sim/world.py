@@ -33,6 +33,7 @@ class World:
         "discontinuities",
         "dt",
         "environments",
+        "ghosts",
         "hitches",
         "ignored",
         "monitors",
@@ -60,6 +61,8 @@ class World:
         self.roads = roads
         self._lanes = LaneCache(roads) if roads is not None else None
         self.actors = {actor.name: actor for actor in actors}
+        self.ghosts: frozenset[str] = frozenset()
+        """esmini's ghost entities (:mod:`esmini_ghost`): recorded, but phantoms to everyone."""
         self.hitches = Hitches(actor.obj for actor in self.actors.values())
         """Which entity tows which (TrailerActions change it)."""
         self.dt = dt
