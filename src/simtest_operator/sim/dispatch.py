@@ -26,6 +26,7 @@ from simtest_operator.errors import ScenarioError
 from simtest_operator.openscenario import model
 from simtest_operator.sim import (
     carla,
+    esmini_acc,
     esmini_controllers,
     esmini_route,
     placements,
@@ -72,6 +73,7 @@ class Dispatcher:
         "_traffic",
         "_watched",
         "_world",
+        "accs",
         "assigned",
         "overrides",
         "routers",
@@ -114,6 +116,8 @@ class Dispatcher:
         self.routers: dict[str, esmini_route.FollowRoute] = {}
         """esmini FollowRoute controllers imitated, by entity (never under ScenarioRunner's
         rules)."""
+        self.accs: dict[str, esmini_acc.Acc] = {}
+        """esmini ACC controllers activated on entities (never under ScenarioRunner's rules)."""
         for actor in world.actors.values():
             controller = actor.obj.controller
             if isinstance(controller, model.Controller) and not scenario_runner:
@@ -127,8 +131,11 @@ class Dispatcher:
         one it was assigned, or a FollowRouteController."""
         assigned = self._controllers.get(entity)
         router = self.routers.get(entity)
-        return (assigned is not None and assigned.name == controller) or (
-            router is not None and router.name == controller
+        acc = self.accs.get(entity)
+        return (
+            (assigned is not None and assigned.name == controller)
+            or (router is not None and router.name == controller)
+            or (acc is not None and acc.name == controller)
         )
 
     def runs(self, actor: Actor) -> dict[Domain, Run]:
@@ -505,6 +512,21 @@ class Dispatcher:
         when ``controller`` is none of them (it then takes over the domains it activates)."""
         if self._scenario_runner or controller is None:
             return False
+        both = longitudinal is None and lateral is None
+        acc = self.accs.get(actor.name)
+        if esmini_acc.is_acc(controller):
+            if acc is None or acc.name != controller.name:
+                acc = self.accs[actor.name] = esmini_acc.Acc.of(controller)
+            if both or longitudinal is True:
+                acc.activate(actor)  # its only domain: the others' longitudinal ends
+                current = self.overrides.get(actor.name)
+                if current is not None:
+                    current.longitudinal = False
+            elif longitudinal is False:
+                acc.active = False
+            return True
+        if acc is not None and (both or longitudinal is True):
+            acc.active = False  # another controller takes the longitudinal domain
         override = esmini_controllers.activate(
             self.overrides.get(actor.name),
             controller,
@@ -515,7 +537,6 @@ class Dispatcher:
         if override is None:
             current = self.overrides.get(actor.name)
             if current is not None:  # the other controller takes the domains it activates
-                both = longitudinal is None and lateral is None
                 current.longitudinal = current.longitudinal and not (both or longitudinal is True)
                 current.lateral = current.lateral and not (both or lateral is True)
             return False

@@ -26,7 +26,14 @@ from simtest_operator.errors import ScenarioError
 from simtest_operator.geometry import unexplained_displacement
 from simtest_operator.opendrive import RoadNetwork
 from simtest_operator.openscenario import model, rulesets
-from simtest_operator.sim import carla, esmini_controllers, motion, perception, trailers
+from simtest_operator.sim import (
+    carla,
+    esmini_acc,
+    esmini_controllers,
+    motion,
+    perception,
+    trailers,
+)
 from simtest_operator.sim.actors import Actor, Domain, Mode
 from simtest_operator.sim.backends import ActorSpec, Backend, BackendConfig
 from simtest_operator.sim.condition_checks import Conditions
@@ -200,6 +207,8 @@ class Simulation:
                 if not isinstance(controller, model.Controller) or replaced:
                     continue
                 if imitates and esmini_controllers.kind_of(controller) is not None:
+                    continue
+                if imitates and esmini_acc.is_acc(controller):
                     continue
                 if self._dispatcher.imitates(obj.name, controller.name):
                     continue
@@ -432,6 +441,9 @@ class Simulation:
         )
         if actor.mode is Mode.PATH and Domain.LATERAL not in self._dispatcher.runs(actor):
             world.attach(actor)
+        acc = self._dispatcher.accs.get(actor.name)
+        if acc is not None and acc.active and driver is None:
+            acc.step(world, actor, dt)  # esmini's ACC sets the speed the lane motion drives at
         override = self._dispatcher.overrides.get(actor.name)
         if override is not None and driver is None:
             # an imitated esmini controller overrides the storyboard in its domains
