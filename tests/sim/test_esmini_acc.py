@@ -14,7 +14,9 @@ from simtest_operator.sim import BackendChoice, SutConfig, Takeover
 DATA = Path(__file__).parent / "data"
 
 
-def _run(tmp_path: Path, properties: str, *, gap: float = 40.0) -> scenario_execution.RunReport:
+def _run(
+    tmp_path: Path, properties: str, *, gap: float = 40.0, kind: str = "ACCController"
+) -> scenario_execution.RunReport:
     # hard_braking_lead: Ego at s = 20 and Lead ``gap`` m ahead, both at 25 m/s (Ego's
     # controller activated after the Init's SpeedAction); the lead brakes at 8 m/s^2 from
     # t = 2 s to a stop; Ego's car accelerates at up to 5 m/s^2
@@ -23,7 +25,7 @@ def _run(tmp_path: Path, properties: str, *, gap: float = 40.0) -> scenario_exec
     text = text.replace('value="40"', f'value="{gap}"')  # the Gap parameter
     controller = (
         '<ObjectController><Controller name="acc"><Properties>'
-        f'<Property name="esminiController" value="ACCController"/>{properties}'
+        f'<Property name="esminiController" value="{kind}"/>{properties}'
         "</Properties></Controller></ObjectController>"
     )
     head, tail = text.split('<ScenarioObject name="Ego">')
@@ -73,3 +75,11 @@ def test_it_slows_down_behind_a_lead_braking_to_a_stop(tmp_path: Path) -> None:
     gap = lead[-1][1] - ego[-1][1] - 4.5  # reference points on the same place of equal boxes
     assert 3.0 < gap < 8.0
     assert "collided" not in report.outcome.reason
+
+
+def test_alks_controller_is_the_acc(tmp_path: Path) -> None:
+    # esmini's older ALKSController inherits the ACC: additive without a mode, it slows down
+    # behind the lead 40 m ahead (3 m + 1.5 s x 25 m/s wanted)
+    report = _run(tmp_path, "", kind="ALKSController")
+    assert report.samples["Ego"][1][4] < 25.0
+    assert not report.intended

@@ -35,7 +35,8 @@ from simtest_operator.sim.actors import Actor, Mode
 from simtest_operator.sim.world import World
 from simtest_operator.snapshots import EntityState
 
-NAME = "ACCController"
+NAMES = ("ACCController", "ALKSController")
+"""esmini's ACC and its older ALKS controller (the ACC under another name)."""
 MIN_DISTANCE = 3.0
 """m the controller keeps to its lead at standstill."""
 SET_SPEED_GAIN = 0.7
@@ -49,9 +50,9 @@ DEFAULT_LIMIT = 10.0
 
 
 def is_acc(controller: model.Controller) -> bool:
-    """Whether ``controller`` is esmini's ACCController (its type: the ``esminiController``
-    property, else its name)."""
-    return (controller.property("esminiController") or controller.name) == NAME
+    """Whether ``controller`` is esmini's ACCController or ALKSController (its type: the
+    ``esminiController`` property, else its name)."""
+    return (controller.property("esminiController") or controller.name) in NAMES
 
 
 def _number(text: str | None, default: float) -> float:
