@@ -27,6 +27,7 @@ from simtest_operator.openscenario import model
 from simtest_operator.sim import (
     carla,
     esmini_acc,
+    esmini_alks,
     esmini_controllers,
     esmini_route,
     placements,
@@ -68,12 +69,14 @@ class Dispatcher:
         "_ego",
         "_external",
         "_host",
+        "_imitated",
         "_scenario_runner",
         "_switch",
         "_traffic",
         "_watched",
         "_world",
         "accs",
+        "alks",
         "assigned",
         "overrides",
         "routers",
@@ -110,6 +113,8 @@ class Dispatcher:
         self.assigned: dict[tuple[str, str], None] = {}
         """(entity, controller) pairs assigned during the run, in order (an ordered set)."""
         self._controllers: dict[str, model.Controller] = {}
+        self._imitated: set[tuple[str, str]] = set()
+        """(entity, controller) pairs assigned during the run that the engine imitates."""
         """Controllers an AssignControllerAction gave entities (replacing the declared one)."""
         self.overrides: dict[str, esmini_controllers.Override] = {}
         """Imitated esmini controllers activated on entities (see :mod:`esmini_controllers`)."""
@@ -118,6 +123,8 @@ class Dispatcher:
         rules)."""
         self.accs: dict[str, esmini_acc.Acc] = {}
         """esmini ACC controllers activated on entities (never under ScenarioRunner's rules)."""
+        self.alks: dict[str, esmini_alks.Alks] = {}
+        """esmini ALKS R157 controllers (imitated models) activated on entities."""
         for actor in world.actors.values():
             controller = actor.obj.controller
             if isinstance(controller, model.Controller) and not scenario_runner:
@@ -134,8 +141,10 @@ class Dispatcher:
         acc = self.accs.get(entity)
         return (
             (assigned is not None and assigned.name == controller)
+            or (entity, controller) in self._imitated
             or (router is not None and router.name == controller)
             or (acc is not None and acc.name == controller)
+            or (entity in self.alks and self.alks[entity].name == controller)
         )
 
     def runs(self, actor: Actor) -> dict[Domain, Run]:
@@ -465,8 +474,13 @@ class Dispatcher:
             carla.autopilot(self._world, actor, on=body.activate_longitudinal is not False)
             return
         self.assigned.setdefault((actor.name, controller.name), None)
-        if not self._scenario_runner and esmini_controllers.kind_of(controller) is not None:
+        if not self._scenario_runner and (
+            esmini_controllers.kind_of(controller) is not None
+            or esmini_acc.is_acc(controller)
+            or esmini_alks.imitated(controller)
+        ):
             self._controllers[actor.name] = controller
+            self._imitated.add((actor.name, controller.name))
             self.overrides.pop(actor.name, None)
             longitudinal, lateral = body.activate_longitudinal, body.activate_lateral
             if longitudinal is None and lateral is None:
@@ -519,14 +533,36 @@ class Dispatcher:
                 acc = self.accs[actor.name] = esmini_acc.Acc.of(controller)
             if both or longitudinal is True:
                 acc.activate(actor)  # its only domain: the others' longitudinal ends
+                if actor.name in self.alks:
+                    self.alks[actor.name].active = False
                 current = self.overrides.get(actor.name)
                 if current is not None:
                     current.longitudinal = False
             elif longitudinal is False:
                 acc.active = False
             return True
-        if acc is not None and (both or longitudinal is True):
-            acc.active = False  # another controller takes the longitudinal domain
+        alks = self.alks.get(actor.name)
+        if esmini_alks.is_alks(controller):
+            if alks is None or alks.name != controller.name:
+                made = esmini_alks.Alks.of(controller)
+                if made is None:
+                    return False  # a model not imitated: the controller takes over
+                alks = self.alks[actor.name] = made
+            if both or longitudinal is True:
+                alks.activate(actor)
+                current = self.overrides.get(actor.name)
+                if current is not None:
+                    current.longitudinal = False
+                if acc is not None:
+                    acc.active = False
+            elif longitudinal is False:
+                alks.active = False
+            return True
+        if both or longitudinal is True:  # another controller takes the longitudinal domain
+            if acc is not None:
+                acc.active = False
+            if alks is not None:
+                alks.active = False
         override = esmini_controllers.activate(
             self.overrides.get(actor.name),
             controller,

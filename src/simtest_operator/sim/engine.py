@@ -29,6 +29,7 @@ from simtest_operator.openscenario import model, rulesets
 from simtest_operator.sim import (
     carla,
     esmini_acc,
+    esmini_alks,
     esmini_controllers,
     motion,
     perception,
@@ -209,6 +210,8 @@ class Simulation:
                 if imitates and esmini_controllers.kind_of(controller) is not None:
                     continue
                 if imitates and esmini_acc.is_acc(controller):
+                    continue
+                if imitates and esmini_alks.imitated(controller):
                     continue
                 if self._dispatcher.imitates(obj.name, controller.name):
                     continue
@@ -444,6 +447,9 @@ class Simulation:
         acc = self._dispatcher.accs.get(actor.name)
         if acc is not None and acc.active and driver is None:
             acc.step(world, actor, dt)  # esmini's ACC sets the speed the lane motion drives at
+        alks = self._dispatcher.alks.get(actor.name)
+        if alks is not None and alks.active and driver is None:
+            alks.step(world, actor, dt)
         override = self._dispatcher.overrides.get(actor.name)
         if override is not None and driver is None:
             # an imitated esmini controller overrides the storyboard in its domains
