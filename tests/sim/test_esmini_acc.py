@@ -14,7 +14,7 @@ from simtest_operator.sim import BackendChoice, SutConfig, Takeover
 DATA = Path(__file__).parent / "data"
 
 
-def _run(
+def run_controlled(
     tmp_path: Path, properties: str, *, gap: float = 40.0, kind: str = "ACCController"
 ) -> scenario_execution.RunReport:
     # hard_braking_lead: Ego at s = 20 and Lead ``gap`` m ahead, both at 25 m/s (Ego's
@@ -24,14 +24,14 @@ def _run(
     text = (DATA / "hard_braking_lead.xosc").read_text(encoding="utf-8")
     text = text.replace('value="40"', f'value="{gap}"')  # the Gap parameter
     controller = (
-        '<ObjectController><Controller name="acc"><Properties>'
+        '<ObjectController><Controller name="ctrl"><Properties>'
         f'<Property name="esminiController" value="{kind}"/>{properties}'
         "</Properties></Controller></ObjectController>"
     )
     head, tail = text.split('<ScenarioObject name="Ego">')
     end = tail.index("</Vehicle>") + len("</Vehicle>")
     text = head + '<ScenarioObject name="Ego">' + tail[:end] + controller + tail[end:]
-    path = tmp_path / "acc.xosc"
+    path = tmp_path / "controlled.xosc"
     path.write_text(text, encoding="utf-8")
     return scenario_execution.run_scenario(
         scenario_execution.RunRequest(
@@ -50,7 +50,7 @@ _OVERRIDE = '<Property name="mode" value="override"/><Property name="setSpeed" v
 def test_without_lead_it_approaches_the_set_speed(tmp_path: Path) -> None:
     # the lead 200 m ahead is beyond the lookahead (50 m or twice the stopping distance):
     # at most 0.7 x 5 m/s^2, 3.5 m/s^2 per m/s short of 30 m/s, never past it
-    report = _run(tmp_path, _OVERRIDE, gap=200.0)
+    report = run_controlled(tmp_path, _OVERRIDE, gap=200.0)
     ego = report.samples["Ego"]
     assert ego[1][4] == pytest.approx(28.5, abs=1e-6)
     assert 29.9 < ego[2][4] <= 30.0
@@ -59,13 +59,13 @@ def test_without_lead_it_approaches_the_set_speed(tmp_path: Path) -> None:
 
 
 def test_additive_mode_takes_the_speed_at_activation_as_set_speed(tmp_path: Path) -> None:
-    report = _run(tmp_path, '<Property name="setSpeed" value="30"/>', gap=200.0)
+    report = run_controlled(tmp_path, '<Property name="setSpeed" value="30"/>', gap=200.0)
     assert [sample[4] for sample in report.samples["Ego"][:5]] == pytest.approx([25.0] * 5)
     assert not report.intended
 
 
 def test_it_slows_down_behind_a_lead_braking_to_a_stop(tmp_path: Path) -> None:
-    report = _run(tmp_path, _OVERRIDE)
+    report = run_controlled(tmp_path, _OVERRIDE)
     ego, lead = report.samples["Ego"], report.samples["Lead"]
     # 40 m ahead is closer than 3 m + 1.5 s x 25 m/s: it starts falling back at once
     assert ego[1][4] < 25.0
@@ -80,6 +80,6 @@ def test_it_slows_down_behind_a_lead_braking_to_a_stop(tmp_path: Path) -> None:
 def test_alks_controller_is_the_acc(tmp_path: Path) -> None:
     # esmini's older ALKSController inherits the ACC: additive without a mode, it slows down
     # behind the lead 40 m ahead (3 m + 1.5 s x 25 m/s wanted)
-    report = _run(tmp_path, "", kind="ALKSController")
+    report = run_controlled(tmp_path, "", kind="ALKSController")
     assert report.samples["Ego"][1][4] < 25.0
     assert not report.intended
