@@ -201,11 +201,13 @@ class Alks:
         if self.additive:
             self.speed = actor.speed  # the storyboard's speed reaches the model
         driver = self.kind is ModelType.REFERENCE_DRIVER
-        if self.focus.actor is not None and driver and self.phase is not Phase.INACTIVE:
-            if self.full_stop:
-                _measure(world, actor, self, self.focus)
-            else:
-                self._detect(world, actor)
+        if (
+            driver
+            and self.full_stop
+            and self.focus.actor is not None
+            and self.phase is not Phase.INACTIVE
+        ):
+            _measure(world, actor, self, self.focus)  # a reaction under way: no new scan
         else:
             self._detect(world, actor)
         if self._critical(world, actor, dt):
@@ -363,7 +365,7 @@ class Alks:
             self._reset()
             self.mode = ModelMode.NO_TARGET
         elif (self.speed > SMALL and focus.dist_long > 0.0) or self.full_stop:
-            self._critical_condition(actor)
+            self._critical_condition()
         if (
             self.aeb_available
             and not self.aeb
@@ -426,7 +428,7 @@ class Alks:
         self.timer -= dt
         return self.timer < SMALL
 
-    def _critical_condition(self, actor: Actor) -> None:
+    def _critical_condition(self) -> None:
         focus = self.focus
         measure = focus.ttc if self.threat is Threat.CUT_IN else focus.thw
         if self.threat is Threat.NONE:
