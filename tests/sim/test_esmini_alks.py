@@ -1,4 +1,4 @@
-"""esmini's ALKS_R157SM_Controller imitated (Regulation and ReferenceDriver models) on the
+"""esmini's ALKS_R157SM_Controller imitated (Regulation, ReferenceDriver and FSM models) on the
 hard-braking-lead scenario: the lead 40 m ahead brakes at 8 m/s^2 from t = 2 s."""
 
 from __future__ import annotations
@@ -38,6 +38,16 @@ def test_regulation_model_brakes_at_six_metres_per_second_squared(tmp_path: Path
     )
     assert speeds[:4] == pytest.approx([25.0] * 4)
     assert speeds[4] - speeds[5] == pytest.approx(6.0)
+
+
+def test_fsm_model_brakes_between_its_fuzzy_limits(tmp_path: Path) -> None:
+    # closing in on the braking lead: 0.75 s of reaction, then at most 6 m/s^2 (its critical
+    # zone's braking), never harder
+    fsm = '<Property name="model" value="FSM"/>'
+    speeds = _speeds(tmp_path, fsm + _OVERRIDE + _NO_CRUISE)
+    assert speeds[:3] == pytest.approx([25.0] * 3)
+    assert 24.0 < speeds[3] < 25.0
+    assert 4.0 < speeds[4] - speeds[5] <= 6.0 + 1e-9
 
 
 def test_cruise_follows_the_lead_at_the_models_distance(tmp_path: Path) -> None:

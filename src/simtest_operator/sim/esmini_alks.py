@@ -4,7 +4,7 @@ The reference player's controller scans the entities ahead (within the model's r
 own or a neighbouring lane, pedestrians in any lane), keeps the closest one that is a threat in
 focus, decides whether the situation is critical and then brakes, else cruises (towards the speed
 at activation, following a lead at the model's minimum distance; ``cruise=false``: the speed
-stays). Two of its four models are imitated:
+stays). Three of its four models are imitated:
 
 - ``Regulation`` (reaction 0.35 s, 6 m/s^2, 46 m range): an entity in the own lane is a
   deceleration threat, one whose front wheel is 0.3 m inside the own lane a cut-in; critical when
@@ -18,8 +18,13 @@ stays). Two of its four models are imitated:
   (time to collision or headway under 2 s, always with ``alwaysTrigOnScenario``) brakes with a
   jerk of 0.774 g / 0.6 s up to 0.774 g; an AEB brakes up to 0.85 g once the time to collision
   falls under ``aebTTC`` (1.5 s) with the entity across the whole front.
+- ``FSM`` (fuzzy safety model; 46 m range): a cut-in when the entity reaches the lane before
+  the ego reaches it; critical while its proactive or critical fuzzy surrogate (safe and unsafe
+  distances for 4 and 6 m/s^2 of braking, a lead braking at 7 m/s^2, 2 + 2 m of margin) is
+  positive; after 0.75 s of reaction it brakes with a jerk of 12.65 m/s^3 to between 4 and
+  6 m/s^2 as the surrogates say.
 
-``RSS`` and ``FSM`` are not imitated (the controller stays labelled). Measures are taken in the
+``RSS`` is not imitated (the controller stays labelled). Measures are taken in the
 frame of the lane the entity drives (its travel direction): gaps between the boxes, speeds from
 the last step's motion.
 """
@@ -48,6 +53,7 @@ deems critical."""
 class ModelType(enum.StrEnum):
     REGULATION = "Regulation"
     REFERENCE_DRIVER = "ReferenceDriver"
+    FSM = "FSM"
 
 
 class Threat(enum.Enum):
@@ -114,6 +120,8 @@ class Seen:
     ttc: float = LARGE
     thw: float = LARGE
     d_lane: int = 0
+    their_v_t: float = 0.0
+    """The entity's lateral speed (towards the ego frame's left)."""
     threat: Threat = Threat.NONE
 
 
@@ -157,6 +165,10 @@ class Alks:
     perception_t: float = 0.0
     aeb: bool = False
     trigger: Trigger = dataclasses.field(default_factory=Trigger)
+    reaction_left: float = 0.0
+    """FSM: reaction time left before braking (counting down)."""
+    cfs: float = 0.0
+    pfs: float = 0.0
 
     @classmethod
     def of(cls, controller: model.Controller) -> Alks | None:
@@ -188,7 +200,7 @@ class Alks:
 
     @property
     def max_range(self) -> float:
-        return 46.0 if self.kind is ModelType.REGULATION else 100.0
+        return 100.0 if self.kind is ModelType.REFERENCE_DRIVER else 46.0
 
     def activate(self, actor: Actor) -> None:
         """Cruise at the entity's speed now."""
@@ -263,6 +275,8 @@ class Alks:
             return True
         if self.kind is ModelType.REGULATION:
             return self._safe_regulation(world, seen)
+        if self.kind is ModelType.FSM:
+            return self._safe_fsm(seen)
         other = seen.actor
         self._update_trigger(world, actor, seen)
         if other.kind is EntityKind.PEDESTRIAN:
@@ -307,6 +321,21 @@ class Alks:
             return False
         return True
 
+    def _safe_fsm(self, seen: Seen) -> bool:
+        if seen.d_lane == 0:
+            seen.threat = Threat.DECELERATION
+            return False
+        if seen.dist_lat > -SMALL and seen.actor is not None:
+            cut_in_speed = (-1.0 if seen.d_lane > 0 else 1.0) * seen.their_v_t
+            if cut_in_speed <= 0.0:
+                return True
+            lateral = abs(seen.dist_lat) / cut_in_speed
+            closing = max(SMALL, self.speed - seen.actor.speed)
+            if lateral > abs(seen.dist_long) / closing + 0.1:
+                return True
+        seen.threat = Threat.CUT_IN
+        return False
+
     def _update_trigger(self, world: World, actor: Actor, seen: Seen) -> None:
         trigger = self.trigger
         other = seen.actor
@@ -344,11 +373,17 @@ class Alks:
             else:
                 gap = 1.0 + speed * 3.6 / 100.0
             return max(speed * gap, 2.0)
+        if self.kind is ModelType.FSM:
+            lead = self.focus.actor.speed if self.focus.actor is not None else 0.0
+            stop = speed**2 / (2.0 * FSM_BRAKE_MIN) - lead**2 / (2.0 * FSM_LEAD_BRAKE)
+            return FSM_MARGIN + speed * FSM_REACTION + stop + FSM_MARGIN
         return 2.0 + speed * 2.0
 
     def _critical(self, world: World, actor: Actor, dt: float) -> bool:
         if self.kind is ModelType.REGULATION:
             return self._critical_regulation()
+        if self.kind is ModelType.FSM:
+            return self._critical_fsm(actor)
         focus = self.focus
         if self.phase in (Phase.INACTIVE, Phase.PERCEIVE):
             if self._perceived(world, actor, dt):
@@ -458,9 +493,37 @@ class Alks:
         self.mode = ModelMode.TARGET_IN_SIGHT
         return False
 
+    def _critical_fsm(self, actor: Actor) -> bool:
+        focus = self.focus
+        if focus.actor is None:
+            self.mode = ModelMode.NO_TARGET
+            return False
+        if focus.dv_s > 0.0 and focus.dist_long > 0.0:
+            lead = focus.actor.speed
+            self.cfs = _cfs(focus.dist_long, self.speed, lead, actor.acceleration)
+            self.pfs = _pfs(focus.dist_long, self.speed, lead)
+            if self.cfs + self.pfs >= SMALL:
+                if self.mode is not ModelMode.CRITICAL:
+                    self.reaction_left = 0.75
+                self.mode = ModelMode.CRITICAL
+                return True
+        self.mode = ModelMode.TARGET_IN_SIGHT
+        return False
+
     def _brake(self, dt: float) -> float:
         if self.kind is ModelType.REGULATION:
             self.acc = -6.0
+            return max(0.0, self.speed + self.acc * dt)
+        if self.kind is ModelType.FSM:
+            if self.reaction_left > 0.0:
+                self.acc = min(self.acc, 0.0)  # foot off the accelerator
+                self.reaction_left -= dt
+                return self.speed + self.acc * dt
+            if self.cfs > SMALL:
+                wanted = self.cfs * (FSM_BRAKE_MAX - FSM_BRAKE_MIN) + FSM_BRAKE_MIN
+            else:
+                wanted = self.pfs * FSM_BRAKE_MIN
+            self.acc = max(self.acc - 12.65 * dt, -self.driver_dec, -wanted)
             return max(0.0, self.speed + self.acc * dt)
         if self.phase is Phase.REACT and self.timer < SMALL:
             self.phase = Phase.BRAKE_REF
@@ -495,6 +558,50 @@ class Alks:
                 return max(0.0, min(self.speed + self.acc * dt, self.set_speed))
         self.acc = 0.0
         return self.speed
+
+
+FSM_MARGIN = 2.0
+"""m the FSM model adds twice to its safe distance (margin and safe margin)."""
+FSM_BRAKE_MIN = 4.0
+"""m/s^2 the FSM model brakes with at the edge of its proactive zone."""
+FSM_BRAKE_MAX = 6.0
+"""m/s^2 it brakes with at the edge of its critical zone."""
+FSM_LEAD_BRAKE = 7.0
+"""m/s^2 it assumes the lead can brake with."""
+FSM_REACTION = 0.75
+"""s of its driver's reaction."""
+
+
+def _pfs(dist: float, rear: float, lead: float) -> float:
+    """The FSM's proactive fuzzy surrogate: 0 (safe) to 1 (unsafe) for a following distance."""
+    dist -= FSM_MARGIN
+    lead_stop = lead**2 / (2.0 * FSM_LEAD_BRAKE)
+    safe = rear * FSM_REACTION + rear**2 / (2.0 * FSM_BRAKE_MIN) - lead_stop + FSM_MARGIN
+    if dist > safe:
+        return 0.0
+    unsafe = rear * FSM_REACTION + rear**2 / (2.0 * FSM_BRAKE_MAX) - lead_stop
+    if dist < unsafe:
+        return 1.0
+    return (dist - safe) / (unsafe - safe)
+
+
+def _cfs(dist: float, rear: float, lead: float, acc: float) -> float:
+    """The FSM's critical fuzzy surrogate for closing in on a slower lead at ``acc``."""
+    if rear <= lead:
+        return 0.0
+    reacting = max(acc, -FSM_BRAKE_MIN)
+    if rear + FSM_REACTION * reacting < lead:
+        safe = (rear - lead) ** 2 / abs(acc * 2.0) if acc != 0.0 else LARGE
+        return 1.0 if dist < safe else 0.0
+    travel = (rear + reacting * FSM_REACTION / 2.0 - lead) * FSM_REACTION
+    closing = (rear + reacting * FSM_REACTION - lead) ** 2
+    safe = travel + closing / (FSM_BRAKE_MIN * 2.0)
+    if dist > safe:
+        return 0.0
+    unsafe = travel + closing / (FSM_BRAKE_MAX * 2.0)
+    if dist < unsafe:
+        return 1.0
+    return (dist - safe) / (unsafe - safe)
 
 
 def _relative_heading(actor: Actor) -> float:
@@ -561,6 +668,7 @@ def _measure(world: World, actor: Actor, alks: Alks, seen: Seen) -> bool:
     their_vx, their_vy = other.velocity_xy
     own_s, their_s = own_vx * ux + own_vy * uy, their_vx * ux + their_vy * uy
     own_t, their_t = -own_vx * uy + own_vy * ux, -their_vx * uy + their_vy * ux
+    seen.their_v_t = their_t
     seen.dv_s = own_s - their_s
     lateral = geometry.lateral_gap(own, theirs, freespace=False)
     seen.dv_t = (own_t - their_t) * (1.0 if lateral > 0 else -1.0 if lateral < 0 else 0.0)
