@@ -28,6 +28,8 @@ from simtest_operator.errors import ScenarioError
 from simtest_operator.openscenario import model
 from simtest_operator.sim import (
     carla,
+    esmini_acc,
+    esmini_alks,
     esmini_controllers,
     esmini_ghost,
     esmini_route,
@@ -70,11 +72,14 @@ class Dispatcher:
         "_ego",
         "_external",
         "_host",
+        "_imitated",
         "_scenario_runner",
         "_switch",
         "_traffic",
         "_watched",
         "_world",
+        "accs",
+        "alks",
         "assigned",
         "followers",
         "overrides",
@@ -113,6 +118,8 @@ class Dispatcher:
         self.assigned: dict[tuple[str, str], None] = {}
         """(entity, controller) pairs assigned during the run, in order (an ordered set)."""
         self._controllers: dict[str, model.Controller] = {}
+        self._imitated: set[tuple[str, str]] = set()
+        """(entity, controller) pairs assigned during the run that the engine imitates."""
         """Controllers an AssignControllerAction gave entities (replacing the declared one)."""
         self.overrides: dict[str, esmini_controllers.Override] = {}
         """Imitated esmini controllers activated on entities (see :mod:`esmini_controllers`)."""
@@ -123,6 +130,10 @@ class Dispatcher:
             entity: esmini_ghost.Follower(ghost) for entity, ghost in (ghosts or {}).items()
         }
         """esmini ghost-following controllers by entity (:mod:`esmini_ghost`)."""
+        self.accs: dict[str, esmini_acc.Acc] = {}
+        """esmini ACC controllers activated on entities (never under ScenarioRunner's rules)."""
+        self.alks: dict[str, esmini_alks.Alks] = {}
+        """esmini ALKS R157 controllers (imitated models) activated on entities."""
         for actor in world.actors.values():
             controller = actor.obj.controller
             if isinstance(controller, model.Controller) and not scenario_runner:
@@ -133,13 +144,18 @@ class Dispatcher:
 
     def imitates(self, entity: str, controller: str) -> bool:
         """Whether ``entity``'s controller of that name is imitated: an interactive or external
-        one it was assigned, or a FollowRouteController."""
+        one it was assigned, a FollowRoute, ACC or ALKS R157 controller, or a ghost follower
+        that never restarts."""
         assigned = self._controllers.get(entity)
         router = self.routers.get(entity)
         follower = self.followers.get(entity)
+        acc = self.accs.get(entity)
         return (
             (assigned is not None and assigned.name == controller)
+            or (entity, controller) in self._imitated
             or (router is not None and router.name == controller)
+            or (acc is not None and acc.name == controller)
+            or (entity in self.alks and self.alks[entity].name == controller)
             or (
                 follower is not None
                 and follower.ghost.controller.name == controller
@@ -491,8 +507,13 @@ class Dispatcher:
             carla.autopilot(self._world, actor, on=body.activate_longitudinal is not False)
             return
         self.assigned.setdefault((actor.name, controller.name), None)
-        if not self._scenario_runner and esmini_controllers.kind_of(controller) is not None:
+        if not self._scenario_runner and (
+            esmini_controllers.kind_of(controller) is not None
+            or esmini_acc.is_acc(controller)
+            or esmini_alks.imitated(controller)
+        ):
             self._controllers[actor.name] = controller
+            self._imitated.add((actor.name, controller.name))
             self.overrides.pop(actor.name, None)
             longitudinal, lateral = body.activate_longitudinal, body.activate_lateral
             if longitudinal is None and lateral is None:
@@ -542,6 +563,43 @@ class Dispatcher:
         if follower is not None and esmini_ghost.uses_ghost(controller):
             follower.activate(actor, longitudinal, lateral)
             return True
+        both = longitudinal is None and lateral is None
+        acc = self.accs.get(actor.name)
+        if esmini_acc.is_acc(controller):
+            if acc is None or acc.name != controller.name:
+                acc = self.accs[actor.name] = esmini_acc.Acc.of(controller)
+            if both or longitudinal is True:
+                acc.activate(actor)  # its only domain: the others' longitudinal ends
+                if actor.name in self.alks:
+                    self.alks[actor.name].active = False
+                current = self.overrides.get(actor.name)
+                if current is not None:
+                    current.longitudinal = False
+            elif longitudinal is False:
+                acc.active = False
+            return True
+        alks = self.alks.get(actor.name)
+        if esmini_alks.is_alks(controller):
+            if alks is None or alks.name != controller.name:
+                made = esmini_alks.Alks.of(controller)
+                if made is None:
+                    return False  # a model not imitated: the controller takes over
+                alks = self.alks[actor.name] = made
+            if both or longitudinal is True:
+                alks.activate(actor)
+                current = self.overrides.get(actor.name)
+                if current is not None:
+                    current.longitudinal = False
+                if acc is not None:
+                    acc.active = False
+            elif longitudinal is False:
+                alks.active = False
+            return True
+        if both or longitudinal is True:  # another controller takes the longitudinal domain
+            if acc is not None:
+                acc.active = False
+            if alks is not None:
+                alks.active = False
         override = esmini_controllers.activate(
             self.overrides.get(actor.name),
             controller,
@@ -552,7 +610,6 @@ class Dispatcher:
         if override is None:
             current = self.overrides.get(actor.name)
             if current is not None:  # the other controller takes the domains it activates
-                both = longitudinal is None and lateral is None
                 current.longitudinal = current.longitudinal and not (both or longitudinal is True)
                 current.lateral = current.lateral and not (both or lateral is True)
             return False

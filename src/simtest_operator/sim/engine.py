@@ -29,6 +29,8 @@ from simtest_operator.openscenario import model, rulesets
 from simtest_operator.sim import (
     carla,
     carla_init,
+    esmini_acc,
+    esmini_alks,
     esmini_controllers,
     esmini_ghost,
     motion,
@@ -214,6 +216,10 @@ class Simulation:
                 if not isinstance(controller, model.Controller) or replaced:
                     continue
                 if imitates and esmini_controllers.kind_of(controller) is not None:
+                    continue
+                if imitates and esmini_acc.is_acc(controller):
+                    continue
+                if imitates and esmini_alks.imitated(controller):
                     continue
                 if self._dispatcher.imitates(obj.name, controller.name):
                     continue
@@ -453,6 +459,12 @@ class Simulation:
         )
         if actor.mode is Mode.PATH and Domain.LATERAL not in self._dispatcher.runs(actor):
             world.attach(actor)
+        acc = self._dispatcher.accs.get(actor.name)
+        if acc is not None and acc.active and driver is None:
+            acc.step(world, actor, dt)  # esmini's ACC sets the speed the lane motion drives at
+        alks = self._dispatcher.alks.get(actor.name)
+        if alks is not None and alks.active and driver is None:
+            alks.step(world, actor, dt)
         override = self._dispatcher.overrides.get(actor.name)
         if override is not None and driver is None:
             # an imitated esmini controller overrides the storyboard in its domains
