@@ -180,6 +180,9 @@ class WorldSnapshot:
     signals: tuple[tuple[str, str], ...] = ()
     """Traffic signal states set so far, ``(name, state)`` as the scenario's
     TrafficSignalStateActions gave them (a signal never set is absent: its state is unknown)."""
+    phantoms: frozenset[str] = frozenset()
+    """Entities recorded but seen by no one (esmini's ghosts): a system under test never
+    perceives them."""
 
     def entity(self, name: str) -> EntityState | None:
         """The entity called ``name``, or None when it is not (yet) in the world."""

@@ -84,6 +84,16 @@ def test_sensor_view_decodes_with_betterosi_and_honours_the_perception_range() -
     assert len(betterosi.SensorView.from_binary(everything).global_ground_truth.moving_object) == 3
 
 
+@pytest.mark.parametrize("perception_range", [None, 200.0])
+def test_phantoms_are_recorded_but_never_perceived(perception_range: float | None) -> None:
+    # esmini's ghosts drive ahead of their entities: no system under test may see them
+    haunted = WorldSnapshot(time=1.25, entities=(EGO, LEAD, FAR), phantoms=frozenset({"Lead"}))
+    encoder = messages.SensorViewEncoder(perception_range=perception_range)
+    truth = betterosi.SensorView.from_binary(encoder.encode(haunted, EGO)).global_ground_truth
+    assert 1 not in [o.id.value for o in truth.moving_object]
+    assert 0 in [o.id.value for o in truth.moving_object]
+
+
 def test_reference_parser_reads_what_the_encoder_writes() -> None:
     payload = messages.SensorViewEncoder(perception_range=None).encode(SNAPSHOT, EGO)
     nanos, host, objects = reference.parse_sensor_view(payload)

@@ -591,6 +591,7 @@ class Simulation:
             time=self.world.time,
             entities=(*entities, *traffic),
             signals=tuple(self.world.signals.items()),
+            phantoms=self.world.ghosts,
         )
         return self._snapshot
 

@@ -101,14 +101,16 @@ class SensorViewEncoder:
         self._layouts: dict[tuple[object, ...], osiwire.ObjectLayout] = {}
 
     def visible(self, snapshot: WorldSnapshot, ego: EntityState) -> Sequence[EntityState]:
-        """The entities within the perception range of the ego (the ego always)."""
-        if self._range is None:
+        """The entities within the perception range of the ego (the ego always; phantoms never)."""
+        phantoms = snapshot.phantoms
+        if self._range is None and not phantoms:
             return snapshot.entities
-        limit = self._range * self._range
+        limit = self._range * self._range if self._range is not None else math.inf
         return [
             e
             for e in snapshot.entities
-            if e.id == ego.id or (e.x - ego.x) ** 2 + (e.y - ego.y) ** 2 <= limit
+            if e.id == ego.id
+            or (e.name not in phantoms and (e.x - ego.x) ** 2 + (e.y - ego.y) ** 2 <= limit)
         ]
 
     def encode(self, snapshot: WorldSnapshot, ego: EntityState) -> bytes:
