@@ -8,6 +8,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from simtest_operator.openscenario import model
+from simtest_operator.sim.engine import init_order
 from simtest_operator.sim.storyboard import Storyboard
 from tests.sim import builders as b
 
@@ -219,3 +220,37 @@ def test_without_stories_or_stop_trigger_the_storyboard_runs_on() -> None:
     carla.update(0.05)
     carla.settle(0.05)
     assert carla.complete
+
+
+def test_init_teleports_relative_to_later_entities_run_after_them() -> None:
+    # esmini's ScenarioReader::parseInit: car0 placed relative to car1, car1 relative to car2,
+    # car2 on a lane: the teleports run car2, car1, car0 (a chain resolved), the rest in order.
+    def teleport(position: model.Position) -> model.TeleportAction:
+        return model.TeleportAction(position=position)
+
+    step = model.TransitionDynamics(
+        shape=model.DynamicsShape.STEP, dimension=model.DynamicsDimension.TIME, value=0.0
+    )
+    speed = model.SpeedAction(dynamics=step, target=model.AbsoluteTargetSpeed(value=5.0))
+    init = model.Init(
+        private=(
+            model.PrivateInit(
+                entity_ref="car0",
+                actions=(teleport(model.RelativeObjectPosition(entity_ref="car1", dx=-10, dy=0)),),
+            ),
+            model.PrivateInit(
+                entity_ref="car1",
+                actions=(
+                    teleport(model.RelativeObjectPosition(entity_ref="car2", dx=-10, dy=0)),
+                    speed,
+                ),
+            ),
+            model.PrivateInit(
+                entity_ref="car2",
+                actions=(teleport(model.LanePosition(road_id="1", lane_id=-1, s=100)), speed),
+            ),
+        )
+    )
+    teleports = [e for e, a in init_order(init) if isinstance(a, model.TeleportAction)]
+    assert teleports == ["car2", "car1", "car0"]
+    assert [e for e, a in init_order(init) if isinstance(a, model.SpeedAction)] == ["car1", "car2"]

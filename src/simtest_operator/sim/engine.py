@@ -266,10 +266,8 @@ class Simulation:
         if self.rules.scenario_runner:
             init, unread = carla_init.scenario_runner_init(init)
             world.ignored.extend(u for u in unread if u not in world.ignored)
-        for private in init.private:
-            actor = world.actor(private.entity_ref)
-            for body in private.actions:
-                self._init_runs.append(self._dispatcher.start_private(actor, body))
+        for entity, body in init_order(init):
+            self._init_runs.append(self._dispatcher.start_private(world.actor(entity), body))
         for global_action in init.global_actions:
             self._dispatcher.start_global(global_action)
         self._initial_takeover()
@@ -594,6 +592,26 @@ class Simulation:
             phantoms=self.world.ghosts,
         )
         return self._snapshot
+
+
+def init_order(init: model.Init) -> list[tuple[str, model.PrivateAction]]:
+    """The Init's private actions in the order they run: as written, except that a teleport
+    relative to an entity placed by a later action swaps places with that action (esmini's
+    ``ScenarioReader::parseInit``: each action is checked against every earlier one, so a chain
+    of references is resolved too)."""
+    order = [(p.entity_ref, action) for p in init.private for action in p.actions]
+    for i in range(1, len(order)):
+        for j in range(i):
+            action = order[j][1]
+            if (
+                isinstance(action, model.TeleportAction)
+                and isinstance(
+                    action.position, model.RelativeLanePosition | model.RelativeObjectPosition
+                )
+                and action.position.entity_ref == order[i][0]
+            ):
+                order[i], order[j] = order[j], order[i]
+    return order
 
 
 TRAFFIC_JUMP = 0.25

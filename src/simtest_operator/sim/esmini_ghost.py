@@ -321,6 +321,7 @@ class Follower:
 
     __slots__ = (
         "_index",
+        "_synced",
         "_times",
         "_trail",
         "external",
@@ -353,6 +354,9 @@ class Follower:
         self.inertia = _number(controller, "steeringSpeedInertia", 0.01)
         self.longitudinal = self.lateral = False
         self.x = self.y = self.heading = self.speed = 0.0
+        self._synced = False
+        """The vehicle model holds the entity's pose (taken at the first step after an
+        activation: an Init teleport may come after the Init's activation)."""
         self._trail: list[_Point] = []
         self._times: list[float] = []
         self._index = 0
@@ -369,7 +373,7 @@ class Follower:
         both = longitudinal is None and lateral is None
         self.longitudinal = both or (self.longitudinal if longitudinal is None else longitudinal)
         self.lateral = both or (self.lateral if lateral is None else lateral)
-        self.x, self.y, self.heading, self.speed = actor.x, actor.y, actor.heading, actor.speed
+        self._synced = False
 
     def restart(self, ghost: Actor, entity: Actor, time: float) -> None:
         """The ghost was put onto the entity by a restarting event: after 0 it takes the
@@ -400,6 +404,9 @@ class Follower:
         """Move the entity one step (False when not active: the storyboard moves it)."""
         if not self.active:
             return False
+        if not self._synced:
+            self.x, self.y, self.heading, self.speed = actor.x, actor.y, actor.heading, actor.speed
+            self._synced = True
         if self.external:
             actor.speed = 0.0
         elif self._trail:
