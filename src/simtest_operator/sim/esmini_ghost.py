@@ -369,7 +369,7 @@ class Follower:
 
     def activate(self, actor: Actor, longitudinal: bool | None, lateral: bool | None) -> None:
         """(De)activate in the domains given (both None: both on); an activation restarts the
-        vehicle model at the entity's pose and speed."""
+        vehicle model at the entity's pose and speed at its next step."""
         both = longitudinal is None and lateral is None
         self.longitudinal = both or (self.longitudinal if longitudinal is None else longitudinal)
         self.lateral = both or (self.lateral if lateral is None else lateral)
