@@ -367,7 +367,7 @@ class Follower:
     def active(self) -> bool:
         return self.longitudinal or self.lateral
 
-    def activate(self, actor: Actor, longitudinal: bool | None, lateral: bool | None) -> None:
+    def activate(self, longitudinal: bool | None, lateral: bool | None) -> None:
         """(De)activate in the domains given (both None: both on); an activation restarts the
         vehicle model at the entity's pose and speed at its next step."""
         both = longitudinal is None and lateral is None
