@@ -16,9 +16,11 @@ Reported:
   functions on its own runs) — a search is right about regions when that equals the truth;
 * boundary misclassification: the share of the dense grid that the boundary classifier fitted on
   the search's runs gets wrong;
-* runs to the dense grid's accuracy: the fewest runs (in steps of 10) after which the search's
-  classifier reaches 90 % of the dense grid's own balanced accuracy (5-fold cross-validated
-  classifier on the dense grid; balanced, so "everything passes" cannot score).
+* runs to the dense grid's accuracy: the fewest runs after which the search's classifier reaches
+  90 % of the dense grid's own balanced accuracy (5-fold cross-validated classifier on the dense
+  grid; balanced, so "everything passes" cannot score), checked after every wave (``WAVE`` runs,
+  the steps in which a search asks and is told): a coarser step would report the next multiple
+  of it, not the runs the search needed.
 
 Every simulation is cached under ``~/.cache/simtest/search-truth/`` by scenario content and
 parameter values, so a rerun (and the dense grid) is free; the output says what came from the
@@ -62,7 +64,8 @@ LIBRARY = REPO / "scenarios" / "library"
 RESULTS = REPO / "bench" / "results"
 BUDGETS = (100, 200)
 WAVE = 4
-CHECKPOINT = 10
+CHECKPOINT = WAVE
+"""Runs between two checks of the boundary's accuracy: every wave, for every strategy."""
 ACCURACY_SHARE = 0.9
 ADAPTIVE = (SearchStrategy.TPE, SearchStrategy.BOUNDARY, SearchStrategy.HYBRID)
 
