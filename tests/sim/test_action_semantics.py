@@ -192,26 +192,54 @@ def test_relative_lane_position_past_the_road_is_on_its_edge() -> None:
     assert other.lane_id == -2
 
 
-def test_relative_target_speed_not_continuous_is_sampled_at_the_start() -> None:
-    # esmini reads the reference's speed once for a non-continuous relative target: the car
-    # goes to the lead's 10 m/s (+2), not to the 20 m/s the lead speeds up to meanwhile
+def _relative_speed(
+    dimension: model.DynamicsDimension, value: float, delta: float
+) -> model.SpeedAction:
+    """A linear SpeedAction to Lead's speed plus ``delta``, not continuous."""
+    dynamics = model.TransitionDynamics(
+        shape=model.DynamicsShape.LINEAR, dimension=dimension, value=value
+    )
+    relative = model.RelativeTargetSpeed(
+        entity_ref="Lead",
+        value=delta,
+        value_type=model.SpeedTargetValueType.DELTA,
+        continuous=False,
+    )
+    return model.SpeedAction(dynamics=dynamics, target=relative)
+
+
+def test_relative_target_speed_not_continuous_is_re_read_every_step() -> None:
+    # esmini (LongSpeedAction::Step) re-reads a relative target every step, continuous or not:
+    # the car goes to the 20 m/s the lead speeds up to meanwhile (+2), not to its 10 m/s at
+    # the start
     bench = Bench("Car", "Lead")
     bench.start("Car", teleport(lane(-1, 100.0)))
     bench.start("Lead", teleport(lane(-1, 200.0)))
     bench.start("Lead", speed(10.0))
-    dynamics = model.TransitionDynamics(
-        shape=model.DynamicsShape.LINEAR, dimension=model.DynamicsDimension.TIME, value=2.0
-    )
-    relative = model.RelativeTargetSpeed(
-        entity_ref="Lead",
-        value=2.0,
-        value_type=model.SpeedTargetValueType.DELTA,
-        continuous=False,
-    )
-    bench.start("Car", model.SpeedAction(dynamics=dynamics, target=relative))
+    bench.start("Car", _relative_speed(model.DynamicsDimension.TIME, 2.0, 2.0))
     bench.start("Lead", speed(20.0))
     bench.step(round(3.0 / DT))
-    assert bench.actor("Car").speed == pytest.approx(12.0)
+    assert bench.actor("Car").speed == pytest.approx(22.0)
+    assert not bench.dispatcher.runs(bench.actor("Car"))
+
+
+def test_relative_target_speed_over_a_rate_ramps_until_it_meets_the_moving_target() -> None:
+    # at 5 m/s² towards a lead that went from 10 to 20 m/s after the start: the ramp goes on
+    # past 10 m/s and ends at 20 m/s after 4 s (repeated_relative_speed: the ego stopped
+    # 1.5 m/s short of the lead and never re-triggered, 6 m behind esmini)
+    bench = Bench("Car", "Lead")
+    bench.start("Car", teleport(lane(-1, 100.0)))
+    bench.start("Lead", teleport(lane(-1, 200.0)))
+    bench.start("Lead", speed(10.0))
+    bench.start("Car", _relative_speed(model.DynamicsDimension.RATE, 5.0, 0.0))
+    bench.start("Lead", speed(20.0))
+    car = bench.actor("Car")
+    bench.step(round(3.0 / DT))
+    assert car.speed == pytest.approx(15.0)
+    assert bench.dispatcher.runs(car)
+    bench.step(round(1.0 / DT))
+    assert car.speed == pytest.approx(20.0)
+    assert not bench.dispatcher.runs(car)
 
 
 def test_a_speed_change_ends_in_the_step_that_completes_its_duration() -> None:
