@@ -8,11 +8,13 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from pathlib import Path
 
 import pytest
 
 from simtest_operator.openscenario import model
 from simtest_operator.sim import speeds
+from tests.sim import osc_scenarios as osc
 from tests.sim.worlds import DT, Bench, lane, speed, teleport
 
 
@@ -240,6 +242,35 @@ def test_relative_target_speed_over_a_rate_ramps_until_it_meets_the_moving_targe
     bench.step(round(1.0 / DT))
     assert car.speed == pytest.approx(20.0)
     assert not bench.dispatcher.runs(car)
+
+
+def test_a_scenario_ramping_to_an_accelerating_lead_follows_it(tmp_path: Path) -> None:
+    # the file's own reading of the same: Car ramps at 5 m/s² from 0 to the Lead's speed
+    # (delta 0, not continuous) while the Lead speeds up from 10 at 2 m/s²; they meet at
+    # 10 + 2 t = 5 t, t = 3.33 s, 16.7 m/s (it used to stop at the 10 m/s read at the start)
+    lead = (
+        '<Private entityRef="Lead"><PrivateAction><LongitudinalAction><SpeedAction>'
+        '<SpeedActionDynamics dynamicsShape="linear" dynamicsDimension="rate" value="2"/>'
+        '<SpeedActionTarget><AbsoluteTargetSpeed value="30"/></SpeedActionTarget>'
+        "</SpeedAction></LongitudinalAction></PrivateAction></Private>"
+    )
+    ramp = (
+        "<PrivateAction><LongitudinalAction><SpeedAction>"
+        '<SpeedActionDynamics dynamicsShape="linear" dynamicsDimension="rate" value="5"/>'
+        '<SpeedActionTarget><RelativeTargetSpeed entityRef="Lead" value="0"'
+        ' speedTargetValueType="delta" continuous="false"/></SpeedActionTarget>'
+        "</SpeedAction></LongitudinalAction></PrivateAction>"
+    )
+    text = osc.scenario(
+        entities=osc.CAR.format(name="Car") + osc.CAR.format(name="Lead"),
+        init=osc.place("Car", s=20.0, speed=0.0) + osc.place("Lead", s=100.0) + lead,
+        stories=osc.story('<EntityRef entityRef="Car"/>', ramp, osc.at_time(-1.0, edge="none")),
+        stop=osc.at_time(5.0),
+    )
+    report = osc.run(osc.write(tmp_path, text), tmp_path)
+    car = {round(sample[0]): sample[4] for sample in report.samples["Car"]}
+    assert car[2] == pytest.approx(10.0, abs=0.3)  # still ramping past the Lead's start speed
+    assert car[5] == pytest.approx(50.0 / 3.0, abs=0.3)  # met the Lead, then kept that speed
 
 
 def test_a_speed_change_ends_in_the_step_that_completes_its_duration() -> None:
