@@ -244,6 +244,34 @@ def test_relative_target_speed_over_a_rate_ramps_until_it_meets_the_moving_targe
     assert not bench.dispatcher.runs(car)
 
 
+def test_continuous_step_tracking_brakes_within_the_performance() -> None:
+    # a continuous, step-shaped relative speed jumps to the target when it starts only; after
+    # that esmini tracks within maxDeceleration (10 m/s² here): the follower of a lead that
+    # stops dead slows 0.5 m/s a step (highway_merge_advanced's A5: it stopped at once, 33 m
+    # short of esmini's)
+    bench = Bench("Car", "Lead")
+    bench.start("Car", teleport(lane(-1, 100.0)))
+    bench.start("Lead", teleport(lane(-1, 200.0)))
+    bench.start("Lead", speed(20.0))
+    dynamics = model.TransitionDynamics(
+        shape=model.DynamicsShape.STEP, dimension=model.DynamicsDimension.TIME, value=0.0
+    )
+    relative = model.RelativeTargetSpeed(
+        entity_ref="Lead", value=0.0, value_type=model.SpeedTargetValueType.DELTA, continuous=True
+    )
+    bench.start("Car", model.SpeedAction(dynamics=dynamics, target=relative))
+    car = bench.actor("Car")
+    assert car.speed == 20.0
+    bench.start("Lead", speed(0.0))
+    bench.step()
+    assert car.speed == pytest.approx(19.5)
+    bench.step(round(1.0 / DT) - 1)
+    assert car.speed == pytest.approx(10.0)
+    bench.step(round(1.0 / DT))
+    assert car.speed == pytest.approx(0.0)
+    assert bench.dispatcher.runs(car)
+
+
 def test_a_scenario_ramping_to_an_accelerating_lead_follows_it(tmp_path: Path) -> None:
     # the file's own reading of the same: Car ramps at 5 m/s² from 0 to the Lead's speed
     # (delta 0, not continuous) while the Lead speeds up from 10 at 2 m/s²; they meet at

@@ -124,7 +124,9 @@ class SpeedRun(Run):
         transition's pace is re-derived from the current target each step (a target that ran
         away stretches it to the vehicle's performance), and no step changes the speed by more
         than the performance allows, during the transition or while tracking after it (a
-        follower cannot copy a harder braking than its own maxDeceleration)."""
+        follower cannot copy a harder braking than its own maxDeceleration), whatever the shape:
+        a ``step`` jumps to the target only when the action starts (esmini's Start), then
+        tracks within the performance like any other (its Step)."""
         actor = self.actor
         assert actor is not None
         dynamics = self._action.dynamics
@@ -135,7 +137,7 @@ class SpeedRun(Run):
         wanted = self._v0 + (target - self._v0) * shape_fraction(dynamics.shape, self._progress)
         if self._progress >= 1.0:
             wanted = target
-        if performance is not None and dynamics.shape is not model.DynamicsShape.STEP:
+        if performance is not None:
             if performance.max_deceleration > 0:
                 wanted = max(wanted, actor.speed - performance.max_deceleration * dt)
             if performance.max_acceleration > 0:
