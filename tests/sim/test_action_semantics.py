@@ -272,6 +272,31 @@ def test_continuous_step_tracking_brakes_within_the_performance() -> None:
     assert bench.dispatcher.runs(car)
 
 
+def test_a_scenario_follower_of_a_lead_stopping_dead_brakes_within_its_performance(
+    tmp_path: Path,
+) -> None:
+    # the same in an authored file: the Car keeps the Lead's speed (step, continuous) from
+    # Init; the Lead steps to 0 after 1 s and the Car slows at its maxDeceleration (10 m/s²)
+    follow = (
+        '<Private entityRef="Car"><PrivateAction><LongitudinalAction><SpeedAction>'
+        '<SpeedActionDynamics dynamicsShape="step" dynamicsDimension="time" value="0"/>'
+        '<SpeedActionTarget><RelativeTargetSpeed entityRef="Lead" value="0"'
+        ' speedTargetValueType="delta" continuous="true"/></SpeedActionTarget>'
+        "</SpeedAction></LongitudinalAction></PrivateAction></Private>"
+    )
+    text = osc.scenario(
+        entities=osc.CAR.format(name="Car") + osc.CAR.format(name="Lead"),
+        init=osc.place("Lead", s=100.0, speed=20.0) + osc.place("Car", s=20.0) + follow,
+        stories=osc.story('<EntityRef entityRef="Lead"/>', osc.speed_action(0.0), osc.at_time(1.0)),
+        stop=osc.at_time(4.0),
+    )
+    report = osc.run(osc.write(tmp_path, text), tmp_path)
+    car = {round(sample[0]): sample[4] for sample in report.samples["Car"]}
+    assert car[1] == pytest.approx(20.0)
+    assert 8.0 < car[2] < 14.0  # braking at 10 m/s², not stopped dead (it was 0)
+    assert car[4] == pytest.approx(0.0)
+
+
 def test_a_scenario_ramping_to_an_accelerating_lead_follows_it(tmp_path: Path) -> None:
     # the file's own reading of the same: Car ramps at 5 m/s² from 0 to the Lead's speed
     # (delta 0, not continuous) while the Lead speeds up from 10 at 2 m/s²; they meet at
