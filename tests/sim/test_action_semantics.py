@@ -8,11 +8,13 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from pathlib import Path
 
 import pytest
 
 from simtest_operator.openscenario import model
 from simtest_operator.sim import speeds
+from tests.sim import osc_scenarios as osc
 from tests.sim.worlds import DT, Bench, lane, speed, teleport
 
 
@@ -192,26 +194,136 @@ def test_relative_lane_position_past_the_road_is_on_its_edge() -> None:
     assert other.lane_id == -2
 
 
-def test_relative_target_speed_not_continuous_is_sampled_at_the_start() -> None:
-    # esmini reads the reference's speed once for a non-continuous relative target: the car
-    # goes to the lead's 10 m/s (+2), not to the 20 m/s the lead speeds up to meanwhile
+def _relative_speed(
+    dimension: model.DynamicsDimension, value: float, delta: float
+) -> model.SpeedAction:
+    """A linear SpeedAction to Lead's speed plus ``delta``, not continuous."""
+    dynamics = model.TransitionDynamics(
+        shape=model.DynamicsShape.LINEAR, dimension=dimension, value=value
+    )
+    relative = model.RelativeTargetSpeed(
+        entity_ref="Lead",
+        value=delta,
+        value_type=model.SpeedTargetValueType.DELTA,
+        continuous=False,
+    )
+    return model.SpeedAction(dynamics=dynamics, target=relative)
+
+
+def test_relative_target_speed_not_continuous_is_re_read_every_step() -> None:
+    # esmini (LongSpeedAction::Step) re-reads a relative target every step, continuous or not:
+    # the car goes to the 20 m/s the lead speeds up to meanwhile (+2), not to its 10 m/s at
+    # the start
     bench = Bench("Car", "Lead")
     bench.start("Car", teleport(lane(-1, 100.0)))
     bench.start("Lead", teleport(lane(-1, 200.0)))
     bench.start("Lead", speed(10.0))
-    dynamics = model.TransitionDynamics(
-        shape=model.DynamicsShape.LINEAR, dimension=model.DynamicsDimension.TIME, value=2.0
-    )
-    relative = model.RelativeTargetSpeed(
-        entity_ref="Lead",
-        value=2.0,
-        value_type=model.SpeedTargetValueType.DELTA,
-        continuous=False,
-    )
-    bench.start("Car", model.SpeedAction(dynamics=dynamics, target=relative))
+    bench.start("Car", _relative_speed(model.DynamicsDimension.TIME, 2.0, 2.0))
     bench.start("Lead", speed(20.0))
     bench.step(round(3.0 / DT))
-    assert bench.actor("Car").speed == pytest.approx(12.0)
+    assert bench.actor("Car").speed == pytest.approx(22.0)
+    assert not bench.dispatcher.runs(bench.actor("Car"))
+
+
+def test_relative_target_speed_over_a_rate_ramps_until_it_meets_the_moving_target() -> None:
+    # at 5 m/s² towards a lead that went from 10 to 20 m/s after the start: the ramp goes on
+    # past 10 m/s and ends at 20 m/s after 4 s (repeated_relative_speed: the ego stopped
+    # 1.5 m/s short of the lead and never re-triggered, 6 m behind esmini)
+    bench = Bench("Car", "Lead")
+    bench.start("Car", teleport(lane(-1, 100.0)))
+    bench.start("Lead", teleport(lane(-1, 200.0)))
+    bench.start("Lead", speed(10.0))
+    bench.start("Car", _relative_speed(model.DynamicsDimension.RATE, 5.0, 0.0))
+    bench.start("Lead", speed(20.0))
+    car = bench.actor("Car")
+    bench.step(round(3.0 / DT))
+    assert car.speed == pytest.approx(15.0)
+    assert bench.dispatcher.runs(car)
+    bench.step(round(1.0 / DT))
+    assert car.speed == pytest.approx(20.0)
+    assert not bench.dispatcher.runs(car)
+
+
+def test_continuous_step_tracking_brakes_within_the_performance() -> None:
+    # a continuous, step-shaped relative speed jumps to the target when it starts only; after
+    # that esmini tracks within maxDeceleration (10 m/s² here): the follower of a lead that
+    # stops dead slows 0.5 m/s a step (highway_merge_advanced's A5: it stopped at once, 33 m
+    # short of esmini's)
+    bench = Bench("Car", "Lead")
+    bench.start("Car", teleport(lane(-1, 100.0)))
+    bench.start("Lead", teleport(lane(-1, 200.0)))
+    bench.start("Lead", speed(20.0))
+    dynamics = model.TransitionDynamics(
+        shape=model.DynamicsShape.STEP, dimension=model.DynamicsDimension.TIME, value=0.0
+    )
+    relative = model.RelativeTargetSpeed(
+        entity_ref="Lead", value=0.0, value_type=model.SpeedTargetValueType.DELTA, continuous=True
+    )
+    bench.start("Car", model.SpeedAction(dynamics=dynamics, target=relative))
+    car = bench.actor("Car")
+    assert car.speed == 20.0
+    bench.start("Lead", speed(0.0))
+    bench.step()
+    assert car.speed == pytest.approx(19.5)
+    bench.step(round(1.0 / DT) - 1)
+    assert car.speed == pytest.approx(10.0)
+    bench.step(round(1.0 / DT))
+    assert car.speed == pytest.approx(0.0)
+    assert bench.dispatcher.runs(car)
+
+
+def test_a_scenario_follower_of_a_lead_stopping_dead_brakes_within_its_performance(
+    tmp_path: Path,
+) -> None:
+    # the same in an authored file: the Car keeps the Lead's speed (step, continuous) from
+    # Init; the Lead steps to 0 after 1 s and the Car slows at its maxDeceleration (10 m/s²)
+    follow = (
+        '<Private entityRef="Car"><PrivateAction><LongitudinalAction><SpeedAction>'
+        '<SpeedActionDynamics dynamicsShape="step" dynamicsDimension="time" value="0"/>'
+        '<SpeedActionTarget><RelativeTargetSpeed entityRef="Lead" value="0"'
+        ' speedTargetValueType="delta" continuous="true"/></SpeedActionTarget>'
+        "</SpeedAction></LongitudinalAction></PrivateAction></Private>"
+    )
+    text = osc.scenario(
+        entities=osc.CAR.format(name="Car") + osc.CAR.format(name="Lead"),
+        init=osc.place("Lead", s=100.0, speed=20.0) + osc.place("Car", s=20.0) + follow,
+        stories=osc.story('<EntityRef entityRef="Lead"/>', osc.speed_action(0.0), osc.at_time(1.0)),
+        stop=osc.at_time(4.0),
+    )
+    report = osc.run(osc.write(tmp_path, text), tmp_path)
+    car = {round(sample[0]): sample[4] for sample in report.samples["Car"]}
+    assert car[1] == pytest.approx(20.0)
+    assert 8.0 < car[2] < 14.0  # braking at 10 m/s², not stopped dead (it was 0)
+    assert car[4] == pytest.approx(0.0)
+
+
+def test_a_scenario_ramping_to_an_accelerating_lead_follows_it(tmp_path: Path) -> None:
+    # the file's own reading of the same: Car ramps at 5 m/s² from 0 to the Lead's speed
+    # (delta 0, not continuous) while the Lead speeds up from 10 at 2 m/s²; they meet at
+    # 10 + 2 t = 5 t, t = 3.33 s, 16.7 m/s (it used to stop at the 10 m/s read at the start)
+    lead = (
+        '<Private entityRef="Lead"><PrivateAction><LongitudinalAction><SpeedAction>'
+        '<SpeedActionDynamics dynamicsShape="linear" dynamicsDimension="rate" value="2"/>'
+        '<SpeedActionTarget><AbsoluteTargetSpeed value="30"/></SpeedActionTarget>'
+        "</SpeedAction></LongitudinalAction></PrivateAction></Private>"
+    )
+    ramp = (
+        "<PrivateAction><LongitudinalAction><SpeedAction>"
+        '<SpeedActionDynamics dynamicsShape="linear" dynamicsDimension="rate" value="5"/>'
+        '<SpeedActionTarget><RelativeTargetSpeed entityRef="Lead" value="0"'
+        ' speedTargetValueType="delta" continuous="false"/></SpeedActionTarget>'
+        "</SpeedAction></LongitudinalAction></PrivateAction>"
+    )
+    text = osc.scenario(
+        entities=osc.CAR.format(name="Car") + osc.CAR.format(name="Lead"),
+        init=osc.place("Car", s=20.0, speed=0.0) + osc.place("Lead", s=100.0) + lead,
+        stories=osc.story('<EntityRef entityRef="Car"/>', ramp, osc.at_time(-1.0, edge="none")),
+        stop=osc.at_time(5.0),
+    )
+    report = osc.run(osc.write(tmp_path, text), tmp_path)
+    car = {round(sample[0]): sample[4] for sample in report.samples["Car"]}
+    assert car[2] == pytest.approx(10.0, abs=0.3)  # still ramping past the Lead's start speed
+    assert car[5] == pytest.approx(50.0 / 3.0, abs=0.3)  # met the Lead, then kept that speed
 
 
 def test_a_speed_change_ends_in_the_step_that_completes_its_duration() -> None:

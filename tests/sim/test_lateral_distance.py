@@ -5,11 +5,13 @@ with a speed limit only it moves at that speed, and a non-continuous action ends
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import pytest
 
 from simtest_operator.openscenario import model
 from simtest_operator.snapshots import JumpCause
+from tests.sim import osc_scenarios as osc
 from tests.sim.worlds import DT, Bench, lane, speed, teleport
 
 
@@ -82,3 +84,35 @@ def test_non_continuous_ends_within_a_centimetre() -> None:
             break
     assert action.finished
     assert abs(b.actor("Car").offset - 1.5) < 0.01
+
+
+def test_an_entity_placed_at_an_angle_drives_on_along_its_heading_then_turns(
+    tmp_path: Path,
+) -> None:
+    # esmini (lat_dist_entity_basic): a target placed across the road at 5 m/s, 9.25 m right
+    # of where it should be, keeps its heading at first (its motion across the road is where
+    # the spring starts, limited to its speed) and turns to the road as it closes the gap;
+    # it used to drive along the lane, sideways, starting the spring from rest (3.9 m off)
+    target = (
+        '<Private entityRef="Target"><PrivateAction><TeleportAction><Position>'
+        f'<WorldPosition x="40" y="-6" h="{math.pi / 2}"/></Position></TeleportAction>'
+        f"</PrivateAction>{osc.speed_action(5.0)}<PrivateAction><LateralAction>"
+        '<LateralDistanceAction entityRef="Ego" distance="5" freespace="false" continuous="true"'
+        ' coordinateSystem="road" displacement="leftToReferencedEntity">'
+        '<DynamicConstraints maxAcceleration="5"/></LateralDistanceAction></LateralAction>'
+        "</PrivateAction></Private>"
+    )
+    text = osc.scenario(
+        entities=osc.CAR.format(name="Ego") + osc.CAR.format(name="Target"),
+        init=osc.place("Ego", s=20.0, speed=0.0) + target,
+        stop=osc.at_time(4.0),
+    )
+    report = osc.run(osc.write(tmp_path, text), tmp_path)
+    samples = {round(sample[0]): sample for sample in report.samples["Target"]}
+    _, x, y, heading, _ = samples[1]
+    assert x < 41.5  # hardly along the road yet (it was 43.9)
+    assert y > -2.0  # most of its speed went across it (it was -3.4)
+    assert 0.5 < heading < math.pi / 2  # turning towards the road (not 2.9 rad)
+    _, x, y, heading, _ = samples[4]
+    assert y == pytest.approx(-1.75 + 5.0, abs=0.5)
+    assert abs(heading) < 0.2

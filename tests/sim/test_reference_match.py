@@ -6,7 +6,8 @@ entity's speed; reversing along a trajectory and road-position headings in a par
 jerk-limited follow-mode speed profiles (entries asking for more than the limits arrive
 later); a continuous relative speed tracked within the vehicle's performance; lateral offsets
 on banked roads and crests; spring-model distance keeping with jerk limits; time-gap distance
-keeping in free space behind a reference that moves first in the step, and synchronizing with a
+keeping in free space behind a reference that moves first in the step, a non-continuous relative
+speed whose rate ramp follows the moving target, and synchronizing with a
 master that moves first (within 0.1 m); lane changes on a circle with a headway trigger;
 end-of-road teleports restarting acts; lateral distance keeping; lane clearance on a 2+1 road;
 traffic signal states with edge-triggered events)."""
@@ -85,6 +86,7 @@ def compare(relative: str, tmp_path: Path) -> references.Comparison:
         "brake_by_trajectory_100-0.xosc",  # follow-mode trajectory from the entity's speed
         "speed-profile_test.xosc",  # follow-mode entries beyond maxAcceleration arrive later
         "relative_speed_phases.xosc",  # continuous relative speed within the performance
+        "repeated_relative_speed.xosc",  # a non-continuous relative target re-read each step
         "pitch_by_super_elevation.xosc",  # t rolls with the superelevation
         "tilted_crest.xosc",  # ... about the pitched tangent: banked on a crest
         "star.xosc",  # a relative orientation of a RelativeRoadPosition turns from the road's s

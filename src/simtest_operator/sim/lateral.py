@@ -289,6 +289,14 @@ class LateralDistanceRun(Run):
         self._action = action
         self._ref = world.actor(action.entity_ref)
         self._lateral_speed = 0.0
+        limits = action.constraints
+        if limits is not None and limits.max_acceleration is not None:
+            # The spring starts from the actor's own motion across the road (as esmini): an
+            # entity placed at an angle drives on along its heading, then turns to the
+            # distance; from here its heading follows the motion.
+            across = actor.direction * actor.speed * math.sin(actor.heading_offset)
+            self._lateral_speed = self._clamp(across + actor.lateral_speed, actor.speed)
+            actor.heading_offset = 0.0
         if action.displacement is model.LateralDisplacement.LEFT:
             self._side = 1.0
         elif action.displacement is model.LateralDisplacement.RIGHT:
@@ -301,6 +309,11 @@ class LateralDistanceRun(Run):
         if abs(actor.offset - offset) > 1e-9:
             # Without limits the actor snaps to the distance at once (as esmini).
             world.declare(actor, JumpCause.LATERAL_STEP)
+
+    @staticmethod
+    def _clamp(speed: float, limit: float) -> float:
+        """``speed`` within +-``limit``."""
+        return max(-abs(limit), min(abs(limit), speed))
 
     @staticmethod
     def _t(world: World, actor: Actor) -> float:
@@ -336,7 +349,7 @@ class LateralDistanceRun(Run):
                 wanted = error * stiffness - self._lateral_speed * 2.0 * math.sqrt(stiffness)
                 wanted = max(-limits.max_acceleration, min(limits.max_acceleration, wanted))
                 speed = self._lateral_speed + wanted * dt
-            speed = max(-max_speed, min(max_speed, speed))
+            speed = self._clamp(speed, min(max_speed, abs(actor.speed)))
             if stepped and abs(speed - self._lateral_speed) > _STEP_ACCELERATION * dt:
                 # no acceleration limit: the lateral speed steps and the heading with it (esmini
                 # turns 53 degrees in one step), a discontinuity the scenario commands

@@ -4,11 +4,12 @@ continuous) and SpeedProfileAction.
 A transition runs from the speed at the action start to the target with the dynamics shape over a
 duration derived from the dimension: ``time`` is the duration, ``distance`` the distance covered
 (duration = distance / mean speed), ``rate`` the peak acceleration (linear: duration =
-|dv| / rate). A ``continuous`` relative target is re-read each step, so the transition bends
-towards a moving target (its pace re-derived from it), and the action keeps tracking it after
-the transition and never ends by itself, never changing speed faster than the vehicle's
-performance; a relative target that is not continuous is the reference's speed at the action
-start (as esmini).
+|dv| / rate). A relative target is re-read each step, continuous or not (esmini's
+LongSpeedAction::Step), so the transition bends towards a moving target (over a ``rate`` its
+duration is re-derived from it: the speed ramps at the rate until it meets the target). A
+``continuous`` one keeps tracking it after the transition and never ends by itself, never
+changing speed faster than the vehicle's performance; one that is not continuous ends where
+its transition meets the target.
 """
 
 from __future__ import annotations
@@ -77,7 +78,7 @@ def transition_duration(
 class SpeedRun(Run):
     """A running SpeedAction on one actor."""
 
-    __slots__ = ("_action", "_duration", "_elapsed", "_progress", "_sampled", "_v0")
+    __slots__ = ("_action", "_duration", "_elapsed", "_progress", "_v0")
 
     def __init__(self, world: World, actor: Actor, action: model.SpeedAction) -> None:
         super().__init__(actor, LONGITUDINAL)
@@ -87,9 +88,6 @@ class SpeedRun(Run):
         self._progress = 0.0
         """Fraction of a continuous transition done (its pace follows the moving target)."""
         target = target_speed(world, action.target)
-        self._sampled = None if self._continuous else target
-        """A relative target that is not continuous is the reference's speed at the start
-        (esmini samples it once); absolute targets are fixed anyway."""
         self._duration = transition_duration(
             action.dynamics, self._v0, target, actor.obj.performance
         )
@@ -104,12 +102,15 @@ class SpeedRun(Run):
 
     def step(self, world: World, dt: float) -> None:
         assert self.actor is not None
-        target = self._sampled
-        if target is None:
-            target = target_speed(world, self._action.target)
+        target = target_speed(world, self._action.target)
         if self._continuous:
             self._track(target, dt)
             return
+        if self._action.dynamics.dimension is model.DynamicsDimension.RATE:
+            # a moving target moves the end of a ramp at the given rate
+            self._duration = transition_duration(
+                self._action.dynamics, self._v0, target, self.actor.obj.performance
+            )
         self._elapsed += dt
         if self._duration <= 0.0 or self._elapsed >= self._duration - END_EPSILON:
             self.actor.speed = target
@@ -123,7 +124,9 @@ class SpeedRun(Run):
         transition's pace is re-derived from the current target each step (a target that ran
         away stretches it to the vehicle's performance), and no step changes the speed by more
         than the performance allows, during the transition or while tracking after it (a
-        follower cannot copy a harder braking than its own maxDeceleration)."""
+        follower cannot copy a harder braking than its own maxDeceleration), whatever the shape:
+        a ``step`` jumps to the target only when the action starts (esmini's Start), then
+        tracks within the performance like any other (its Step)."""
         actor = self.actor
         assert actor is not None
         dynamics = self._action.dynamics
@@ -134,7 +137,7 @@ class SpeedRun(Run):
         wanted = self._v0 + (target - self._v0) * shape_fraction(dynamics.shape, self._progress)
         if self._progress >= 1.0:
             wanted = target
-        if performance is not None and dynamics.shape is not model.DynamicsShape.STEP:
+        if performance is not None:
             if performance.max_deceleration > 0:
                 wanted = max(wanted, actor.speed - performance.max_deceleration * dt)
             if performance.max_acceleration > 0:
