@@ -188,6 +188,7 @@ def test_the_sut_model_does_not_see_ghosts(tmp_path: Path) -> None:
         "init_test.xosc",  # time mode
         "ghost_restart2.xosc",  # restarts re-arming the teleporting events
         "timing_scenario_with_restarts.xosc",  # external controller with ghost, restarts
+        "ghost_route.xosc",  # activated in the Init before its SpeedAction: starts from 0 m/s
     ],
 )
 def test_matches_the_reference_player(relative: str, tmp_path: Path) -> None:

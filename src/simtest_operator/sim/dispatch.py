@@ -561,7 +561,7 @@ class Dispatcher:
             return False
         follower = self.followers.get(actor.name)
         if follower is not None and esmini_ghost.uses_ghost(controller):
-            follower.activate(longitudinal, lateral)
+            follower.activate(actor, longitudinal, lateral)
             return True
         both = longitudinal is None and lateral is None
         acc = self.accs.get(actor.name)

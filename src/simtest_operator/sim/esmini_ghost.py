@@ -356,7 +356,8 @@ class Follower:
         self.x = self.y = self.heading = self.speed = 0.0
         self._synced = False
         """The vehicle model holds the entity's pose (taken at the first step after an
-        activation: an Init teleport may come after the Init's activation)."""
+        activation: an Init teleport may come after the Init's activation; the speed is the
+        one at activation)."""
         self._trail: list[_Point] = []
         self._times: list[float] = []
         self._index = 0
@@ -367,12 +368,13 @@ class Follower:
     def active(self) -> bool:
         return self.longitudinal or self.lateral
 
-    def activate(self, longitudinal: bool | None, lateral: bool | None) -> None:
+    def activate(self, actor: Actor, longitudinal: bool | None, lateral: bool | None) -> None:
         """(De)activate in the domains given (both None: both on); an activation restarts the
-        vehicle model at the entity's pose and speed at its next step."""
+        vehicle model with the entity's speed now and its pose at the next step."""
         both = longitudinal is None and lateral is None
         self.longitudinal = both or (self.longitudinal if longitudinal is None else longitudinal)
         self.lateral = both or (self.lateral if lateral is None else lateral)
+        self.speed = actor.speed
         self._synced = False
 
     def restart(self, ghost: Actor, entity: Actor, time: float) -> None:
@@ -405,7 +407,7 @@ class Follower:
         if not self.active:
             return False
         if not self._synced:
-            self.x, self.y, self.heading, self.speed = actor.x, actor.y, actor.heading, actor.speed
+            self.x, self.y, self.heading = actor.x, actor.y, actor.heading
             self._synced = True
         if self.external:
             actor.speed = 0.0
