@@ -115,8 +115,14 @@ def write(tmp_path: Path, text: str, name: str = "scenario.xosc") -> Path:
     return path
 
 
-def run(path: Path, tmp_path: Path, *, seed: int | None = None) -> scenario_execution.RunReport:
-    """Run ``path`` on the in-memory backend with the ego scripted (no SUT takeover)."""
+def run(
+    path: Path,
+    tmp_path: Path,
+    *,
+    seed: int | None = None,
+    takeover: Takeover = Takeover.NEVER,
+) -> scenario_execution.RunReport:
+    """Run ``path`` on the in-memory backend, the ego scripted unless ``takeover`` says."""
     simulation = SimulationSettings() if seed is None else SimulationSettings(seed=seed)
     return scenario_execution.run_scenario(
         scenario_execution.RunRequest(
@@ -124,7 +130,19 @@ def run(path: Path, tmp_path: Path, *, seed: int | None = None) -> scenario_exec
             nets_dir=tmp_path,
             record=False,
             backend=BackendChoice.MEMORY,
-            sut=SutConfig(takeover=Takeover.NEVER),
+            sut=SutConfig(takeover=takeover),
             simulation=simulation,
         )
     )
+
+
+def with_controller(text: str, entity: str, properties: str) -> str:
+    """``text`` with an ObjectController ``ctrl`` of ``properties`` on vehicle ``entity``."""
+    controller = (
+        f'<ObjectController><Controller name="ctrl"><Properties>{properties}</Properties>'
+        "</Controller></ObjectController>"
+    )
+    marker = f'<ScenarioObject name="{entity}">'
+    head, tail = text.split(marker)
+    end = tail.index("</Vehicle>") + len("</Vehicle>")
+    return head + marker + tail[:end] + controller + tail[end:]

@@ -9,7 +9,8 @@ from pathlib import Path
 import pytest
 
 from simtest_operator.runner import scenario_execution
-from simtest_operator.sim import BackendChoice, SutConfig, Takeover
+
+from . import osc_scenarios as osc
 
 DATA = Path(__file__).parent / "data"
 
@@ -23,25 +24,12 @@ def run_controlled(
     shutil.copy(DATA / "straight.xodr", tmp_path / "straight.xodr")
     text = (DATA / "hard_braking_lead.xosc").read_text(encoding="utf-8")
     text = text.replace('value="40"', f'value="{gap}"')  # the Gap parameter
-    controller = (
-        '<ObjectController><Controller name="ctrl"><Properties>'
-        f'<Property name="esminiController" value="{kind}"/>{properties}'
-        "</Properties></Controller></ObjectController>"
+    text = osc.with_controller(
+        text, "Ego", f'<Property name="esminiController" value="{kind}"/>{properties}'
     )
-    head, tail = text.split('<ScenarioObject name="Ego">')
-    end = tail.index("</Vehicle>") + len("</Vehicle>")
-    text = head + '<ScenarioObject name="Ego">' + tail[:end] + controller + tail[end:]
     path = tmp_path / "controlled.xosc"
     path.write_text(text, encoding="utf-8")
-    return scenario_execution.run_scenario(
-        scenario_execution.RunRequest(
-            scenario=path,
-            nets_dir=tmp_path,
-            record=False,
-            backend=BackendChoice.MEMORY,
-            sut=SutConfig(takeover=Takeover.NEVER),
-        )
-    )
+    return osc.run(path, tmp_path)
 
 
 _OVERRIDE = '<Property name="mode" value="override"/><Property name="setSpeed" value="30"/>'

@@ -11,7 +11,8 @@ from pathlib import Path
 import pytest
 
 from simtest_operator.runner import scenario_execution
-from simtest_operator.sim import BackendChoice, SutConfig, Takeover
+from simtest_operator.sim import Takeover
+from tests.sim import osc_scenarios as osc
 from tests.sim.test_reference_match import compare
 
 DATA = Path(__file__).parent / "data"
@@ -34,14 +35,7 @@ def _run(
     # the lead brakes at 8 m/s^2 from t = 2 s; the storyboard ends 3 s after that
     shutil.copy(DATA / "straight.xodr", tmp_path / "straight.xodr")
     text = (DATA / "hard_braking_lead.xosc").read_text(encoding="utf-8")
-    object_controller = (
-        f'<ObjectController><Controller name="ctrl"><Properties>{controller}</Properties>'
-        "</Controller></ObjectController>"
-    )
-    marker = f'<ScenarioObject name="{entity}">'
-    head, tail = text.split(marker)
-    vehicle_end = tail.index("</Vehicle>") + len("</Vehicle>")
-    text = head + marker + tail[:vehicle_end] + object_controller + tail[vehicle_end:]
+    text = osc.with_controller(text, entity, controller)
     if activate_first or entity != "Ego":
         text = text.replace(
             f"<PrivateAction>\n            {_ACTIVATE}\n          </PrivateAction>", ""
@@ -52,15 +46,7 @@ def _run(
         text = text[:position] + f"<PrivateAction>{_ACTIVATE}</PrivateAction>" + text[position:]
     path = tmp_path / "controlled.xosc"
     path.write_text(text, encoding="utf-8")
-    return scenario_execution.run_scenario(
-        scenario_execution.RunRequest(
-            scenario=path,
-            nets_dir=tmp_path,
-            record=False,
-            backend=BackendChoice.MEMORY,
-            sut=SutConfig(takeover=takeover),
-        )
-    )
+    return osc.run(path, tmp_path, takeover=takeover)
 
 
 _INTERACTIVE = '<Property name="esminiController" value="InteractiveController"/>'

@@ -10,7 +10,8 @@ from pathlib import Path
 import pytest
 
 from simtest_operator.runner import scenario_execution
-from simtest_operator.sim import BackendChoice, SutConfig, Takeover
+from simtest_operator.sim import Takeover
+from tests.sim import osc_scenarios as osc
 from tests.sim.test_reference_match import compare
 
 DATA = Path(__file__).parent / "data"
@@ -64,14 +65,7 @@ def _run(
     # after that braking ended
     shutil.copy(DATA / "straight.xodr", tmp_path / "straight.xodr")
     text = (DATA / "hard_braking_lead.xosc").read_text(encoding="utf-8")
-    object_controller = (
-        f'<ObjectController><Controller name="ctrl"><Properties>{controller}</Properties>'
-        "</Controller></ObjectController>"
-    )
-    marker = f'<ScenarioObject name="{entity}">'
-    head, tail = text.split(marker)
-    vehicle_end = tail.index("</Vehicle>") + len("</Vehicle>")
-    text = head + marker + tail[:vehicle_end] + object_controller + tail[vehicle_end:]
+    text = osc.with_controller(text, entity, controller)
     if entity == "Lead" and activate:
         # after its Init's SpeedAction: the vehicle model starts at 25 m/s
         position = text.index("</Private>", text.index('<Private entityRef="Lead">'))
@@ -82,15 +76,7 @@ def _run(
         text = text[:end] + _LANE_CHANGE.format(trigger=lane_change, actors=refs) + text[end:]
     path = tmp_path / "ghost.xosc"
     path.write_text(text, encoding="utf-8")
-    return scenario_execution.run_scenario(
-        scenario_execution.RunRequest(
-            scenario=path,
-            nets_dir=tmp_path,
-            record=False,
-            backend=BackendChoice.MEMORY,
-            sut=SutConfig(takeover=takeover),
-        )
-    )
+    return osc.run(path, tmp_path, takeover=takeover)
 
 
 def _at(samples: list[tuple[float, ...]], time: float) -> tuple[float, ...]:
