@@ -55,13 +55,6 @@ def is_acc(controller: model.Controller) -> bool:
     return (controller.property("esminiController") or controller.name) in NAMES
 
 
-def _number(text: str | None, default: float) -> float:
-    try:
-        return float(text) if text is not None else default
-    except ValueError:
-        return default
-
-
 @dataclasses.dataclass(slots=True)
 class Acc:
     """One entity's ACC controller: its parameters and state."""
@@ -83,9 +76,9 @@ class Acc:
         mode = controller.property("mode")
         return cls(
             name=controller.name,
-            time_gap=_number(controller.property("timeGap"), 1.5),
-            lateral_dist=_number(controller.property("lateralDist"), 5.0),
-            set_speed=_number(given, 0.0),
+            time_gap=controller.number("timeGap", 1.5),
+            lateral_dist=controller.number("lateralDist", 5.0),
+            set_speed=controller.number("setSpeed", 0.0),
             set_speed_given=given is not None,
             additive=mode is None or mode.strip().lower() == "additive",
             virtual=(controller.property("virtual") or "").strip().lower() == "true",

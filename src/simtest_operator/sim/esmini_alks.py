@@ -95,19 +95,6 @@ def model_of(controller: model.Controller) -> ModelType | None:
         return None
 
 
-def _flag(controller: model.Controller, name: str, default: bool) -> bool:
-    text = controller.property(name)
-    return default if text is None else text.strip().lower() == "true"
-
-
-def _number(controller: model.Controller, name: str, default: float) -> float:
-    text = controller.property(name)
-    try:
-        return float(text) if text is not None else default
-    except ValueError:
-        return default
-
-
 @dataclasses.dataclass(slots=True)
 class Seen:
     """What the controller measures of one entity ahead (esmini's ObjectInfo)."""
@@ -176,22 +163,22 @@ class Alks:
         kind = model_of(controller)
         if kind is None:
             return None
-        lateral = _number(controller, "lateralTrigDistance", 0.0)
+        lateral = controller.number("lateralTrigDistance", 0.0)
         return cls(
             name=controller.name,
             kind=kind,
             additive=(controller.property("mode") or "").strip().lower() == "additive",
-            cruise=_flag(controller, "cruise", True),
-            full_stop=_flag(controller, "fullStop", False),
-            always_trig=_flag(controller, "alwaysTrigOnScenario", False),
+            cruise=controller.flag("cruise", True),
+            full_stop=controller.flag("fullStop", False),
+            always_trig=controller.flag("alwaysTrigOnScenario", False),
             time_perception=controller.property("cutInPerceptionDelayMode") == "Time",
-            pedestrian_time=_number(controller, "pedestrianRiskEvaluationTime", 0.4),
-            aeb_ttc=_number(controller, "aebTTC", 1.5),
+            pedestrian_time=controller.number("pedestrianRiskEvaluationTime", 0.4),
+            aeb_ttc=controller.number("aebTTC", 1.5),
             lateral_trig=lateral if lateral > SMALL else None,
-            overlap_tolerance=_number(controller, "overlapTolerance", 0.2),
-            driver_dec=_number(controller, "driverDeceleration", 0.774 * 9.81),
-            aeb_dec=_number(controller, "aebDeceleration", 0.85 * 9.81),
-            aeb_available=_flag(controller, "aebAvailable", True),
+            overlap_tolerance=controller.number("overlapTolerance", 0.2),
+            driver_dec=controller.number("driverDeceleration", 0.774 * 9.81),
+            aeb_dec=controller.number("aebDeceleration", 0.85 * 9.81),
+            aeb_available=controller.flag("aebAvailable", True),
         )
 
     @property

@@ -93,19 +93,12 @@ def activate(
         longitudinal=both or _domain(longitudinal, kept.longitudinal if kept else False),
         lateral=both or _domain(lateral, kept.lateral if kept else False),
         speed=actor.speed,
-        speed_factor=_number(controller.property("speedFactor"), 1.0),
+        speed_factor=controller.number("speedFactor", 1.0),
     )
 
 
 def _domain(flag: bool | None, before: bool) -> bool:
     return before if flag is None else flag
-
-
-def _number(text: str | None, default: float) -> float:
-    try:
-        return float(text) if text is not None else default
-    except ValueError:
-        return default
 
 
 def drive_speed(world: World, actor: Actor, override: Override) -> None:

@@ -103,14 +103,6 @@ def ghost_controller(obj: model.ScenarioObject) -> model.Controller | None:
     return None
 
 
-def _number(controller: model.Controller, name: str, default: float) -> float:
-    text = controller.property(name)
-    try:
-        return float(text) if text is not None else default
-    except ValueError:
-        return default
-
-
 @dataclasses.dataclass(frozen=True, slots=True)
 class Ghost:
     """An entity's ghost as set up before the run."""
@@ -141,7 +133,7 @@ def setup(
         name = obj.name + SUFFIX
         if any(other.name == name for other in entities):
             continue
-        headstart = max(_number(controller, "headstartTime", DEFAULT_HEADSTART), 0.0)
+        headstart = max(controller.number("headstartTime", DEFAULT_HEADSTART), 0.0)
         entities.append(
             dataclasses.replace(
                 obj, name=name, controller=None, object_controller_name=None, object_controllers=()
@@ -347,11 +339,11 @@ class Follower:
         kind = controller.property("esminiController") or controller.name
         self.external = kind == "ExternalController"
         self.position_mode = (controller.property("followMode") or "").strip() == "position"
-        self.lookahead_speed = _number(controller, "lookaheadSpeed", 0.1)
-        self.min_lookahead_speed = _number(controller, "minLookaheadSpeed", 0.1)
-        self.lookahead_steering = _number(controller, "lookaheadSteering", 1.0)
-        self.min_lookahead_steering = _number(controller, "minLookaheadSteering", 1.0)
-        self.inertia = _number(controller, "steeringSpeedInertia", 0.01)
+        self.lookahead_speed = controller.number("lookaheadSpeed", 0.1)
+        self.min_lookahead_speed = controller.number("minLookaheadSpeed", 0.1)
+        self.lookahead_steering = controller.number("lookaheadSteering", 1.0)
+        self.min_lookahead_steering = controller.number("minLookaheadSteering", 1.0)
+        self.inertia = controller.number("steeringSpeedInertia", 0.01)
         self.longitudinal = self.lateral = False
         self.x = self.y = self.heading = self.speed = 0.0
         self._synced = False

@@ -56,16 +56,6 @@ def is_follow_route(controller: model.Controller) -> bool:
     return controller.property("esminiController") == TYPE_NAME
 
 
-def _number(controller: model.Controller, name: str, default: float) -> float:
-    value = controller.property(name)
-    if value is None:
-        return default
-    try:
-        return float(value)
-    except ValueError:
-        return default
-
-
 class FollowRoute:
     """One actor's FollowRoute controller; :meth:`step` once per step while it drives."""
 
@@ -87,8 +77,8 @@ class FollowRoute:
 
     def __init__(self, controller: model.Controller) -> None:
         self.name = controller.name
-        self.min_dist = _number(controller, "minDistForCollision", 10.0)
-        self.lane_change_time = _number(controller, "laneChangeTime", 5.0)
+        self.min_dist = controller.number("minDistForCollision", 10.0)
+        self.lane_change_time = controller.number("laneChangeTime", 5.0)
         self.test_mode = (controller.property("testMode") or "").strip().lower() == "true"
         self.active = False
         self.change: object | None = None

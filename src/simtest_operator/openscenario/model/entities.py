@@ -71,6 +71,20 @@ class Controller:
                 return prop.value
         return None
 
+    def number(self, name: str, default: float) -> float:
+        """Property ``name`` as a number; ``default`` when absent or not a number (as esmini's
+        controllers read their properties)."""
+        text = self.property(name)
+        try:
+            return float(text) if text is not None else default
+        except ValueError:
+            return default
+
+    def flag(self, name: str, default: bool) -> bool:
+        """Property ``name`` as a boolean (``true`` in any case); ``default`` when absent."""
+        text = self.property(name)
+        return default if text is None else text.strip().lower() == "true"
+
 
 @dataclasses.dataclass(frozen=True, slots=True, kw_only=True)
 class ObjectController:
